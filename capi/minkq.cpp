@@ -1,0 +1,454 @@
+// The C ABI front end: argument checks with messages naming the offending element, topology
+// (edge derivation), digests and library-owned results; all geometry runs in a backend.
+#include "minkq.h"
+
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "backend.h"
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "digests hash little-endian int32 pairs in place");
+static_assert(sizeof(minkq::Triangle) == 12 && sizeof(minkq::Edge) == 8 && sizeof(minkq::Box) == 24, "layouts");
+
+using minkq::Failure;
+using minkq::fail;
+using minkq::Status;
+
+struct minkq_device {
+  std::unique_ptr<minkq::Backend> backend;
+  std::string name;
+  minkq_backend kind;
+};
+
+struct minkq_scene {
+  minkq_device* device;
+  uint32_t flags;
+  size_t vertex_count;
+  std::vector<minkq::Triangle> triangles;
+  std::vector<minkq::Edge> edges;
+  std::unique_ptr<minkq::Store> store;
+};
+
+struct minkq_bvh {
+  minkq_device* device;
+  size_t box_count;
+  std::unique_ptr<minkq::Store> store;
+};
+
+struct minkq_result {
+  std::vector<int32_t> pairs;
+  uint64_t count = 0;
+  uint64_t digest = 0;
+};
+
+namespace {
+
+thread_local std::string last_error;
+
+template <class Fn>
+minkq_status guarded(Fn&& fn) {
+  try {
+    fn();
+    last_error.clear();
+    return MINKQ_SUCCESS;
+  } catch (const Failure& failure) {
+    last_error = failure.what();
+    return static_cast<minkq_status>(failure.status);
+  } catch (const std::bad_alloc&) {
+    last_error = "out of host memory";
+    return MINKQ_ERROR_OUT_OF_MEMORY;
+  } catch (const std::exception& e) {
+    last_error = std::string("internal error: ") + e.what();
+    return MINKQ_ERROR_INTERNAL;
+  }
+}
+
+void require(bool condition, Status status, const std::string& message) {
+  if (!condition) fail(status, message);
+}
+
+std::string format_float(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", double(v));
+  return text;
+}
+
+// Checks a buffer's pointer, stride, count and memory kind; returns it as a Strided view.
+minkq::Strided checked_buffer(const minkq_device* device, const minkq_buffer& buffer, size_t element_size,
+                              const char* what) {
+  const std::string name(what);
+  require(buffer.memory == MINKQ_MEMORY_HOST || buffer.memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
+          name + ".memory is not a minkq_memory value");
+  require(buffer.memory == MINKQ_MEMORY_HOST || device->kind == MINKQ_BACKEND_CUDA, Status::kInvalidArgument,
+          name + " is in device memory but the device is " + device->name);
+  require(buffer.count == 0 || buffer.data != nullptr, Status::kInvalidArgument,
+          name + ".data is NULL but " + name + ".count is " + std::to_string(buffer.count));
+  const size_t stride = buffer.byte_stride == 0 ? element_size : buffer.byte_stride;
+  require(stride >= element_size, Status::kInvalidArgument,
+          name + ".byte_stride " + std::to_string(stride) + " is smaller than one element (" +
+              std::to_string(element_size) + " bytes)");
+  require(buffer.count <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
+          name + ".count " + std::to_string(buffer.count) + " exceeds the limit of 2^31 - 2 elements");
+  require(buffer.count == 0 || stride <= SIZE_MAX / buffer.count, Status::kSizeOverflow,
+          name + ": " + std::to_string(buffer.count) + " elements of stride " + std::to_string(stride) +
+              " bytes overflow the address space");
+  return {buffer.data, stride, int64_t(buffer.count), static_cast<minkq::Memory>(buffer.memory)};
+}
+
+// Copies the records of a strided buffer (host or device) into a packed host vector.
+template <class T>
+std::vector<T> host_copy(minkq::Backend& backend, const minkq::Strided& values) {
+  std::vector<T> out(static_cast<size_t>(values.count));
+  if (values.count == 0) return out;
+  const size_t span = size_t(values.count - 1) * values.stride + sizeof(T);
+  std::vector<char> raw(span);
+  backend.copy_to_host(raw.data(), values.data, span, values.memory);
+  for (size_t i = 0; i < out.size(); ++i) std::memcpy(&out[i], raw.data() + i * values.stride, sizeof(T));
+  return out;
+}
+
+void require_finite(minkq::Backend& backend, const minkq::Strided& values, int floats, const char* element) {
+  const int64_t bad = backend.first_non_finite(values, floats);
+  if (bad < 0) return;
+  float f[6];
+  backend.copy_to_host(f, static_cast<const char*>(values.data) + size_t(bad) * values.stride,
+                       sizeof(float) * size_t(floats), values.memory);
+  std::string coords;
+  for (int k = 0; k < floats; ++k) coords += (k ? ", " : "") + format_float(f[k]);
+  fail(Status::kNonFinite, std::string(element) + " " + std::to_string(bad) + " has a non-finite coordinate (" +
+                               coords + ")");
+}
+
+template <int N, class T>
+void require_indices(const std::vector<T>& elements, size_t vertex_count, const char* element) {
+  for (size_t i = 0; i < elements.size(); ++i)
+    for (int k = 0; k < N; ++k) {
+      const int32_t v = elements[i].v[k];
+      if (v < 0 || size_t(v) >= vertex_count)
+        fail(Status::kIndexOutOfRange, std::string(element) + " " + std::to_string(i) + " references vertex " +
+                                           std::to_string(v) + " but the scene has " +
+                                           std::to_string(vertex_count) + " vertices");
+    }
+}
+
+// Every distinct undirected triangle edge as (min, max), in lexicographic order. A triangle
+// with a repeated vertex contributes its zero-length edge (v, v) too.
+std::vector<minkq::Edge> derive_edges(const std::vector<minkq::Triangle>& triangles) {
+  std::vector<uint64_t> keys;
+  keys.reserve(triangles.size() * 3);
+  for (const auto& t : triangles)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = uint32_t(t.v[k]), b = uint32_t(t.v[(k + 1) % 3]);
+      keys.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
+    }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<minkq::Edge> edges(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) edges[i] = {{int32_t(keys[i] >> 32), int32_t(keys[i] & 0xffffffffu)}};
+  return edges;
+}
+
+void require_radius(float r) {
+  require(std::isfinite(r), Status::kNonFinite, "radius " + format_float(r) + " is not finite");
+  require(r >= 0.0f, Status::kInvalidArgument, "radius " + format_float(r) + " is negative");
+}
+
+constexpr uint32_t kKnownQueryFlags = MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
+
+// Runs a request against a store with the common output checks, CAPACITY and digest.
+void run_and_report(minkq_device* device, minkq::Store& store, const minkq::QueryRequest& request, uint32_t flags,
+                    int32_t* out_pairs, size_t capacity, minkq_memory out_memory, minkq_query_info* info) {
+  require(info != nullptr, Status::kInvalidArgument, "info is NULL");
+  require(out_memory == MINKQ_MEMORY_HOST || out_memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
+          "out_memory is not a minkq_memory value");
+  require(out_memory == MINKQ_MEMORY_HOST || device->kind == MINKQ_BACKEND_CUDA, Status::kInvalidArgument,
+          "out_pairs is in device memory but the device is " + device->name);
+  require(capacity == 0 || out_pairs != nullptr, Status::kInvalidArgument,
+          "out_pairs is NULL but capacity is " + std::to_string(capacity));
+  require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
+          "capacity " + std::to_string(capacity) + " pairs overflows the address space");
+  const bool digest = flags & MINKQ_QUERY_DIGEST;
+  const minkq::PairOutput out{out_pairs, capacity, static_cast<minkq::Memory>(out_memory),
+                              digest || (flags & MINKQ_QUERY_CANONICAL)};
+  info->count = 0;
+  info->digest = 0;
+  const uint64_t count = store.query(request, out);
+  info->count = count;
+  if (count > capacity)
+    fail(Status::kCapacity, std::to_string(count) + " pairs found but the buffer holds " + std::to_string(capacity));
+  if (digest) {
+    const size_t bytes = size_t(count) * 2 * sizeof(int32_t);
+    if (out_memory == MINKQ_MEMORY_HOST) {
+      info->digest = XXH64(out_pairs, bytes, 0);
+    } else {
+      std::vector<int32_t> host(size_t(count) * 2);
+      device->backend->copy_to_host(host.data(), out_pairs, bytes, minkq::Memory::kDevice);
+      info->digest = XXH64(host.data(), bytes, 0);
+    }
+  }
+}
+
+}  // namespace
+
+extern "C" {
+
+uint32_t minkq_version(void) { return MINKQ_VERSION_MAJOR * 10000 + MINKQ_VERSION_MINOR * 100 + MINKQ_VERSION_PATCH; }
+uint32_t minkq_abi_version(void) { return MINKQ_ABI_VERSION; }
+const char* minkq_last_error_message(void) { return last_error.c_str(); }
+
+const char* minkq_status_name(minkq_status status) {
+  switch (status) {
+    case MINKQ_SUCCESS: return "MINKQ_SUCCESS";
+    case MINKQ_ERROR_INVALID_ARGUMENT: return "MINKQ_ERROR_INVALID_ARGUMENT";
+    case MINKQ_ERROR_NON_FINITE: return "MINKQ_ERROR_NON_FINITE";
+    case MINKQ_ERROR_INDEX_OUT_OF_RANGE: return "MINKQ_ERROR_INDEX_OUT_OF_RANGE";
+    case MINKQ_ERROR_SIZE_OVERFLOW: return "MINKQ_ERROR_SIZE_OVERFLOW";
+    case MINKQ_ERROR_CAPACITY: return "MINKQ_ERROR_CAPACITY";
+    case MINKQ_ERROR_UNSUPPORTED: return "MINKQ_ERROR_UNSUPPORTED";
+    case MINKQ_ERROR_OUT_OF_MEMORY: return "MINKQ_ERROR_OUT_OF_MEMORY";
+    case MINKQ_ERROR_DEVICE: return "MINKQ_ERROR_DEVICE";
+    case MINKQ_ERROR_INTERNAL: return "MINKQ_ERROR_INTERNAL";
+  }
+  return "unknown minkq_status";
+}
+
+int minkq_cuda_device_count(void) { return minkq::cuda_device_count(); }
+
+minkq_status minkq_device_create(const char* spec, minkq_device** out_device) {
+  return guarded([&] {
+    require(out_device != nullptr, Status::kInvalidArgument, "out_device is NULL");
+    *out_device = nullptr;
+    require(spec != nullptr, Status::kInvalidArgument, "spec is NULL (use \"cpu\", \"cuda\", \"cuda:N\" or \"auto\")");
+    const std::string text(spec);
+    auto device = std::make_unique<minkq_device>();
+    int ordinal = -1;
+    if (text == "cuda") {
+      ordinal = 0;
+    } else if (text.rfind("cuda:", 0) == 0) {
+      const std::string digits = text.substr(5);
+      require(!digits.empty() && digits.size() < 6 && digits.find_first_not_of("0123456789") == std::string::npos,
+              Status::kInvalidArgument, "device spec \"" + text + "\": expected cuda:N with N a device number");
+      ordinal = std::stoi(digits);
+    } else if (text == "auto") {
+      ordinal = minkq::cuda_device_count() > 0 ? 0 : -1;
+    } else {
+      require(text == "cpu", Status::kInvalidArgument,
+              "unknown device spec \"" + text + "\" (use \"cpu\", \"cuda\", \"cuda:N\" or \"auto\")");
+    }
+    if (ordinal >= 0) {
+      device->backend = minkq::make_cuda_backend(ordinal);
+      device->kind = MINKQ_BACKEND_CUDA;
+    } else {
+      device->backend = minkq::make_cpu_backend();
+      device->kind = MINKQ_BACKEND_CPU;
+    }
+    device->name = device->backend->name();
+    *out_device = device.release();
+  });
+}
+
+void minkq_device_release(minkq_device* device) { delete device; }
+minkq_backend minkq_device_backend(const minkq_device* device) { return device ? device->kind : MINKQ_BACKEND_CPU; }
+const char* minkq_device_name(const minkq_device* device) { return device ? device->name.c_str() : ""; }
+
+minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* desc, minkq_scene** out_scene) {
+  return guarded([&] {
+    require(out_scene != nullptr, Status::kInvalidArgument, "out_scene is NULL");
+    *out_scene = nullptr;
+    require(device != nullptr, Status::kInvalidArgument, "device is NULL");
+    require(desc != nullptr, Status::kInvalidArgument, "desc is NULL");
+    const uint32_t known = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
+    require((desc->flags & ~known) == 0, Status::kInvalidArgument, "desc->flags has unknown bits");
+    require(desc->flags & (MINKQ_SCENE_VT | MINKQ_SCENE_EE), Status::kInvalidArgument,
+            "desc->flags asks for no query: set MINKQ_SCENE_VT, MINKQ_SCENE_EE or both");
+    minkq::Backend& backend = *device->backend;
+    const minkq::Strided vertices = checked_buffer(device, desc->vertices, 12, "vertices");
+    const minkq::Strided triangles = checked_buffer(device, desc->triangles, 12, "triangles");
+    const minkq::Strided edges = checked_buffer(device, desc->edges, 8, "edges");
+    require_finite(backend, vertices, 3, "vertex");
+    auto scene = std::make_unique<minkq_scene>();
+    scene->device = device;
+    scene->flags = desc->flags;
+    scene->vertex_count = size_t(vertices.count);
+    scene->triangles = host_copy<minkq::Triangle>(backend, triangles);
+    require_indices<3>(scene->triangles, scene->vertex_count, "triangle");
+    if (edges.count > 0) {
+      scene->edges = host_copy<minkq::Edge>(backend, edges);
+      require_indices<2>(scene->edges, scene->vertex_count, "edge");
+    } else if (desc->flags & MINKQ_SCENE_EE) {
+      scene->edges = derive_edges(scene->triangles);
+      require(scene->edges.size() <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
+              "the triangles have more than 2^31 - 2 edges");
+    }
+    scene->store = backend.create_mesh_store(vertices, scene->triangles, scene->edges,
+                                             desc->flags & MINKQ_SCENE_VT, desc->flags & MINKQ_SCENE_EE);
+    *out_scene = scene.release();
+  });
+}
+
+void minkq_scene_release(minkq_scene* scene) { delete scene; }
+size_t minkq_scene_vertex_count(const minkq_scene* scene) { return scene ? scene->vertex_count : 0; }
+size_t minkq_scene_triangle_count(const minkq_scene* scene) { return scene ? scene->triangles.size() : 0; }
+size_t minkq_scene_edge_count(const minkq_scene* scene) { return scene ? scene->edges.size() : 0; }
+
+minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, size_t capacity) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    require(capacity == 0 || out_edges != nullptr, Status::kInvalidArgument, "out_edges is NULL");
+    require(scene->edges.size() <= capacity, Status::kCapacity,
+            "the scene has " + std::to_string(scene->edges.size()) + " edges but the buffer holds " +
+                std::to_string(capacity));
+    if (!scene->edges.empty()) std::memcpy(out_edges, scene->edges.data(), scene->edges.size() * sizeof(minkq::Edge));
+  });
+}
+
+minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    const minkq::Strided values = checked_buffer(scene->device, vertices, 12, "vertices");
+    require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
+            "refit with " + std::to_string(values.count) + " vertices but the scene has " +
+                std::to_string(scene->vertex_count));
+    require_finite(*scene->device->backend, values, 3, "vertex");
+    scene->store->refit(values);
+  });
+}
+
+minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
+                               size_t capacity, minkq_memory out_memory, minkq_query_info* info) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    require(query != nullptr, Status::kInvalidArgument, "query is NULL");
+    require(query->kind == MINKQ_QUERY_VT || query->kind == MINKQ_QUERY_EE, Status::kInvalidArgument,
+            "query->kind is not a minkq_query_kind value");
+    require(query->mode >= MINKQ_MODE_BOX && query->mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
+            "query->mode is not a minkq_mode value");
+    require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, "query->flags has unknown bits");
+    const bool vt = query->kind == MINKQ_QUERY_VT;
+    require(scene->flags & (vt ? MINKQ_SCENE_VT : MINKQ_SCENE_EE), Status::kInvalidArgument,
+            vt ? "VT query on a scene created without MINKQ_SCENE_VT" : "EE query on a scene created without MINKQ_SCENE_EE");
+    require(vt || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
+            "sphere mode needs point queries; use capsule_ray or capsule_exact for EE");
+    require_radius(query->radius);
+    uint32_t filters = 0;
+    if (scene->flags & MINKQ_SCENE_DROP_INCIDENT) filters |= minkq::kDropIncident;
+    if (query->flags & MINKQ_QUERY_LEAF_EXACT) filters |= minkq::kLeafExact;
+    const minkq::QueryRequest request{vt ? minkq::QueryKind::kVertexTriangle : minkq::QueryKind::kEdgeEdge,
+                                      static_cast<minkq::Mode>(query->mode), filters, query->radius, {}, {}};
+    run_and_report(scene->device, *scene->store, request, query->flags, out_pairs, capacity, out_memory, info);
+  });
+}
+
+minkq_status minkq_result_create(minkq_result** out_result) {
+  return guarded([&] {
+    require(out_result != nullptr, Status::kInvalidArgument, "out_result is NULL");
+    *out_result = new minkq_result();
+  });
+}
+void minkq_result_release(minkq_result* result) { delete result; }
+uint64_t minkq_result_count(const minkq_result* result) { return result ? result->count : 0; }
+const int32_t* minkq_result_pairs(const minkq_result* result) { return result ? result->pairs.data() : nullptr; }
+uint64_t minkq_result_digest(const minkq_result* result) { return result ? result->digest : 0; }
+
+minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query, minkq_result* result) {
+  if (result == nullptr) {
+    last_error = "result is NULL";
+    return MINKQ_ERROR_INVALID_ARGUMENT;
+  }
+  // Try the buffer as it is; on CAPACITY grow it to the exact count and run again.
+  minkq_query_info info{};
+  minkq_status status = minkq_scene_query(scene, query, result->pairs.data(), result->pairs.size() / 2,
+                                          MINKQ_MEMORY_HOST, &info);
+  if (status == MINKQ_ERROR_CAPACITY) {
+    const minkq_status grown = guarded([&] { result->pairs.resize(size_t(info.count) * 2); });
+    if (grown != MINKQ_SUCCESS) return grown;
+    status = minkq_scene_query(scene, query, result->pairs.data(), result->pairs.size() / 2, MINKQ_MEMORY_HOST, &info);
+  }
+  result->count = status == MINKQ_SUCCESS ? info.count : 0;
+  result->digest = status == MINKQ_SUCCESS ? info.digest : 0;
+  return status;
+}
+
+minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh) {
+  return guarded([&] {
+    require(out_bvh != nullptr, Status::kInvalidArgument, "out_bvh is NULL");
+    *out_bvh = nullptr;
+    require(device != nullptr, Status::kInvalidArgument, "device is NULL");
+    const minkq::Strided values = checked_buffer(device, boxes, 24, "boxes");
+    require_finite(*device->backend, values, 6, "box");
+    const std::vector<minkq::Box> host = host_copy<minkq::Box>(*device->backend, values);
+    for (size_t i = 0; i < host.size(); ++i) {
+      const minkq::Box& b = host[i];
+      require(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z, Status::kInvalidArgument,
+              "box " + std::to_string(i) + " has lo > hi");
+    }
+    auto bvh = std::make_unique<minkq_bvh>();
+    bvh->device = device;
+    bvh->box_count = host.size();
+    bvh->store = device->backend->create_box_store(values);
+    *out_bvh = bvh.release();
+  });
+}
+
+void minkq_bvh_release(minkq_bvh* bvh) { delete bvh; }
+
+minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes) {
+  return guarded([&] {
+    require(bvh != nullptr, Status::kInvalidArgument, "bvh is NULL");
+    const minkq::Strided values = checked_buffer(bvh->device, boxes, 24, "boxes");
+    require(size_t(values.count) == bvh->box_count, Status::kInvalidArgument,
+            "refit with " + std::to_string(values.count) + " boxes but the bvh has " + std::to_string(bvh->box_count));
+    require_finite(*bvh->device->backend, values, 6, "box");
+    const std::vector<minkq::Box> host = host_copy<minkq::Box>(*bvh->device->backend, values);
+    for (size_t i = 0; i < host.size(); ++i) {
+      const minkq::Box& b = host[i];
+      require(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z, Status::kInvalidArgument,
+              "box " + std::to_string(i) + " has lo > hi");
+    }
+    bvh->store->refit(values);
+  });
+}
+
+minkq_status minkq_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, int32_t* out_pairs, size_t capacity,
+                             minkq_memory out_memory, minkq_query_info* info) {
+  return guarded([&] {
+    require(bvh != nullptr, Status::kInvalidArgument, "bvh is NULL");
+    require(query != nullptr, Status::kInvalidArgument, "query is NULL");
+    require(query->shape >= MINKQ_SHAPE_SPHERE && query->shape <= MINKQ_SHAPE_BOX, Status::kInvalidArgument,
+            "query->shape is not a minkq_shape value");
+    require(query->mode >= MINKQ_MODE_BOX && query->mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
+            "query->mode is not a minkq_mode value");
+    require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, "query->flags has unknown bits");
+    require(!(query->flags & MINKQ_QUERY_LEAF_EXACT), Status::kInvalidArgument,
+            "MINKQ_QUERY_LEAF_EXACT applies to mesh scenes only: a bvh's leaves are boxes");
+    require(query->shape != MINKQ_SHAPE_CAPSULE || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
+            "sphere mode needs point queries; use capsule_ray or capsule_exact for capsules");
+    require(query->shape != MINKQ_SHAPE_BOX || query->mode == MINKQ_MODE_BOX, Status::kInvalidArgument,
+            "box queries support only MINKQ_MODE_BOX");
+    require_radius(query->radius);
+    minkq_device* device = bvh->device;
+    const minkq::Strided first = checked_buffer(device, query->first, 12, "first");
+    const minkq::Strided second = checked_buffer(device, query->second, 12, "second");
+    const bool spheres = query->shape == MINKQ_SHAPE_SPHERE;
+    require(spheres ? second.count == 0 : second.count == first.count, Status::kInvalidArgument,
+            spheres ? "second must be empty for sphere queries"
+                    : "second.count " + std::to_string(second.count) + " differs from first.count " +
+                          std::to_string(first.count));
+    require_finite(*device->backend, first, 3, "query point");
+    require_finite(*device->backend, second, 3, "query point");
+    const minkq::QueryKind kind = spheres ? minkq::QueryKind::kUserSpheres
+                                          : (query->shape == MINKQ_SHAPE_CAPSULE ? minkq::QueryKind::kUserCapsules
+                                                                                 : minkq::QueryKind::kUserBoxes);
+    const minkq::QueryRequest request{kind, static_cast<minkq::Mode>(query->mode), 0u, query->radius, first, second};
+    run_and_report(device, *bvh->store, request, query->flags, out_pairs, capacity, out_memory, info);
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,202 @@
+// Linear BVH (Karras 2012) over primitive boxes: flat arrays of PODs, identical on CPU and
+// GPU. Each step is a per-element __host__ __device__ function; a backend only loops over it.
+#pragma once
+
+#include "minkq/hd.h"
+
+namespace minkq {
+
+// One internal node in 64 bytes: both children's boxes travel together, so a visit reads one
+// record. Child >= 0: internal node index; child < 0: leaf holding primitive ~child.
+struct BvhNode {
+  Box left_box;
+  Box right_box;
+  int32_t left;
+  int32_t right;   // kNoChild in the single root of a one-primitive tree
+  int32_t parent;  // (parent index << 1) | side, -1 for the root
+  int32_t unused;
+};
+static_assert(sizeof(BvhNode) == 64, "node record must stay one 64-byte line");
+
+constexpr int32_t kNoChild = INT32_MIN;
+// Keys are 63 Morton bits plus a 32-bit index tie-break; each level down lengthens the shared
+// key prefix, so depth <= 96 and a traversal stack of 128 entries never overflows.
+constexpr int kTraversalStack = 128;
+// Primitive ids must leave ~id distinct from kNoChild.
+constexpr int64_t kMaxPrimitives = INT32_MAX - 1;
+
+struct BvhView {
+  const BvhNode* nodes;
+  int32_t num_prims;
+};
+
+// ---- Morton codes ----------------------------------------------------------------------------
+
+MINKQ_HD uint64_t spread_bits_21(uint32_t v) {  // 21 bits -> every third bit of 63
+  uint64_t x = v & 0x1fffffu;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+MINKQ_HD uint32_t quantize_21(float value, float lo, float scale) {
+  const float q = (value - lo) * scale;  // scale = 2^21 / extent, 0 for a flat axis
+  if (!(q > 0.0f)) return 0u;
+  if (q >= 2097151.0f) return 2097151u;
+  return uint32_t(q);
+}
+
+// 63-bit Morton code of a box's centre within the bounds of all centres.
+struct MortonFrame {
+  Vec3 lo;
+  Vec3 scale;
+};
+MINKQ_HD MortonFrame morton_frame(const Box& centre_bounds) {
+  const Vec3 extent = centre_bounds.hi - centre_bounds.lo;
+  auto scale_of = [](float e) { return e > 0.0f ? 2097152.0f / e : 0.0f; };
+  return {centre_bounds.lo, {scale_of(extent.x), scale_of(extent.y), scale_of(extent.z)}};
+}
+MINKQ_HD Vec3 box_centre(const Box& b) { return 0.5f * (b.lo + b.hi); }
+MINKQ_HD uint64_t morton_code(const MortonFrame& f, Vec3 c) {
+  return spread_bits_21(quantize_21(c.x, f.lo.x, f.scale.x)) << 2 |
+         spread_bits_21(quantize_21(c.y, f.lo.y, f.scale.y)) << 1 |
+         spread_bits_21(quantize_21(c.z, f.lo.z, f.scale.z));
+}
+
+// ---- Hierarchy from sorted keys ---------------------------------------------------------------
+
+MINKQ_HD int count_leading_zeros64(uint64_t x) {
+#if defined(__CUDA_ARCH__)
+  return __clzll((long long)x);
+#else
+  return x == 0 ? 64 : __builtin_clzll(x);
+#endif
+}
+
+// Length of the common prefix of sorted keys i and j, the position breaking ties; -1 outside.
+MINKQ_HD int common_prefix(const uint64_t* keys, int32_t n, int32_t i, int32_t j) {
+  if (j < 0 || j >= n) return -1;
+  const uint64_t a = keys[i], b = keys[j];
+  if (a != b) return count_leading_zeros64(a ^ b);
+  return 64 + count_leading_zeros64(uint64_t(uint32_t(i) ^ uint32_t(j))) - 32;
+}
+
+// Internal node i of the Karras tree over n >= 2 sorted leaves. sorted_prims maps leaf
+// position to primitive id. Writes node i's children and the parent links of its children.
+MINKQ_HD void build_internal_node(int32_t i, const uint64_t* keys, const int32_t* sorted_prims,
+                                  int32_t n, BvhNode* nodes, int32_t* leaf_parent) {
+  const int dir = common_prefix(keys, n, i, i + 1) - common_prefix(keys, n, i, i - 1) > 0 ? 1 : -1;
+  const int delta_min = common_prefix(keys, n, i, i - dir);
+  int32_t lmax = 2;
+  while (common_prefix(keys, n, i, i + lmax * dir) > delta_min) lmax *= 2;
+  int32_t l = 0;
+  for (int32_t t = lmax / 2; t >= 1; t /= 2)
+    if (common_prefix(keys, n, i, i + (l + t) * dir) > delta_min) l += t;
+  const int32_t j = i + l * dir;
+  const int delta_node = common_prefix(keys, n, i, j);
+  int32_t s = 0;
+  for (int32_t div = 2;; div *= 2) {
+    const int32_t t = (l + div - 1) / div;
+    if (common_prefix(keys, n, i, i + (s + t) * dir) > delta_node) s += t;
+    if (t <= 1) break;
+  }
+  const int32_t split = i + s * dir + (dir < 0 ? -1 : 0);
+  const int32_t first = i < j ? i : j, last = i < j ? j : i;
+  BvhNode& node = nodes[i];
+  if (first == split) {
+    node.left = ~sorted_prims[split];
+    leaf_parent[sorted_prims[split]] = i << 1;
+  } else {
+    node.left = split;
+    nodes[split].parent = i << 1;
+  }
+  if (last == split + 1) {
+    node.right = ~sorted_prims[split + 1];
+    leaf_parent[sorted_prims[split + 1]] = i << 1 | 1;
+  } else {
+    node.right = split + 1;
+    nodes[split + 1].parent = i << 1 | 1;
+  }
+  if (i == 0) node.parent = -1;
+}
+
+// ---- Bottom-up refit ---------------------------------------------------------------------------
+
+MINKQ_HD int atomic_increment(int32_t* counter) {
+#if defined(__CUDA_ARCH__)
+  __threadfence();  // publish this thread's box writes before the sibling can read them
+  return atomicAdd(counter, 1);
+#else
+  return __atomic_fetch_add(counter, 1, __ATOMIC_ACQ_REL);
+#endif
+}
+
+MINKQ_HD Box load_box_coherent(const Box* b) {
+#if defined(__CUDA_ARCH__)
+  const volatile float* f = reinterpret_cast<const volatile float*>(b);  // bypass stale L1
+  return {{f[0], f[1], f[2]}, {f[3], f[4], f[5]}};
+#else
+  return *b;
+#endif
+}
+
+MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
+  BvhNode& parent = nodes[slot >> 1];
+  if (slot & 1) parent.right_box = box; else parent.left_box = box;
+}
+
+// Refit from leaf prim with its new box: the second of two children to arrive at a node
+// (counters zeroed before the pass) merges both boxes and climbs on. Unions are exact.
+MINKQ_HD void refit_from_leaf(int32_t prim, const Box& box, const int32_t* leaf_parent,
+                              BvhNode* nodes, int32_t* arrivals) {
+  int32_t slot = leaf_parent[prim];
+  store_child_box(nodes, slot, box);
+  int32_t node = slot >> 1;
+  while (true) {
+    if (nodes[node].right == kNoChild) return;  // one-primitive tree: nothing to merge
+    if (atomic_increment(&arrivals[node]) == 0) return;
+    const Box merged = box_union(load_box_coherent(&nodes[node].left_box),
+                                 load_box_coherent(&nodes[node].right_box));
+    slot = nodes[node].parent;
+    if (slot < 0) return;
+    store_child_box(nodes, slot, merged);
+    node = slot >> 1;
+  }
+}
+
+// ---- Traversal ---------------------------------------------------------------------------------
+
+// The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim) is called
+// for every primitive whose box the shape overlaps (and only if every ancestor box overlaps,
+// which holds for every shape here as each test is monotone under box inclusion).
+template <class Shape, class OnLeaf>
+MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, OnLeaf& on_leaf) {
+  if (bvh.num_prims <= 0) return;
+  int32_t stack[kTraversalStack];
+  int sp = 0;
+  int32_t node = 0;
+  while (true) {
+    const BvhNode& n = bvh.nodes[node];
+    int32_t next = -1;
+    if (shape.overlaps(n.left_box)) {
+      if (n.left < 0) on_leaf(~n.left); else next = n.left;
+    }
+    if (n.right != kNoChild && shape.overlaps(n.right_box)) {
+      if (n.right < 0) {
+        on_leaf(~n.right);
+      } else if (next < 0) {
+        next = n.right;
+      } else {
+        stack[sp++] = n.right;
+      }
+    }
+    if (next >= 0) { node = next; continue; }
+    if (sp == 0) return;
+    node = stack[--sp];
+  }
+}
+
+}  // namespace minkq

@@ -1,0 +1,75 @@
+// Portable building blocks shared by the CPU (g++) and CUDA (nvcc) backends: the MINKQ_HD
+// macro, a float3 type, boxes, and outward rounding. Everything here is plain arithmetic on
+// PODs so both compilers produce bit-identical results (no FMA contraction: see CMakeLists).
+#pragma once
+
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#if defined(__CUDACC__)
+#define MINKQ_HD __host__ __device__ __forceinline__
+#else
+#define MINKQ_HD inline
+#endif
+
+namespace minkq {
+
+// Unit roundoff of float32 (2^-24): every basic float operation on normal numbers has a
+// relative error of at most this.
+constexpr float kFloatUnitRoundoff = 5.9604644775390625e-08f;
+
+struct Vec3 {
+  float x, y, z;
+};
+
+MINKQ_HD Vec3 make_vec3(float x, float y, float z) { return Vec3{x, y, z}; }
+MINKQ_HD Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+MINKQ_HD Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+MINKQ_HD Vec3 operator*(float s, Vec3 a) { return {s * a.x, s * a.y, s * a.z}; }
+MINKQ_HD float component(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+MINKQ_HD Vec3 vmin(Vec3 a, Vec3 b) { return {fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
+MINKQ_HD Vec3 vmax(Vec3 a, Vec3 b) { return {fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+
+// Axis-aligned box; an empty box has lo > hi (see Box::empty()).
+struct Box {
+  Vec3 lo, hi;
+  MINKQ_HD static Box empty() { return {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}}; }
+  MINKQ_HD static Box of_point(Vec3 p) { return {p, p}; }
+};
+
+// Union and overlap are exact in float (min, max and comparisons do not round), so node
+// bounds built from exact primitive boxes need no outward rounding.
+MINKQ_HD Box box_union(Box a, Box b) { return {vmin(a.lo, b.lo), vmax(a.hi, b.hi)}; }
+MINKQ_HD Box box_expand(Box a, Vec3 p) { return {vmin(a.lo, p), vmax(a.hi, p)}; }
+MINKQ_HD bool boxes_overlap(const Box& a, const Box& b) {
+  return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y &&
+         a.lo.z <= b.hi.z && b.lo.z <= a.hi.z;
+}
+
+// Next float toward -inf / +inf. Written with bit operations (not nextafterf) so the device
+// needs no libm and the result is identical on both backends. Finite inputs only; -0/+0 step
+// to the smallest subnormal of the right sign.
+MINKQ_HD float next_down(float x) {
+  if (x != x || x == -INFINITY) return x;
+  if (x == 0.0f) return -1.40129846e-45f;
+  uint32_t bits;
+  memcpy(&bits, &x, 4);
+  bits = (x > 0.0f) ? bits - 1u : bits + 1u;
+  memcpy(&x, &bits, 4);
+  return x;
+}
+MINKQ_HD float next_up(float x) { return -next_down(-x); }
+
+// Upper bound of r*r that also covers the relative error a few float operations add to a
+// squared distance computed from exact float inputs (see predicates.h for the budgets).
+// scale = 1 + 2^-18 covers 64 roundings of relative size 2^-24; the additive term covers
+// underflow (each subnormal result may be off by 2^-150 absolutely).
+MINKQ_HD float square_upper_bound(float r) {
+  const float r2 = r * r;
+  const float padded = next_up(r2 * 1.000003814697265625f);  // 1 + 2^-18
+  return padded + 16.0f * 1.40129846e-45f;
+}
+
+}  // namespace minkq

@@ -1,0 +1,119 @@
+// Internal interface between the C API front end (capi/minkq.cpp: validation, topology,
+// digests) and a backend (CPU or CUDA) that owns the arrays and runs build, refit and queries.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "minkq/queries.h"
+
+namespace minkq {
+
+// Numbered as the C API's minkq_status.
+enum class Status : int {
+  kSuccess = 0,
+  kInvalidArgument = 1,
+  kNonFinite = 2,
+  kIndexOutOfRange = 3,
+  kSizeOverflow = 4,
+  kCapacity = 5,
+  kUnsupported = 6,
+  kOutOfMemory = 7,
+  kDevice = 8,
+  kInternal = 9,
+};
+
+struct Failure : std::runtime_error {
+  Status status;
+  Failure(Status s, const std::string& message) : std::runtime_error(message), status(s) {}
+};
+[[noreturn]] inline void fail(Status status, const std::string& message) { throw Failure(status, message); }
+
+enum class Memory : int { kHost = 0, kDevice = 1 };
+
+// `count` records, each starting `stride` bytes after the previous one.
+struct Strided {
+  const void* data;
+  size_t stride;
+  int64_t count;
+  Memory memory;
+};
+
+enum class QueryKind : int { kVertexTriangle, kEdgeEdge, kUserSpheres, kUserCapsules, kUserBoxes };
+
+struct QueryRequest {
+  QueryKind kind;
+  Mode mode;
+  uint32_t filters;  // kDropIncident | kLeafExact
+  float r;
+  Strided first;   // user queries: sphere centres, capsule starts or box lows (float3)
+  Strided second;  // user queries: capsule ends or box highs (float3)
+};
+
+struct PairOutput {
+  int32_t* pairs;  // 2 * capacity int32
+  size_t capacity;
+  Memory memory;
+  bool canonical;  // lexicographic order
+};
+
+// One scene's arrays and trees on a backend.
+class Store {
+ public:
+  virtual ~Store() = default;
+  // New positions for the same vertices (mesh stores) or boxes (box stores); refits the trees.
+  virtual void refit(const Strided& values) = 0;
+  // Runs a query; returns the exact pair count and writes the pairs only if they all fit.
+  virtual uint64_t query(const QueryRequest& request, const PairOutput& out) = 0;
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual std::string name() const = 0;
+  virtual bool is_cuda() const = 0;
+  // First record (of `floats` floats each) holding a NaN or infinity, or -1.
+  virtual int64_t first_non_finite(const Strided& values, int floats) = 0;
+  // Copies `bytes` from host or device memory to the host.
+  virtual void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) = 0;
+  virtual std::unique_ptr<Store> create_mesh_store(const Strided& vertices,
+                                                   const std::vector<Triangle>& triangles,
+                                                   const std::vector<Edge>& edges,
+                                                   bool triangle_tree, bool edge_tree) = 0;
+  virtual std::unique_ptr<Store> create_box_store(const Strided& boxes) = 0;
+};
+
+std::unique_ptr<Backend> make_cpu_backend();
+// Throws Failure(kUnsupported) where minkq was built without CUDA or no such device exists.
+std::unique_ptr<Backend> make_cuda_backend(int ordinal);
+int cuda_device_count();  // 0 where built without CUDA or no device/driver
+bool built_with_cuda();
+
+// Calls fn with a default-constructed value of the shape type that `mode` selects. Point
+// queries (VT, user spheres) are zero-length capsules: capsule_ray tests the box, and
+// capsule_exact the sphere. The front end rejects sphere mode for segments and any non-box
+// mode for box queries before calling.
+template <class Fn>
+void with_shape(Mode mode, bool point_queries, Fn&& fn) {
+  switch (mode) {
+    case Mode::kBox: fn(BoxShape{}); return;
+    case Mode::kSphere: fn(SphereShape{}); return;
+    case Mode::kCapsuleRay:
+      if (point_queries) fn(BoxShape{}); else fn(CapsuleRayShape{});
+      return;
+    case Mode::kCapsuleExact:
+      if (point_queries) fn(SphereShape{}); else fn(CapsuleExactShape{});
+      return;
+  }
+  fail(Status::kInternal, "unknown mode");
+}
+
+// Gathers strided float3 records into a packed host vector (host memory only).
+std::vector<Vec3> gather_vec3(const Strided& values);
+std::vector<Box> gather_boxes(const Strided& values);
+
+}  // namespace minkq

@@ -1,0 +1,226 @@
+// CPU backend: the shared per-element steps of bvh.h and queries.h, run in parallel with TBB.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
+
+#include <cmath>
+#include <cstring>
+#include <utility>
+
+#include "backend.h"
+
+namespace minkq {
+
+std::vector<Vec3> gather_vec3(const Strided& values) {
+  std::vector<Vec3> out(static_cast<size_t>(values.count));
+  const char* base = static_cast<const char*>(values.data);
+  for (int64_t i = 0; i < values.count; ++i) std::memcpy(&out[i], base + size_t(i) * values.stride, sizeof(Vec3));
+  return out;
+}
+
+std::vector<Box> gather_boxes(const Strided& values) {
+  std::vector<Box> out(static_cast<size_t>(values.count));
+  const char* base = static_cast<const char*>(values.data);
+  for (int64_t i = 0; i < values.count; ++i) std::memcpy(&out[i], base + size_t(i) * values.stride, sizeof(Box));
+  return out;
+}
+
+namespace {
+
+template <class Fn>
+void parallel_for_each(int64_t n, Fn&& fn) {
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, n, 1024), [&](const tbb::blocked_range<int64_t>& range) {
+    for (int64_t i = range.begin(); i != range.end(); ++i) fn(i);
+  });
+}
+
+class CpuTree {
+ public:
+  template <class Boxes>
+  void build(Boxes boxes, int32_t n) {
+    n_ = n;
+    nodes_.assign(size_t(n > 1 ? n - 1 : n), BvhNode{});
+    leaf_parent_.assign(size_t(n), 0);
+    arrivals_.assign(nodes_.size(), 0);
+    if (n == 0) return;
+    if (n == 1) {
+      nodes_[0].left = ~0;
+      nodes_[0].right = kNoChild;
+      nodes_[0].parent = -1;
+      refit(boxes);
+      return;
+    }
+    const Box centre_bounds = tbb::parallel_reduce(
+        tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),
+        [&](const tbb::blocked_range<int32_t>& range, Box acc) {
+          for (int32_t i = range.begin(); i != range.end(); ++i) acc = box_expand(acc, box_centre(boxes(i)));
+          return acc;
+        },
+        [](Box a, Box b) { return box_union(a, b); });
+    const MortonFrame frame = morton_frame(centre_bounds);
+    std::vector<std::pair<uint64_t, int32_t>> keyed(static_cast<size_t>(n));
+    parallel_for_each(n, [&](int64_t i) { keyed[i] = {morton_code(frame, box_centre(boxes(int32_t(i)))), int32_t(i)}; });
+    tbb::parallel_sort(keyed.begin(), keyed.end());  // (key, index): ties broken by index, as CUB's stable sort
+    std::vector<uint64_t> keys(static_cast<size_t>(n));
+    std::vector<int32_t> prims(static_cast<size_t>(n));
+    for (int32_t i = 0; i < n; ++i) { keys[i] = keyed[i].first; prims[i] = keyed[i].second; }
+    parallel_for_each(n - 1, [&](int64_t i) {
+      build_internal_node(int32_t(i), keys.data(), prims.data(), n, nodes_.data(), leaf_parent_.data());
+    });
+    refit(boxes);
+  }
+
+  template <class Boxes>
+  void refit(Boxes boxes) {
+    std::fill(arrivals_.begin(), arrivals_.end(), 0);
+    parallel_for_each(n_, [&](int64_t p) {
+      refit_from_leaf(int32_t(p), boxes(int32_t(p)), leaf_parent_.data(), nodes_.data(), arrivals_.data());
+    });
+  }
+
+  BvhView view() const { return {nodes_.data(), n_}; }
+  int32_t size() const { return n_; }
+
+ private:
+  int32_t n_ = 0;
+  std::vector<BvhNode> nodes_;
+  std::vector<int32_t> leaf_parent_;
+  std::vector<int32_t> arrivals_;
+};
+
+// Runs every query in fixed blocks, each into its own buffer, then concatenates in block
+// order: the output order is deterministic whatever the thread count.
+template <class Shape, class Queries>
+uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out) {
+  constexpr int32_t kBlock = 256;
+  const int32_t blocks = (num_queries + kBlock - 1) / kBlock;
+  std::vector<std::vector<int32_t>> parts(static_cast<size_t>(blocks));
+  tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
+    std::vector<int32_t>& part = parts[b];
+    auto emit = [&part](int32_t q, int32_t prim) {
+      part.push_back(q);
+      part.push_back(prim);
+    };
+    const int32_t end = std::min(num_queries, (b + 1) * kBlock);
+    for (int32_t q = b * kBlock; q < end; ++q) run_query<Shape>(bvh, queries, q, emit);
+  });
+  uint64_t total = 0;
+  for (const auto& part : parts) total += part.size() / 2;
+  if (total > out.capacity) return total;
+  int32_t* cursor = out.pairs;
+  for (const auto& part : parts) {
+    if (!part.empty()) std::memcpy(cursor, part.data(), part.size() * sizeof(int32_t));
+    cursor += part.size();
+  }
+  if (out.canonical) {
+    std::vector<uint64_t> packed(total);
+    parallel_for_each(int64_t(total), [&](int64_t i) {
+      packed[i] = uint64_t(uint32_t(out.pairs[2 * i])) << 32 | uint32_t(out.pairs[2 * i + 1]);
+    });
+    tbb::parallel_sort(packed.begin(), packed.end());
+    parallel_for_each(int64_t(total), [&](int64_t i) {
+      out.pairs[2 * i] = int32_t(packed[i] >> 32);
+      out.pairs[2 * i + 1] = int32_t(packed[i] & 0xffffffffu);
+    });
+  }
+  return total;
+}
+
+template <class Queries>
+uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView& bvh, const Queries& queries,
+                  int32_t num_queries, const PairOutput& out) {
+  uint64_t total = 0;
+  with_shape(request.mode, point_queries, [&](auto shape) {
+    total = run_queries<decltype(shape)>(bvh, queries, num_queries, out);
+  });
+  return total;
+}
+
+class CpuMeshStore final : public Store {
+ public:
+  CpuMeshStore(const Strided& vertices, std::vector<Triangle> triangles, std::vector<Edge> edges, bool triangle_tree,
+               bool edge_tree)
+      : vertices_(gather_vec3(vertices)), triangles_(std::move(triangles)), edges_(std::move(edges)),
+        has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
+    if (has_triangle_tree_) triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles_.data()}, int32_t(triangles_.size()));
+    if (has_edge_tree_) edge_tree_.build(EdgeBoxes{vertices_.data(), edges_.data()}, int32_t(edges_.size()));
+  }
+
+  void refit(const Strided& vertices) override {
+    vertices_ = gather_vec3(vertices);
+    if (has_triangle_tree_) triangle_tree_.refit(TriangleBoxes{vertices_.data(), triangles_.data()});
+    if (has_edge_tree_) edge_tree_.refit(EdgeBoxes{vertices_.data(), edges_.data()});
+  }
+
+  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+    if (request.kind == QueryKind::kVertexTriangle) {
+      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), request.r, request.filters};
+      return dispatch(request, true, triangle_tree_.view(), queries, int32_t(vertices_.size()), out);
+    }
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), request.r, request.filters};
+    return dispatch(request, false, edge_tree_.view(), queries, int32_t(edges_.size()), out);
+  }
+
+ private:
+  std::vector<Vec3> vertices_;
+  std::vector<Triangle> triangles_;
+  std::vector<Edge> edges_;
+  bool has_triangle_tree_, has_edge_tree_;
+  CpuTree triangle_tree_, edge_tree_;
+};
+
+class CpuBoxStore final : public Store {
+ public:
+  explicit CpuBoxStore(const Strided& boxes) : boxes_(gather_boxes(boxes)) {
+    tree_.build(GivenBoxes{boxes_.data()}, int32_t(boxes_.size()));
+  }
+  void refit(const Strided& boxes) override {
+    boxes_ = gather_boxes(boxes);
+    tree_.refit(GivenBoxes{boxes_.data()});
+  }
+  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+    const std::vector<Vec3> first = gather_vec3(request.first);
+    const std::vector<Vec3> second = gather_vec3(request.second);
+    const UserQueries queries{first.data(), second.empty() ? nullptr : second.data(), request.r};
+    return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
+                    int32_t(first.size()), out);
+  }
+
+ private:
+  std::vector<Box> boxes_;
+  CpuTree tree_;
+};
+
+class CpuBackend final : public Backend {
+ public:
+  std::string name() const override { return "cpu"; }
+  bool is_cuda() const override { return false; }
+  int64_t first_non_finite(const Strided& values, int floats) override {
+    const char* base = static_cast<const char*>(values.data);
+    for (int64_t i = 0; i < values.count; ++i) {
+      float f[6];
+      std::memcpy(f, base + size_t(i) * values.stride, sizeof(float) * size_t(floats));
+      for (int k = 0; k < floats; ++k)
+        if (!std::isfinite(f[k])) return i;
+    }
+    return -1;
+  }
+  void copy_to_host(void* dst, const void* src, size_t bytes, Memory) override {
+    if (bytes) std::memcpy(dst, src, bytes);
+  }
+  std::unique_ptr<Store> create_mesh_store(const Strided& vertices, const std::vector<Triangle>& triangles,
+                                           const std::vector<Edge>& edges, bool triangle_tree,
+                                           bool edge_tree) override {
+    return std::make_unique<CpuMeshStore>(vertices, triangles, edges, triangle_tree, edge_tree);
+  }
+  std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
+    return std::make_unique<CpuBoxStore>(boxes);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_cpu_backend() { return std::make_unique<CpuBackend>(); }
+
+}  // namespace minkq
