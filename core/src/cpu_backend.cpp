@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "backend.h"
+#include "cpu_tree.h"
 
 namespace minkq {
 
@@ -27,67 +28,6 @@ std::vector<Box> gather_boxes(const Strided& values) {
 }
 
 namespace {
-
-template <class Fn>
-void parallel_for_each(int64_t n, Fn&& fn) {
-  tbb::parallel_for(tbb::blocked_range<int64_t>(0, n, 1024), [&](const tbb::blocked_range<int64_t>& range) {
-    for (int64_t i = range.begin(); i != range.end(); ++i) fn(i);
-  });
-}
-
-class CpuTree {
- public:
-  template <class Boxes>
-  void build(Boxes boxes, int32_t n) {
-    n_ = n;
-    nodes_.assign(size_t(n > 1 ? n - 1 : n), BvhNode{});
-    leaf_parent_.assign(size_t(n), 0);
-    arrivals_.assign(nodes_.size(), 0);
-    if (n == 0) return;
-    if (n == 1) {
-      nodes_[0].left = ~0;
-      nodes_[0].right = kNoChild;
-      nodes_[0].parent = -1;
-      refit(boxes);
-      return;
-    }
-    const Box centre_bounds = tbb::parallel_reduce(
-        tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),
-        [&](const tbb::blocked_range<int32_t>& range, Box acc) {
-          for (int32_t i = range.begin(); i != range.end(); ++i) acc = box_expand(acc, box_centre(boxes(i)));
-          return acc;
-        },
-        [](Box a, Box b) { return box_union(a, b); });
-    const MortonFrame frame = morton_frame(centre_bounds);
-    std::vector<std::pair<uint64_t, int32_t>> keyed(static_cast<size_t>(n));
-    parallel_for_each(n, [&](int64_t i) { keyed[i] = {morton_code(frame, box_centre(boxes(int32_t(i)))), int32_t(i)}; });
-    tbb::parallel_sort(keyed.begin(), keyed.end());  // (key, index): ties broken by index, as CUB's stable sort
-    std::vector<uint64_t> keys(static_cast<size_t>(n));
-    std::vector<int32_t> prims(static_cast<size_t>(n));
-    for (int32_t i = 0; i < n; ++i) { keys[i] = keyed[i].first; prims[i] = keyed[i].second; }
-    parallel_for_each(n - 1, [&](int64_t i) {
-      build_internal_node(int32_t(i), keys.data(), prims.data(), n, nodes_.data(), leaf_parent_.data());
-    });
-    refit(boxes);
-  }
-
-  template <class Boxes>
-  void refit(Boxes boxes) {
-    std::fill(arrivals_.begin(), arrivals_.end(), 0);
-    parallel_for_each(n_, [&](int64_t p) {
-      refit_from_leaf(int32_t(p), boxes(int32_t(p)), leaf_parent_.data(), nodes_.data(), arrivals_.data());
-    });
-  }
-
-  BvhView view() const { return {nodes_.data(), n_}; }
-  int32_t size() const { return n_; }
-
- private:
-  int32_t n_ = 0;
-  std::vector<BvhNode> nodes_;
-  std::vector<int32_t> leaf_parent_;
-  std::vector<int32_t> arrivals_;
-};
 
 // Runs every query in fixed blocks, each into its own buffer, then concatenates in block
 // order: the output order is deterministic whatever the thread count.

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Set-up and entry points on a fresh Debian 12 machine:
+#   ./build.sh demo   installs what is missing, builds, runs `minkq demo` on the default scene
+#   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest)
+#   ./build.sh build  installs what is missing and builds only
+# PRESET=cpu|cuda|default (default: default = CUDA when nvcc is found).
+set -euo pipefail
+cd "$(dirname "$0")"
+preset=${PRESET:-default}
+binary_dir=build; [ "$preset" != default ] && binary_dir=build-$preset
+packages=(cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev libgtest-dev googletest)
+
+install_packages() {
+  local missing=()
+  for p in "${packages[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+  [ ${#missing[@]} -eq 0 ] && return
+  local sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
+  echo "installing: ${missing[*]}"
+  $sudo apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "${missing[@]}"
+}
+
+build() {
+  install_packages
+  cmake --preset "$preset"
+  cmake --build --preset "$preset" -j "$(nproc)"
+}
+
+case "${1:-}" in
+  demo) build; "./$binary_dir/examples/minkq" demo "${@:2}" ;;
+  test) build; ctest --preset "$preset" -j "$(nproc)" ;;
+  build) build ;;
+  *) sed -n '2,7p' "$0"; exit 2 ;;
+esac

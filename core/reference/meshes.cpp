@@ -1,0 +1,280 @@
+// Scene generators, mesh statistics and the OBJ / PLY loaders of the reference library.
+#include "minkq_reference.h"
+
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+
+namespace minkq::reference {
+
+// ---- Generators ----------------------------------------------------------------------------
+Mesh grid_sheet(int n) {
+  if (n < 2) throw std::invalid_argument("grid_sheet: n must be >= 2");
+  Mesh m;
+  m.xyz.reserve(3 * size_t(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) m.xyz.insert(m.xyz.end(), {float(double(i) / (n - 1)), float(double(j) / (n - 1)), 0.0f});
+  m.tris.reserve(6 * size_t(n - 1) * (n - 1));
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int32_t v00 = j * n + i, v10 = v00 + 1, v01 = v00 + n, v11 = v01 + 1;
+      m.tris.insert(m.tris.end(), {v00, v10, v11, v00, v11, v01});
+    }
+  m.edges = derive_edges(m.tris);
+  return m;
+}
+
+Mesh twisted_sheet(int n, double turns) {
+  Mesh m = grid_sheet(n);
+  const double pi = 3.14159265358979323846;
+  for (size_t i = 0; i < m.xyz.size(); i += 3) {
+    const double u = m.xyz[i], v = m.xyz[i + 1] - 0.5, t = turns * 2 * pi * u;
+    m.xyz[i + 1] = float(v * std::cos(t));
+    m.xyz[i + 2] = float(v * std::sin(t));
+  }
+  return m;
+}
+
+Mesh stacked_sheets(int n, int layers, double gap) {
+  if (layers < 1) throw std::invalid_argument("stacked_sheets: layers must be >= 1");
+  const Mesh sheet = grid_sheet(n);
+  const int32_t nv = int32_t(sheet.vertex_count());
+  Mesh m;
+  for (int k = 0; k < layers; ++k) {
+    for (size_t i = 0; i < sheet.xyz.size(); i += 3)
+      m.xyz.insert(m.xyz.end(), {sheet.xyz[i], sheet.xyz[i + 1], float(k * gap)});
+    for (int32_t v : sheet.tris) m.tris.push_back(v + k * nv);
+  }
+  m.edges = derive_edges(m.tris);
+  return m;
+}
+
+Mesh random_soup(int triangles, uint64_t seed, double size) {
+  if (triangles < 0) throw std::invalid_argument("random_soup: negative triangle count");
+  uint64_t state = seed;
+  auto uniform = [&state] {  // splitmix64, then the top 53 bits as a double in [0, 1)
+    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
+  };
+  Mesh m;
+  for (int t = 0; t < triangles; ++t) {
+    double c[3];
+    for (double& x : c) x = uniform();
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) m.xyz.push_back(float(c[a] + (uniform() - 0.5) * size));
+    m.tris.insert(m.tris.end(), {3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  m.edges = derive_edges(m.tris);
+  return m;
+}
+
+double mean_edge_length(const Mesh& m) {
+  const std::vector<int32_t> edges = m.edges.empty() ? derive_edges(m.tris) : m.edges;
+  if (edges.empty()) return 0.0;
+  double sum = 0;
+  for (size_t e = 0; e < edges.size(); e += 2) {
+    double d2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double d = double(m.xyz[3 * size_t(edges[e]) + a]) - m.xyz[3 * size_t(edges[e + 1]) + a];
+      d2 += d * d;
+    }
+    sum += std::sqrt(d2);
+  }
+  return sum / double(edges.size() / 2);
+}
+
+void transform(Mesh& m, double scale, double offset) {
+  for (float& x : m.xyz) x = float(double(x) * scale + offset);
+}
+
+// ---- Loaders -------------------------------------------------------------------------------
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw std::runtime_error("load_mesh: " + path + ": " + what);
+}
+
+void check_indices(const std::string& path, Mesh& m) {
+  for (int32_t v : m.tris)
+    if (v < 0 || size_t(v) >= m.vertex_count())
+      fail(path, "face refers to vertex " + std::to_string(v) + " of " + std::to_string(m.vertex_count()));
+  for (float x : m.xyz)
+    if (!std::isfinite(x)) fail(path, "non-finite vertex coordinate");
+  m.edges = derive_edges(m.tris);
+}
+
+Mesh load_obj(const std::string& path) {
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn, err;
+  // Materials are irrelevant here; a missing .mtl only produces a warning, which is ignored.
+  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, path.c_str(), nullptr, true))
+    fail(path, err.empty() ? "cannot read OBJ" : err);
+  Mesh m;
+  m.xyz.assign(attrib.vertices.begin(), attrib.vertices.end());
+  for (const tinyobj::shape_t& s : shapes) {
+    size_t at = 0;
+    for (unsigned char fv : s.mesh.num_face_vertices) {
+      if (fv == 3)
+        for (int k = 0; k < 3; ++k) m.tris.push_back(s.mesh.indices[at + k].vertex_index);
+      at += fv;  // faces under 3 vertices (if any survive triangulation) are skipped
+    }
+  }
+  if (m.tris.empty()) fail(path, "no triangles");
+  check_indices(path, m);
+  return m;
+}
+
+// A minimal PLY reader: one pass over the elements in header order; "vertex" gives x, y, z,
+// "face" gives the list property vertex_indices (or vertex_index); other elements and
+// properties are read and dropped.
+struct PlyProperty {
+  std::string name, type, count_type;  // count_type non-empty for a list
+};
+struct PlyElement {
+  std::string name;
+  size_t count = 0;
+  std::vector<PlyProperty> props;
+};
+
+size_t ply_size(const std::string& path, const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  fail(path, "unknown PLY property type '" + t + "'");
+}
+
+class PlyReader {
+ public:
+  PlyReader(const std::string& path, std::string data, size_t at, int format)
+      : path_(path), data_(std::move(data)), at_(at), format_(format) {
+    if (format_ == 0) text_.str(data_.substr(at_));
+  }
+  // The next scalar of type t as a double (exact for every PLY type).
+  double read(const std::string& t) {
+    if (format_ == 0) {
+      double x;
+      if (!(text_ >> x)) fail(path_, "truncated or malformed ascii data");
+      return x;
+    }
+    const size_t n = ply_size(path_, t);
+    if (at_ + n > data_.size()) fail(path_, "file ends inside the binary data");
+    unsigned char b[8];
+    std::memcpy(b, data_.data() + at_, n);
+    at_ += n;
+    const bool little_host = [] { const uint16_t one = 1; return *reinterpret_cast<const unsigned char*>(&one) == 1; }();
+    if ((format_ == 1) != little_host) std::reverse(b, b + n);  // 1: little-endian file
+    auto as = [&b](auto v) { std::memcpy(&v, b, sizeof v); return double(v); };
+    if (t == "char" || t == "int8") return as(int8_t());
+    if (t == "uchar" || t == "uint8") return as(uint8_t());
+    if (t == "short" || t == "int16") return as(int16_t());
+    if (t == "ushort" || t == "uint16") return as(uint16_t());
+    if (t == "int" || t == "int32") return as(int32_t());
+    if (t == "uint" || t == "uint32") return as(uint32_t());
+    if (t == "float" || t == "float32") return as(float());
+    return as(double());
+  }
+
+ private:
+  std::string path_, data_;
+  size_t at_;
+  int format_;  // 0 ascii, 1 binary little-endian, 2 binary big-endian
+  std::istringstream text_;
+};
+
+Mesh load_ply(const std::string& path, std::string data) {
+  const size_t end = data.find("end_header");
+  if (end == std::string::npos) fail(path, "PLY header has no end_header");
+  const size_t body = data.find('\n', end);
+  if (body == std::string::npos) fail(path, "PLY header has no end of line after end_header");
+  std::istringstream header(data.substr(0, end));
+  std::string line, word;
+  std::getline(header, line);  // "ply"
+  int format = -1;
+  std::vector<PlyElement> elements;
+  while (std::getline(header, line)) {
+    std::istringstream ls(line);
+    ls >> word;
+    if (word == "format") {
+      ls >> word;
+      format = word == "ascii" ? 0 : word == "binary_little_endian" ? 1 : word == "binary_big_endian" ? 2 : -1;
+      if (format < 0) fail(path, "unknown PLY format '" + word + "'");
+    } else if (word == "element") {
+      PlyElement e;
+      if (!(ls >> e.name >> e.count)) fail(path, "malformed line '" + line + "'");
+      elements.push_back(e);
+    } else if (word == "property") {
+      if (elements.empty()) fail(path, "property before any element");
+      PlyProperty p;
+      ls >> p.type;
+      if (p.type == "list") ls >> p.count_type >> p.type;
+      if (!(ls >> p.name)) fail(path, "malformed line '" + line + "'");
+      ply_size(path, p.type);
+      if (!p.count_type.empty()) ply_size(path, p.count_type);
+      elements.back().props.push_back(p);
+    }  // comment, obj_info: ignored
+  }
+  if (format < 0) fail(path, "PLY header has no format line");
+
+  PlyReader in(path, std::move(data), body + 1, format);
+  Mesh m;
+  for (const PlyElement& e : elements) {
+    int axis[3] = {-1, -1, -1};
+    for (size_t i = 0; i < e.props.size(); ++i)
+      for (int a = 0; a < 3; ++a)
+        if (e.props[i].name == std::string(1, char('x' + a)) && e.props[i].count_type.empty()) axis[a] = int(i);
+    if (e.name == "vertex" && (axis[0] < 0 || axis[1] < 0 || axis[2] < 0)) fail(path, "vertex element lacks x, y or z");
+    std::vector<double> row(e.props.size());
+    std::vector<int32_t> poly;
+    for (size_t r = 0; r < e.count; ++r) {
+      for (size_t i = 0; i < e.props.size(); ++i) {
+        const PlyProperty& p = e.props[i];
+        if (p.count_type.empty()) {
+          row[i] = in.read(p.type);
+          continue;
+        }
+        const double n = in.read(p.count_type);
+        if (!(n >= 0 && n < 1e6)) fail(path, "bad list length in element '" + e.name + "'");
+        poly.clear();
+        for (int k = 0; k < int(n); ++k) {
+          const double v = in.read(p.type);
+          if (!(v >= -2147483648.0 && v <= 2147483647.0)) fail(path, "list value out of int32 range");
+          poly.push_back(int32_t(v));
+        }
+        if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index"))
+          for (size_t k = 2; k < poly.size(); ++k) m.tris.insert(m.tris.end(), {poly[0], poly[k - 1], poly[k]});  // fan
+      }
+      if (e.name == "vertex")
+        for (int a = 0; a < 3; ++a) m.xyz.push_back(float(row[axis[a]]));
+    }
+  }
+  if (m.tris.empty()) fail(path, "no triangles");
+  check_indices(path, m);
+  return m;
+}
+
+}  // namespace
+
+Mesh load_mesh(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) fail(path, "cannot open file");
+  std::string data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (data.compare(0, 4, "ply\n") == 0 || data.compare(0, 5, "ply\r\n") == 0) return load_ply(path, std::move(data));
+  std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".obj") return load_obj(path);
+  fail(path, "unknown mesh format (expected .obj or a PLY file)");
+}
+
+}  // namespace minkq::reference

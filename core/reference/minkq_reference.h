@@ -1,0 +1,81 @@
+// minkq::reference: the independent double-precision oracle for tests, benchmarks and the demo.
+//
+// It shares no code with the core on purpose: a bug in the core's predicates or traversal must
+// not be able to hide itself by also living in the oracle. Distances are evaluated in long
+// double on float meshes (whose coordinates are exact in double), and a pair is a contact when
+// that distance is <= r. Everything here favours being obviously right over being fast; the
+// grid-accelerated queries exist only so that ~300k-triangle scenes can be checked in seconds.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace minkq::reference {
+
+// A triangle mesh with optional explicit edges. The scene generators and load_mesh fill `edges`
+// with derive_edges(tris); the contact queries derive them too when `edges` is empty, as the
+// C API does for a scene created with no edges.
+struct Mesh {
+  std::vector<float> xyz;      // 3 per vertex
+  std::vector<int32_t> tris;   // 3 vertex indices per triangle
+  std::vector<int32_t> edges;  // 2 vertex indices per edge
+  size_t vertex_count() const { return xyz.size() / 3; }
+  size_t triangle_count() const { return tris.size() / 3; }
+  size_t edge_count() const { return edges.size() / 2; }
+};
+
+// Every distinct undirected triangle edge as (min vertex, max vertex), sorted lexicographically:
+// the numbering the C API uses. A triangle with a repeated vertex v contributes (v, v).
+std::vector<int32_t> derive_edges(const std::vector<int32_t>& tris);
+
+// ---- Distances (long double, robust to degenerate input) -----------------------------------
+// Each is the minimum over the boundary features (endpoints, edges) plus the interior case,
+// taken only when the closest point lies strictly inside; zero-length segments, parallel
+// segments and zero-area triangles therefore need no special tolerance.
+long double point_segment_distance(const double p[3], const double a[3], const double b[3]);
+long double point_triangle_distance(const double p[3], const double a[3], const double b[3], const double c[3]);
+long double segment_segment_distance(const double p0[3], const double p1[3], const double q0[3], const double q1[3]);
+
+// ---- Contacts -------------------------------------------------------------------------------
+using Pairs = std::vector<std::pair<int32_t, int32_t>>;
+
+// Every (vertex, triangle) with point_triangle_distance <= r, sorted. drop_incident drops the
+// triangles that contain the vertex. Grid-accelerated and parallel (TBB).
+Pairs vt_contacts(const Mesh& mesh, double r, bool drop_incident);
+// Every (e, f), e < f, with segment_segment_distance <= r, sorted. drop_incident drops pairs of
+// edges sharing a vertex. Grid-accelerated and parallel (TBB).
+Pairs ee_contacts(const Mesh& mesh, double r, bool drop_incident);
+// The same sets by testing every pair: O(N * M), for small meshes and for checking the grid.
+Pairs vt_contacts_brute(const Mesh& mesh, double r, bool drop_incident);
+Pairs ee_contacts_brute(const Mesh& mesh, double r, bool drop_incident);
+
+// ---- Scene generators (deterministic on every platform) -------------------------------------
+// n x n vertices on [0,1]^2 at z = 0; vertex (i, j) is index j * n + i at (i, j) / (n - 1).
+// Cell (i, j) gives triangles (v00, v10, v11) and (v00, v11, v01). n >= 2.
+Mesh grid_sheet(int n);
+// grid_sheet(n) twisted about the x axis: (u, v) -> (u, (v - 1/2) cos t, (v - 1/2) sin t) with
+// t = turns * 2 pi * u. Three turns on the unit square strain the rows far from the axis, so
+// the sheet mixes short and long edges and comes close to itself only near the axis.
+Mesh twisted_sheet(int n, double turns);
+// `layers` copies of grid_sheet(n), layer k lifted to z = k * gap (aligned vertex over vertex).
+Mesh stacked_sheets(int n, int layers, double gap);
+// `triangles` independent triangles (3 vertices each, nothing shared): centre uniform in
+// [0,1]^3, each vertex the centre plus a uniform offset in [-size/2, size/2]^3. The random
+// numbers come from splitmix64(seed), so the soup is the same on every platform.
+Mesh random_soup(int triangles, uint64_t seed, double size);
+
+// Mean length of the edges (mesh.edges, or derive_edges(tris) when empty); 0 for no edges.
+double mean_edge_length(const Mesh& mesh);
+// x -> x * scale + offset on every coordinate, in double, then rounded to float.
+void transform(Mesh& mesh, double scale, double offset);
+
+// Loads an OBJ (tinyobjloader: polygons triangulated, all shapes merged into one mesh) or a PLY
+// (ascii, binary_little_endian or binary_big_endian; vertex x, y, z of any scalar type, faces
+// as a list, polygons fan-triangulated). Fills edges with derive_edges. Throws
+// std::runtime_error naming the file and the problem.
+Mesh load_mesh(const std::string& path);
+
+}  // namespace minkq::reference

@@ -1,0 +1,99 @@
+// BVH invariants after build and after refit: every primitive is exactly one leaf, parent links
+// agree with child links, each stored child box is exactly the union of the boxes below it,
+// and depth stays within the traversal stack's bound even when all Morton codes tie.
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "cpu_tree.h"
+#include "minkq/queries.h"
+#include "test_util.h"
+
+namespace minkq {
+namespace {
+
+bool same_box(const Box& a, const Box& b) { return std::memcmp(&a, &b, sizeof(Box)) == 0; }
+
+// Walks the tree; returns the union of the subtree's leaf boxes and checks every invariant.
+Box check_subtree(const CpuTree& tree, const std::vector<Box>& boxes, int32_t node, int depth, std::vector<int>& seen,
+                  int& max_depth) {
+  max_depth = std::max(max_depth, depth);
+  const BvhNode& n = tree.nodes()[node];
+  Box total = Box::empty();
+  const int32_t children[2] = {n.left, n.right};
+  const Box* stored[2] = {&n.left_box, &n.right_box};
+  for (int side = 0; side < 2; ++side) {
+    const int32_t child = children[side];
+    if (child == kNoChild) continue;
+    Box below;
+    if (child < 0) {
+      const int32_t prim = ~child;
+      EXPECT_EQ(tree.leaf_parent()[prim], node << 1 | side);
+      ++seen[prim];
+      below = boxes[prim];
+    } else {
+      EXPECT_EQ(tree.nodes()[child].parent, node << 1 | side);
+      below = check_subtree(tree, boxes, child, depth + 1, seen, max_depth);
+    }
+    EXPECT_TRUE(same_box(*stored[side], below)) << "node " << node << " side " << side;
+    total = box_union(total, below);
+  }
+  return total;
+}
+
+void check_tree(const CpuTree& tree, const std::vector<Box>& boxes) {
+  std::vector<int> seen(boxes.size(), 0);
+  int max_depth = 0;
+  if (!boxes.empty()) {
+    EXPECT_EQ(tree.nodes()[0].parent, -1);
+    check_subtree(tree, boxes, 0, 1, seen, max_depth);
+  }
+  for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(seen[i], 1) << "primitive " << i;
+  EXPECT_LE(max_depth, kTraversalStack - 1);
+}
+
+std::vector<Box> random_boxes(test::Random& rng, int n, float spread) {
+  std::vector<Box> boxes(static_cast<size_t>(n));
+  for (Box& b : boxes) b = rng.box(rng.vec3(-spread, spread), 0.1f);
+  return boxes;
+}
+
+TEST(Bvh, invariants_hold_after_build_and_refit) {
+  test::Random rng(test::fresh_seed());
+  for (int n : {0, 1, 2, 3, 7, 100, 5000, 40000}) {
+    std::vector<Box> boxes = random_boxes(rng, n, 10.0f);
+    CpuTree tree;
+    tree.build(GivenBoxes{boxes.data()}, n);
+    check_tree(tree, boxes);
+    for (Box& b : boxes) {
+      const Vec3 shift = rng.vec3(-3, 3);
+      b = {b.lo + shift, b.hi + shift};
+    }
+    tree.refit(GivenBoxes{boxes.data()});
+    check_tree(tree, boxes);
+  }
+}
+
+TEST(Bvh, coincident_boxes_tie_on_morton_codes_yet_stay_shallow) {
+  std::vector<Box> boxes(100000, Box{{1, 2, 3}, {1, 2, 3}});
+  CpuTree tree;
+  tree.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
+  check_tree(tree, boxes);
+  // Half the boxes far away at huge offsets, half coincident: extreme key skew.
+  for (size_t i = 0; i < boxes.size(); i += 2) boxes[i] = Box{{1e7f, -1e7f, 3}, {1e7f, -1e7f, 3}};
+  tree.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
+  check_tree(tree, boxes);
+}
+
+TEST(Bvh, build_is_deterministic) {
+  test::Random rng(test::fresh_seed());
+  const std::vector<Box> boxes = random_boxes(rng, 20000, 5.0f);
+  CpuTree a, b;
+  a.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
+  b.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
+  ASSERT_EQ(a.nodes().size(), b.nodes().size());
+  EXPECT_EQ(std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size() * sizeof(BvhNode)), 0);
+}
+
+}  // namespace
+}  // namespace minkq

@@ -1,0 +1,251 @@
+// The C ABI's contract: bad input gets a specific status and a message naming the element,
+// outputs are exact-count bounded (nothing written past the buffer), digests and canonical
+// order are as documented, user-box BVHs answer every shape.
+#include <gtest/gtest.h>
+#include <xxhash.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "capi_util.h"
+#include "minkq/shapes.h"
+#include "test_util.h"
+
+namespace minkq {
+namespace {
+
+using test::host_buffer;
+
+std::string message() { return minkq_last_error_message(); }
+
+struct Fixture : ::testing::Test {
+  test::Device device;
+  std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.05f, 1, 0, 0.05f, 0, 1, 0.05f};
+  std::vector<int32_t> tris = {0, 1, 2, 3, 4, 5};
+  minkq_scene_desc desc() {
+    minkq_scene_desc d{};
+    d.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
+    d.vertices = host_buffer(xyz.data(), xyz.size() / 3);
+    d.triangles = host_buffer(tris.data(), tris.size() / 3);
+    return d;
+  }
+  minkq_status create(const minkq_scene_desc& d) {
+    minkq_scene* scene = nullptr;
+    const minkq_status status = minkq_scene_create(device.handle, &d, &scene);
+    if (status == MINKQ_SUCCESS) EXPECT_NE(scene, nullptr); else EXPECT_EQ(scene, nullptr);
+    minkq_scene_release(scene);
+    return status;
+  }
+};
+
+TEST_F(Fixture, non_finite_coordinates_name_the_vertex) {
+  xyz[3 * 4 + 1] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(create(desc()), MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(message().find("vertex 4 has a non-finite coordinate"), std::string::npos) << message();
+  xyz[3 * 4 + 1] = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(create(desc()), MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(message().find("vertex 4"), std::string::npos);
+}
+
+TEST_F(Fixture, out_of_range_and_negative_indices_name_the_triangle) {
+  tris[4] = 6;
+  EXPECT_EQ(create(desc()), MINKQ_ERROR_INDEX_OUT_OF_RANGE);
+  EXPECT_NE(message().find("triangle 1 references vertex 6 but the scene has 6 vertices"), std::string::npos) << message();
+  tris[4] = -1;
+  EXPECT_EQ(create(desc()), MINKQ_ERROR_INDEX_OUT_OF_RANGE);
+  EXPECT_NE(message().find("vertex -1"), std::string::npos);
+  tris[4] = 4;
+  std::vector<int32_t> edges = {0, 1, 2, 9};
+  minkq_scene_desc d = desc();
+  d.edges = host_buffer(edges.data(), 2);
+  EXPECT_EQ(create(d), MINKQ_ERROR_INDEX_OUT_OF_RANGE);
+  EXPECT_NE(message().find("edge 1 references vertex 9"), std::string::npos) << message();
+}
+
+TEST_F(Fixture, null_pointers_strides_flags_and_sizes_are_rejected) {
+  minkq_scene_desc d = desc();
+  d.vertices.data = nullptr;
+  EXPECT_EQ(create(d), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("vertices.data is NULL but vertices.count is 6"), std::string::npos) << message();
+  d = desc();
+  d.triangles.byte_stride = 8;
+  EXPECT_EQ(create(d), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("triangles.byte_stride 8"), std::string::npos) << message();
+  d = desc();
+  d.flags = MINKQ_SCENE_DROP_INCIDENT;
+  EXPECT_EQ(create(d), MINKQ_ERROR_INVALID_ARGUMENT);
+  d = desc();
+  d.flags |= 64;
+  EXPECT_EQ(create(d), MINKQ_ERROR_INVALID_ARGUMENT);
+  d = desc();
+  d.vertices.count = size_t(1) << 40;
+  EXPECT_EQ(create(d), MINKQ_ERROR_SIZE_OVERFLOW);
+  d = desc();
+  d.vertices.count = 1000;
+  d.vertices.byte_stride = std::numeric_limits<size_t>::max() / 10;
+  EXPECT_EQ(create(d), MINKQ_ERROR_SIZE_OVERFLOW);
+  d = desc();
+  d.vertices.memory = MINKQ_MEMORY_DEVICE;
+  EXPECT_EQ(create(d), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("device memory"), std::string::npos);
+  EXPECT_EQ(minkq_scene_create(device.handle, nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  minkq_scene* scene = nullptr;
+  EXPECT_EQ(minkq_scene_create(nullptr, &d, &scene), MINKQ_ERROR_INVALID_ARGUMENT);
+}
+
+TEST_F(Fixture, bad_radius_mode_kind_and_flags_are_rejected) {
+  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
+  minkq_query_info info{};
+  auto run = [&](minkq_query_desc q) { return minkq_scene_query(scene.handle, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info); };
+  EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0, -1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("radius -1 is negative"), std::string::npos) << message();
+  EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0, std::nanf("")}), MINKQ_ERROR_NON_FINITE);
+  EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0, INFINITY}), MINKQ_ERROR_NON_FINITE);
+  EXPECT_EQ(run({MINKQ_QUERY_VT, minkq_mode(7), 0, 1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(run({minkq_query_kind(5), MINKQ_MODE_BOX, 0, 1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_BOX, 1u << 9, 1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(run({MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, 1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("without MINKQ_SCENE_EE"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_edge_count(scene.handle), 0u);  // a VT-only scene derives no edges
+  test::Scene both(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  minkq_query_desc sphere_ee{MINKQ_QUERY_EE, MINKQ_MODE_SPHERE, 0, 1.0f};
+  EXPECT_EQ(minkq_scene_query(both.handle, &sphere_ee, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  minkq_query_desc ok{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f};
+  EXPECT_EQ(minkq_scene_query(both.handle, &ok, nullptr, 0, MINKQ_MEMORY_HOST, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_query(both.handle, &ok, nullptr, 5, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+}
+
+TEST_F(Fixture, capacity_reports_the_exact_count_and_writes_nothing_past_the_buffer) {
+  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  const test::Pairs all = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);
+  ASSERT_GT(all.size(), 3u);
+  minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, 0.1f};
+  for (size_t capacity : {size_t(0), size_t(1), all.size() - 1}) {
+    std::vector<int32_t> buffer(2 * capacity + 16, -77);
+    minkq_query_info info{};
+    EXPECT_EQ(minkq_scene_query(scene.handle, &q, buffer.data(), capacity, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_CAPACITY);
+    EXPECT_EQ(info.count, all.size());
+    EXPECT_NE(message().find(std::to_string(all.size()) + " pairs found"), std::string::npos) << message();
+    for (size_t i = 2 * capacity; i < buffer.size(); ++i) ASSERT_EQ(buffer[i], -77) << "written past the buffer";
+  }
+  std::vector<int32_t> exact(2 * all.size());
+  minkq_query_info info{};
+  EXPECT_EQ(minkq_scene_query(scene.handle, &q, exact.data(), all.size(), MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
+  EXPECT_EQ(info.count, all.size());
+}
+
+TEST_F(Fixture, digest_is_xxh64_of_the_canonical_little_endian_pairs) {
+  test::Scene scene(device.handle, reference::random_soup(300, 7, 1.0), MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  uint64_t digest = 0;
+  const test::Pairs pairs = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, 0.05f, 0, &digest);
+  ASSERT_FALSE(pairs.empty());
+  EXPECT_TRUE(std::is_sorted(pairs.begin(), pairs.end()));
+  std::vector<int32_t> flat;
+  for (const auto& [a, b] : pairs) { flat.push_back(a); flat.push_back(b); }
+  EXPECT_EQ(digest, XXH64(flat.data(), flat.size() * 4, 0));
+  // Without CANONICAL the same set comes back (in the backend's deterministic order).
+  minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, 0, 0.05f};
+  std::vector<int32_t> raw(2 * pairs.size());
+  minkq_query_info info{};
+  ASSERT_EQ(minkq_scene_query(scene.handle, &q, raw.data(), pairs.size(), MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
+  test::Pairs unordered;
+  for (size_t i = 0; i < pairs.size(); ++i) unordered.push_back({raw[2 * i], raw[2 * i + 1]});
+  std::sort(unordered.begin(), unordered.end());
+  EXPECT_EQ(unordered, pairs);
+}
+
+TEST_F(Fixture, failed_refit_keeps_the_previous_positions) {
+  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  const test::Pairs before = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0.1f);
+  std::vector<float> moved = xyz;
+  moved[5] = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(minkq_scene_refit(scene.handle, host_buffer(moved.data(), 6)), MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(message().find("vertex 1"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_refit(scene.handle, host_buffer(moved.data(), 5)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("refit with 5 vertices but the scene has 6"), std::string::npos) << message();
+  EXPECT_EQ(scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0.1f), before);
+}
+
+TEST(Devices, specs_versions_and_missing_cuda) {
+  minkq_device* device = nullptr;
+  EXPECT_EQ(minkq_device_create("gpu", &device), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("unknown device spec \"gpu\""), std::string::npos);
+  EXPECT_EQ(minkq_device_create("cuda:x", &device), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_device_create(nullptr, &device), MINKQ_ERROR_INVALID_ARGUMENT);
+  ASSERT_EQ(minkq_device_create("auto", &device), MINKQ_SUCCESS);
+  EXPECT_EQ(minkq_device_backend(device), minkq_cuda_device_count() > 0 ? MINKQ_BACKEND_CUDA : MINKQ_BACKEND_CPU);
+  minkq_device_release(device);
+  if (minkq_cuda_device_count() == 0) {
+    EXPECT_EQ(minkq_device_create("cuda", &device), MINKQ_ERROR_UNSUPPORTED);
+    EXPECT_FALSE(message().empty());
+    EXPECT_EQ(device, nullptr);
+  }
+  EXPECT_EQ(minkq_device_create("cuda:999", &device), MINKQ_ERROR_UNSUPPORTED);
+  EXPECT_EQ(minkq_abi_version(), uint32_t(MINKQ_ABI_VERSION));
+  EXPECT_EQ(minkq_version(), uint32_t(MINKQ_VERSION_MAJOR * 10000 + MINKQ_VERSION_MINOR * 100 + MINKQ_VERSION_PATCH));
+  EXPECT_STREQ(minkq_status_name(MINKQ_ERROR_CAPACITY), "MINKQ_ERROR_CAPACITY");
+}
+
+// A BVH over user boxes answers sphere, capsule and box queries; each set equals the node test
+// applied to every box (the definition), and contains every exact overlap.
+TEST(UserBvh, every_shape_matches_its_definition) {
+  test::Random rng(test::fresh_seed());
+  test::Device device;
+  std::vector<Box> boxes(800);
+  for (Box& b : boxes) b = rng.box(rng.vec3(0, 10), 0.3f);
+  minkq_bvh* bvh = nullptr;
+  ASSERT_EQ(minkq_bvh_create(device.handle, host_buffer(boxes.data(), boxes.size()), &bvh), MINKQ_SUCCESS);
+  std::vector<Vec3> a(300), b(300);
+  for (size_t i = 0; i < a.size(); ++i) { a[i] = rng.vec3(0, 10); b[i] = a[i] + rng.vec3(-1, 1); }
+  const float r = 0.2f;
+  auto run = [&](minkq_shape shape, minkq_mode mode) {
+    minkq_bvh_query_desc q{shape, mode, MINKQ_QUERY_CANONICAL, shape == MINKQ_SHAPE_BOX ? 0.0f : r,
+                           host_buffer(a.data(), a.size()),
+                           shape == MINKQ_SHAPE_SPHERE ? host_buffer(nullptr, 0) : host_buffer(b.data(), b.size())};
+    minkq_query_info info{};
+    std::vector<int32_t> out(2 * 200000);
+    EXPECT_EQ(minkq_bvh_query(bvh, &q, out.data(), 200000, MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS) << message();
+    test::Pairs pairs;
+    for (size_t i = 0; i < info.count; ++i) pairs.push_back({out[2 * i], out[2 * i + 1]});
+    return pairs;
+  };
+  auto definition = [&](auto shape_type, bool segments, float radius) {
+    using Shape = decltype(shape_type);
+    test::Pairs pairs;
+    for (int32_t q = 0; q < int32_t(a.size()); ++q) {
+      const Shape shape = Shape::from({a[q], segments ? b[q] : a[q], radius});
+      for (int32_t p = 0; p < int32_t(boxes.size()); ++p)
+        if (shape.overlaps(boxes[p])) pairs.push_back({q, p});
+    }
+    return pairs;
+  };
+  EXPECT_EQ(run(MINKQ_SHAPE_SPHERE, MINKQ_MODE_BOX), definition(BoxShape{}, false, r));
+  EXPECT_EQ(run(MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE), definition(SphereShape{}, false, r));
+  EXPECT_EQ(run(MINKQ_SHAPE_CAPSULE, MINKQ_MODE_BOX), definition(BoxShape{}, true, r));
+  EXPECT_EQ(run(MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_RAY), definition(CapsuleRayShape{}, true, r));
+  EXPECT_EQ(run(MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_EXACT), definition(CapsuleExactShape{}, true, r));
+  EXPECT_EQ(run(MINKQ_SHAPE_BOX, MINKQ_MODE_BOX), definition(BoxShape{}, true, 0.0f));
+  // Refit with moved boxes matches a fresh definition.
+  for (Box& box : boxes) { const Vec3 shift = rng.vec3(-0.5f, 0.5f); box = {box.lo + shift, box.hi + shift}; }
+  ASSERT_EQ(minkq_bvh_refit(bvh, host_buffer(boxes.data(), boxes.size())), MINKQ_SUCCESS);
+  EXPECT_EQ(run(MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_EXACT), definition(CapsuleExactShape{}, true, r));
+  // Bad input.
+  boxes[3].lo.x = boxes[3].hi.x + 1;
+  EXPECT_EQ(minkq_bvh_refit(bvh, host_buffer(boxes.data(), boxes.size())), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("box 3 has lo > hi"), std::string::npos);
+  minkq_bvh_query_desc bad{MINKQ_SHAPE_CAPSULE, MINKQ_MODE_SPHERE, 0, r, host_buffer(a.data(), a.size()),
+                           host_buffer(b.data(), b.size())};
+  minkq_query_info info{};
+  EXPECT_EQ(minkq_bvh_query(bvh, &bad, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  bad.mode = MINKQ_MODE_BOX;
+  bad.flags = MINKQ_QUERY_LEAF_EXACT;
+  EXPECT_EQ(minkq_bvh_query(bvh, &bad, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  bad.flags = 0;
+  bad.second.count = 5;
+  EXPECT_EQ(minkq_bvh_query(bvh, &bad, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  minkq_bvh_release(bvh);
+}
+
+}  // namespace
+}  // namespace minkq

@@ -1,0 +1,311 @@
+// Every query mode through the C API against the double-precision oracle: zero false
+// negatives, the containment chain, leaf-exact extras within the stated bound, traversal
+// completeness, refit, scale invariance and the extreme cases of DESIGN.md.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "capi_util.h"
+#include "minkq/queries.h"
+#include "test_util.h"
+
+namespace minkq {
+namespace {
+
+using test::Pairs;
+using reference::Mesh;
+
+constexpr uint32_t kBoth = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
+
+struct Views {  // the mesh as the core's types, for brute-force definitions
+  std::vector<Vec3> vertices;
+  std::vector<Triangle> triangles;
+  std::vector<Edge> edges;
+  Views(const Mesh& mesh, const std::vector<int32_t>& edge_ids) {
+    vertices.resize(mesh.xyz.size() / 3);
+    std::memcpy(vertices.data(), mesh.xyz.data(), mesh.xyz.size() * sizeof(float));
+    triangles.resize(mesh.tris.size() / 3);
+    std::memcpy(triangles.data(), mesh.tris.data(), mesh.tris.size() * sizeof(int32_t));
+    edges.resize(edge_ids.size() / 2);
+    std::memcpy(edges.data(), edge_ids.data(), edge_ids.size() * sizeof(int32_t));
+  }
+};
+
+// The candidate set a mode defines: the node test of its shape applied to every primitive box,
+// then the leaf filter. Traversal must find exactly this set.
+template <class Shape, class Queries, class Boxes>
+Pairs brute_force_definition(const Queries& queries, int32_t num_queries, const Boxes& boxes, int32_t num_prims) {
+  Pairs out;
+  for (int32_t q = 0; q < num_queries; ++q) {
+    const Shape shape = Shape::from(queries.geometry(q));
+    for (int32_t p = 0; p < num_prims; ++p)
+      if (shape.overlaps(boxes(p)) && queries.accept(q, p)) out.push_back({q, p});
+  }
+  return out;
+}
+
+// Largest distance between the points of a pair (the operand size S of predicates.h).
+double pair_scale(const std::vector<const float*>& points) {
+  double s = 0;
+  for (const float* a : points)
+    for (const float* b : points) {
+      const double dx = double(a[0]) - b[0], dy = double(a[1]) - b[1], dz = double(a[2]) - b[2];
+      s = std::max(s, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  return s;
+}
+
+const float* vertex(const Mesh& mesh, int32_t v) { return &mesh.xyz[3 * size_t(v)]; }
+
+long double vt_distance(const Mesh& mesh, int32_t v, int32_t t, double* scale) {
+  double p[3], a[3], b[3], c[3];
+  const float* pts[4] = {vertex(mesh, v), vertex(mesh, mesh.tris[3 * t]), vertex(mesh, mesh.tris[3 * t + 1]),
+                         vertex(mesh, mesh.tris[3 * t + 2])};
+  for (int k = 0; k < 3; ++k) { p[k] = pts[0][k]; a[k] = pts[1][k]; b[k] = pts[2][k]; c[k] = pts[3][k]; }
+  *scale = pair_scale({pts[0], pts[1], pts[2], pts[3]});
+  return reference::point_triangle_distance(p, a, b, c);
+}
+
+long double ee_distance(const Mesh& mesh, const std::vector<int32_t>& edges, int32_t e, int32_t f, double* scale) {
+  const float* pts[4] = {vertex(mesh, edges[2 * e]), vertex(mesh, edges[2 * e + 1]), vertex(mesh, edges[2 * f]),
+                         vertex(mesh, edges[2 * f + 1])};
+  double d[4][3];
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) d[i][k] = pts[i][k];
+  *scale = pair_scale({pts[0], pts[1], pts[2], pts[3]});
+  return reference::segment_segment_distance(d[0], d[1], d[2], d[3]);
+}
+
+// Runs every mode of both kinds and checks the whole contract against the brute-force oracle.
+void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* label, bool check_definition = true) {
+  SCOPED_TRACE(std::string(label) + " r=" + std::to_string(r) + (drop_incident ? " drop_incident" : ""));
+  test::Device device;
+  test::Scene scene(device.handle, mesh, kBoth | (drop_incident ? MINKQ_SCENE_DROP_INCIDENT : 0u));
+  const std::vector<int32_t> edges = scene.edges();
+  ASSERT_EQ(edges, reference::derive_edges(mesh.tris));
+  Mesh with_edges = mesh;
+  with_edges.edges = edges;
+
+  const Pairs vt_true = reference::vt_contacts_brute(with_edges, r, drop_incident);
+  const Pairs ee_true = reference::ee_contacts_brute(with_edges, r, drop_incident);
+
+  const Pairs vt_box = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r);
+  const Pairs vt_sphere = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, r);
+  const Pairs vt_leaf = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, r, MINKQ_QUERY_LEAF_EXACT);
+  const Pairs vt_box_leaf = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+  EXPECT_TRUE(test::is_subset(vt_true, vt_leaf)) << "VT false negatives: " << test::describe(test::difference(vt_true, vt_leaf));
+  EXPECT_TRUE(test::is_subset(vt_true, vt_box_leaf));
+  EXPECT_TRUE(test::is_subset(vt_leaf, vt_sphere));
+  EXPECT_TRUE(test::is_subset(vt_sphere, vt_box));
+  EXPECT_TRUE(test::is_subset(vt_box_leaf, vt_box));
+  // Capsule modes on points are the box and sphere tests.
+  EXPECT_EQ(scene.query(MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_RAY, r), vt_box);
+  EXPECT_EQ(scene.query(MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_EXACT, r), vt_sphere);
+
+  const Pairs ee_box = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r);
+  const Pairs ee_ray = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, r);
+  const Pairs ee_exact = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, r);
+  const Pairs ee_leaf = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, r, MINKQ_QUERY_LEAF_EXACT);
+  const Pairs ee_box_leaf = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+  EXPECT_TRUE(test::is_subset(ee_true, ee_leaf)) << "EE false negatives: " << test::describe(test::difference(ee_true, ee_leaf));
+  EXPECT_TRUE(test::is_subset(ee_true, ee_box_leaf));
+  EXPECT_TRUE(test::is_subset(ee_leaf, ee_exact));
+  EXPECT_TRUE(test::is_subset(ee_exact, ee_ray));
+  EXPECT_TRUE(test::is_subset(ee_ray, ee_box));
+  for (const auto& [e, f] : ee_box) ASSERT_LT(e, f);
+
+  // Leaf-exact extras lie within r + 2^-19 * S.
+  for (const auto& [v, t] : test::difference(vt_leaf, vt_true)) {
+    double s;
+    const long double d = vt_distance(mesh, v, t, &s);
+    ASSERT_LE(d, (long double)r + std::ldexp(s, -19)) << "VT extra (" << v << "," << t << ")";
+  }
+  for (const auto& [e, f] : test::difference(ee_leaf, ee_true)) {
+    double s;
+    const long double d = ee_distance(mesh, edges, e, f, &s);
+    ASSERT_LE(d, (long double)r + std::ldexp(s, -19)) << "EE extra (" << e << "," << f << ")";
+  }
+
+  if (!check_definition) return;
+  const Views views(mesh, edges);
+  const uint32_t filters = drop_incident ? kDropIncident : 0u;
+  const VertexTriangleQueries vt{views.vertices.data(), views.triangles.data(), r, filters};
+  const VertexTriangleQueries vt_exact{views.vertices.data(), views.triangles.data(), r, filters | kLeafExact};
+  const TriangleBoxes tri_boxes{views.vertices.data(), views.triangles.data()};
+  const int32_t nv = int32_t(views.vertices.size()), nt = int32_t(views.triangles.size());
+  EXPECT_EQ(vt_box, brute_force_definition<BoxShape>(vt, nv, tri_boxes, nt));
+  EXPECT_EQ(vt_sphere, brute_force_definition<SphereShape>(vt, nv, tri_boxes, nt));
+  EXPECT_EQ(vt_leaf, brute_force_definition<SphereShape>(vt_exact, nv, tri_boxes, nt));
+  const EdgeEdgeQueries ee{views.vertices.data(), views.edges.data(), r, filters};
+  const EdgeEdgeQueries ee_exact_q{views.vertices.data(), views.edges.data(), r, filters | kLeafExact};
+  const EdgeBoxes edge_boxes{views.vertices.data(), views.edges.data()};
+  const int32_t ne = int32_t(views.edges.size());
+  EXPECT_EQ(ee_box, brute_force_definition<BoxShape>(ee, ne, edge_boxes, ne));
+  EXPECT_EQ(ee_ray, brute_force_definition<CapsuleRayShape>(ee, ne, edge_boxes, ne));
+  EXPECT_EQ(ee_exact, brute_force_definition<CapsuleExactShape>(ee, ne, edge_boxes, ne));
+  EXPECT_EQ(ee_leaf, brute_force_definition<CapsuleExactShape>(ee_exact_q, ne, edge_boxes, ne));
+}
+
+class Queries : public ::testing::Test {
+ protected:
+  uint64_t seed = test::fresh_seed();
+};
+
+TEST_F(Queries, random_soup_every_mode_contains_true_contacts_and_nests) {
+  for (int round = 0; round < 3; ++round) {
+    const Mesh mesh = reference::random_soup(600, seed + round, 0.1);
+    const double edge = reference::mean_edge_length(mesh);
+    for (double factor : {0.1, 0.5, 2.0}) check_scene(mesh, float(factor * edge), round % 2 == 0, "soup");
+  }
+}
+
+TEST_F(Queries, twisted_sheet_every_mode_contains_true_contacts_and_nests) {
+  const Mesh mesh = reference::twisted_sheet(24, 3.0);
+  const double edge = reference::mean_edge_length(mesh);
+  for (double factor : {0.1, 0.25, 1.0, 4.0}) check_scene(mesh, float(factor * edge), true, "twisted sheet");
+  check_scene(mesh, float(0.5 * edge), false, "twisted sheet");
+}
+
+TEST_F(Queries, stacked_sheets_at_gap_equal_to_radius_and_a_few_ulps_around) {
+  const double gap = 0.01;
+  const Mesh mesh = reference::stacked_sheets(12, 3, gap);
+  const float r = float(gap);
+  for (float radius : {r, std::nextafter(r, 0.0f), std::nextafter(r, 1.0f), std::nextafter(std::nextafter(r, 0.0f), 0.0f)})
+    check_scene(mesh, radius, true, "stacked sheets");
+}
+
+TEST_F(Queries, extreme_offsets_radii_and_degenerate_elements) {
+  test::Random rng(seed);
+  Mesh soup = reference::random_soup(300, seed, 0.1);
+  // Degenerate triangles: repeated vertices, collinear vertices, and a point.
+  const int32_t n = int32_t(soup.xyz.size() / 3);
+  soup.tris.insert(soup.tris.end(), {0, 0, 1, 2, 3, 2, 5, 5, 5});
+  soup.xyz.insert(soup.xyz.end(), {0.1f, 0.2f, 0.3f, 0.2f, 0.3f, 0.4f, 0.3f, 0.4f, 0.5f});  // collinear
+  soup.tris.insert(soup.tris.end(), {n, n + 1, n + 2});
+  const double size = 1.0;  // the soup spans the unit cube
+  for (double radius_factor : {1e-9, 1e-5, 1e-2, 1.0, 1e3}) check_scene(soup, float(radius_factor * size), true, "degenerate soup");
+  for (double offset : {1e3, 1e5, 1e7}) {
+    Mesh moved = soup;
+    reference::transform(moved, 1.0, offset);
+    for (double radius_factor : {1e-9, 1e-3, 0.05}) check_scene(moved, float(radius_factor * size), true, "offset soup", false);
+  }
+}
+
+TEST_F(Queries, scaling_by_powers_of_two_gives_identical_pairs) {
+  const Mesh mesh = reference::twisted_sheet(20, 2.0);
+  const float r = float(0.3 * reference::mean_edge_length(mesh));
+  test::Device device;
+  test::Scene base(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  for (int exponent : {-10, 10, -30, 30}) {
+    Mesh scaled = mesh;
+    reference::transform(scaled, std::ldexp(1.0, exponent), 0.0);
+    test::Scene other(device.handle, scaled, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    const float rs = std::ldexp(r, exponent);
+    for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
+      for (uint32_t flags : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)})
+        EXPECT_EQ(base.query(MINKQ_QUERY_VT, mode, r, flags), other.query(MINKQ_QUERY_VT, mode, rs, flags)) << exponent;
+    for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+      for (uint32_t flags : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)})
+        EXPECT_EQ(base.query(MINKQ_QUERY_EE, mode, r, flags), other.query(MINKQ_QUERY_EE, mode, rs, flags)) << exponent;
+  }
+}
+
+TEST_F(Queries, scaling_by_decimal_factors_changes_only_pairs_at_the_boundary) {
+  // x1e3 and x1e-3 round every coordinate, so only pairs whose distance is within the rounding
+  // of r may change; every true contact of the scaled mesh is still found.
+  const Mesh mesh = reference::twisted_sheet(20, 2.0);
+  const double edge = reference::mean_edge_length(mesh);
+  const float r = float(0.3 * edge);
+  test::Device device;
+  test::Scene base(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  const Pairs vt = base.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, r, MINKQ_QUERY_LEAF_EXACT);
+  const Pairs ee = base.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, r, MINKQ_QUERY_LEAF_EXACT);
+  for (double factor : {1e-3, 1e3}) {
+    Mesh scaled = mesh;
+    reference::transform(scaled, factor, 0.0);
+    check_scene(scaled, float(r * factor), true, "decimal scale", false);
+    test::Scene other(device.handle, scaled, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    const Pairs vt_s = other.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, float(r * factor), MINKQ_QUERY_LEAF_EXACT);
+    const Pairs ee_s = other.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, float(r * factor), MINKQ_QUERY_LEAF_EXACT);
+    const std::vector<int32_t> edges = reference::derive_edges(mesh.tris);
+    for (const Pairs* diff : {&vt, &vt_s}) (void)diff;
+    for (const auto& [v, t] : test::difference(vt, vt_s)) {
+      double s;
+      EXPECT_NEAR(double(vt_distance(mesh, v, t, &s)), r, 1e-5 * s) << "VT pair far from the boundary changed";
+    }
+    for (const auto& [v, t] : test::difference(vt_s, vt)) {
+      double s;
+      EXPECT_NEAR(double(vt_distance(mesh, v, t, &s)), r, 1e-5 * s) << "VT pair far from the boundary changed";
+    }
+    for (const auto& [e, f] : test::difference(ee, ee_s)) {
+      double s;
+      EXPECT_NEAR(double(ee_distance(mesh, edges, e, f, &s)), r, 1e-5 * s);
+    }
+    for (const auto& [e, f] : test::difference(ee_s, ee)) {
+      double s;
+      EXPECT_NEAR(double(ee_distance(mesh, edges, e, f, &s)), r, 1e-5 * s);
+    }
+  }
+}
+
+TEST_F(Queries, refit_matches_a_fresh_build_and_the_oracle) {
+  test::Random rng(seed);
+  Mesh mesh = reference::twisted_sheet(20, 1.0);
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  test::Device device;
+  test::Scene scene(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  for (int step = 0; step < 3; ++step) {
+    for (float& x : mesh.xyz) x += rng.uniform(-0.02f, 0.02f);
+    ASSERT_EQ(minkq_scene_refit(scene.handle, test::host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3)), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    test::Scene fresh(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
+      EXPECT_EQ(scene.query(MINKQ_QUERY_VT, mode, r), fresh.query(MINKQ_QUERY_VT, mode, r));
+    for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+      EXPECT_EQ(scene.query(MINKQ_QUERY_EE, mode, r), fresh.query(MINKQ_QUERY_EE, mode, r));
+    check_scene(mesh, r, true, "refit step", false);
+  }
+}
+
+TEST_F(Queries, strided_vertices_give_the_same_pairs) {
+  const Mesh mesh = reference::random_soup(200, seed, 1.0);
+  const size_t nv = mesh.xyz.size() / 3;
+  std::vector<float> padded(nv * 5, -1.0f);
+  for (size_t i = 0; i < nv; ++i) std::memcpy(&padded[5 * i + 1], &mesh.xyz[3 * i], 12);
+  test::Device device;
+  test::Scene packed(device.handle, mesh, kBoth);
+  minkq_scene_desc desc{};
+  desc.flags = kBoth;
+  desc.vertices = {padded.data() + 1, 20, nv, MINKQ_MEMORY_HOST};
+  desc.triangles = test::host_buffer(mesh.tris.data(), mesh.tris.size() / 3);
+  minkq_scene* strided = nullptr;
+  ASSERT_EQ(minkq_scene_create(device.handle, &desc, &strided), MINKQ_SUCCESS) << minkq_last_error_message();
+  const float r = 0.05f;
+  minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, MINKQ_QUERY_DIGEST, r};
+  minkq_result* result = nullptr;
+  ASSERT_EQ(minkq_result_create(&result), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_scene_query_result(strided, &q, result), MINKQ_SUCCESS);
+  uint64_t digest = 0;
+  const Pairs expected = packed.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, r, 0, &digest);
+  EXPECT_EQ(minkq_result_count(result), expected.size());
+  EXPECT_EQ(minkq_result_digest(result), digest);
+  minkq_result_release(result);
+  minkq_scene_release(strided);
+}
+
+TEST_F(Queries, empty_and_single_element_scenes) {
+  test::Device device;
+  Mesh empty;
+  test::Scene none(device.handle, empty, kBoth);
+  EXPECT_TRUE(none.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 1.0f).empty());
+  EXPECT_TRUE(none.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, 1.0f).empty());
+  Mesh one;
+  one.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2f, 0.2f, 0.1f};
+  one.tris = {0, 1, 2};
+  check_scene(one, 0.15f, false, "one triangle");
+  check_scene(one, 0.15f, true, "one triangle");
+}
+
+}  // namespace
+}  // namespace minkq
