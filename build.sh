@@ -27,7 +27,7 @@ build() {
 }
 
 case "${1:-}" in
-  demo) build; "./$binary_dir/examples/minkq" demo "${@:2}" ;;
+  demo) build; "./$binary_dir/bin/minkq" demo "${@:2}" ;;
   test) build; ctest --preset "$preset" -j "$(nproc)" ;;
   build) build ;;
   *) sed -n '2,7p' "$0"; exit 2 ;;

@@ -196,7 +196,7 @@ TEST(PredicateEdgeCases, outward_rounding_helpers_step_one_ulp) {
   EXPECT_LT(next_down(0.0f), 0.0f);
   EXPECT_GT(next_up(-0.0f), 0.0f);
   EXPECT_EQ(next_up(next_down(3.5f)), 3.5f);
-  EXPECT_GE(square_upper_bound(1e-30f), 1e-60f * 0);  // underflow is covered, never negative
+  EXPECT_GT(square_upper_bound(1e-30f), 0.0f);  // r * r underflows to 0; the bound stays positive
   EXPECT_GT(square_upper_bound(1e-23f), 0.0f);
 }
 

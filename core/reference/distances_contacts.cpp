@@ -120,7 +120,8 @@ struct Geometry {
     for (double x : xyz)
       if (!std::isfinite(x)) throw std::invalid_argument("reference: non-finite vertex coordinate");
     const int64_t nv = int64_t(xyz.size() / 3);
-    for (const std::vector<int32_t>* list : {&tris, const_cast<const std::vector<int32_t>*>(&edges)})
+    const std::vector<int32_t>& edge_list = edges;
+    for (const auto* list : {&tris, &edge_list})
       for (int32_t i : *list)
         if (i < 0 || i >= nv) throw std::invalid_argument("reference: vertex index " + std::to_string(i) + " out of range");
   }

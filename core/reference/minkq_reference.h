@@ -3,7 +3,7 @@
 // It shares no code with the core on purpose: a bug in the core's predicates or traversal must
 // not be able to hide itself by also living in the oracle. Distances are evaluated in long
 // double on float meshes (whose coordinates are exact in double), and a pair is a contact when
-// that distance is <= r. Everything here favours being obviously right over being fast; the
+// its distance is <= r (compared as squared distance <= r^2, both in long double). Everything here favours being obviously right over being fast; the
 // grid-accelerated queries exist only so that ~300k-triangle scenes can be checked in seconds.
 #pragma once
 

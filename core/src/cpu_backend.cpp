@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstring>
@@ -134,7 +135,9 @@ class CpuBoxStore final : public Store {
 
 class CpuBackend final : public Backend {
  public:
-  std::string name() const override { return "cpu"; }
+  std::string name() const override {
+    return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads)";
+  }
   bool is_cuda() const override { return false; }
   int64_t first_non_finite(const Strided& values, int floats) override {
     const char* base = static_cast<const char*>(values.data);

@@ -1,0 +1,555 @@
+// CUDA backend: the same per-element steps of bvh.h and queries.h as the CPU backend, one
+// thread per element, so trees are bit-identical and candidate sets equal. All work runs on
+// the per-thread default stream, so scenes used from different host threads do not serialise
+// on the legacy stream; every host read of device results synchronises that stream first.
+#include <cuda_runtime.h>
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_reduce.cuh>
+#include <thrust/iterator/counting_iterator.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+#include <utility>
+
+#include "backend.h"
+
+namespace minkq {
+namespace {
+
+const cudaStream_t kStream = cudaStreamPerThread;
+constexpr int kThreads = 256;       // element-wise kernels
+constexpr int kQueryThreads = 128;  // traversal: divergent, local-memory stack per thread
+
+// ---- Errors and memory ------------------------------------------------------------------------
+
+void check(cudaError_t error, const char* call) {
+  if (error == cudaSuccess) return;
+  cudaGetLastError();  // clear a non-sticky error so it is not reported again by a later call
+  fail(error == cudaErrorMemoryAllocation ? Status::kOutOfMemory : Status::kDevice,
+       std::string(call) + " failed: " + cudaGetErrorString(error));
+}
+
+void use_device(int ordinal) { check(cudaSetDevice(ordinal), "cudaSetDevice"); }
+
+// Owns one cudaMalloc allocation of `size` elements (none when empty).
+template <class T>
+class DeviceBuffer {
+ public:
+  DeviceBuffer() = default;
+  explicit DeviceBuffer(size_t count) { ensure(count); }
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+  DeviceBuffer(DeviceBuffer&& other) noexcept
+      : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
+  DeviceBuffer& operator=(DeviceBuffer&& other) noexcept {
+    std::swap(data_, other.data_);
+    std::swap(size_, other.size_);
+    return *this;
+  }
+  ~DeviceBuffer() { release(); }
+
+  // Room for at least `count` elements; the contents are not kept when it has to grow.
+  void ensure(size_t count) {
+    if (count <= size_) return;
+    if (count > std::numeric_limits<size_t>::max() / sizeof(T))
+      fail(Status::kOutOfMemory, "device allocation size overflows");
+    release();  // free first: growing must not need the old and the new block at once
+    check(cudaMalloc(reinterpret_cast<void**>(&data_), count * sizeof(T)), "cudaMalloc");
+    size_ = count;
+  }
+  T* data() const { return data_; }
+  size_t size() const { return size_; }
+
+ private:
+  void release() {
+    if (data_) cudaFree(data_);  // a destructor cannot report; a failed free only leaks
+    data_ = nullptr;
+    size_ = 0;
+  }
+  T* data_ = nullptr;
+  size_t size_ = 0;
+};
+
+// cudaMemcpy on our stream, complete on return (the host may reuse or read its side at once).
+void copy(void* dst, const void* src, size_t bytes, cudaMemcpyKind kind) {
+  if (bytes == 0) return;
+  check(cudaMemcpyAsync(dst, src, bytes, kind, kStream), "cudaMemcpyAsync");
+  check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");
+}
+
+template <class T>
+void zero(DeviceBuffer<T>& buffer, size_t count) {
+  if (count) check(cudaMemsetAsync(buffer.data(), 0, count * sizeof(T), kStream), "cudaMemsetAsync");
+}
+
+template <class T>
+void upload(DeviceBuffer<T>& dst, const T* src, size_t count) {
+  dst.ensure(count);
+  copy(dst.data(), src, count * sizeof(T), cudaMemcpyHostToDevice);
+}
+
+// One thread per element i < n.
+template <class Kernel, class... Args>
+void launch(const char* name, Kernel kernel, int64_t n, int threads, Args... args) {
+  if (n <= 0) return;
+  kernel<<<unsigned((n + threads - 1) / threads), threads, 0, kStream>>>(args...);
+  check(cudaGetLastError(), name);
+}
+
+__device__ int64_t global_index() { return int64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
+
+// ---- Strided input ------------------------------------------------------------------------
+
+// Float k of a record. Caller-supplied strides need only be 4-aligned; anything less aligned
+// is read byte by byte.
+__device__ float load_float(const char* record, int k, bool aligned) {
+  if (aligned) return reinterpret_cast<const float*>(record)[k];
+  unsigned char bytes[4];
+  for (int b = 0; b < 4; ++b) bytes[b] = static_cast<unsigned char>(record[4 * k + b]);
+  float f;
+  memcpy(&f, bytes, 4);
+  return f;
+}
+
+bool is_aligned4(const Strided& values) {
+  return (reinterpret_cast<uintptr_t>(values.data) % 4 == 0) && values.stride % 4 == 0;
+}
+
+__global__ void gather_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
+                              float* out) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  const char* record = base + size_t(i) * stride;
+  for (int k = 0; k < floats; ++k) out[i * floats + k] = load_float(record, k, aligned);
+}
+
+__global__ void first_non_finite_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
+                                        unsigned long long* first) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  const char* record = base + size_t(i) * stride;
+  for (int k = 0; k < floats; ++k)
+    if (!isfinite(load_float(record, k, aligned))) {
+      atomicMin(first, static_cast<unsigned long long>(i));
+      return;
+    }
+}
+
+// Packs strided Vec3 or Box records (host or device memory) into a device array.
+template <class T>
+void gather_to_device(const Strided& values, DeviceBuffer<T>& dst) {
+  static_assert(std::is_same<T, Vec3>::value || std::is_same<T, Box>::value, "float records only");
+  const size_t count = size_t(values.count);
+  dst.ensure(count);
+  if (count == 0) return;
+  if (values.memory == Memory::kHost) {
+    if (values.stride == sizeof(T)) return upload(dst, static_cast<const T*>(values.data), count);
+    std::vector<T> packed;
+    if constexpr (std::is_same<T, Vec3>::value) packed = gather_vec3(values); else packed = gather_boxes(values);
+    return upload(dst, packed.data(), count);
+  }
+  if (values.stride == sizeof(T)) return copy(dst.data(), values.data, count * sizeof(T), cudaMemcpyDeviceToDevice);
+  launch("gather_kernel launch", gather_kernel, values.count, kThreads, static_cast<const char*>(values.data),
+         values.stride, values.count, int(sizeof(T) / sizeof(float)), is_aligned4(values),
+         reinterpret_cast<float*>(dst.data()));
+}
+
+// ---- Tree ---------------------------------------------------------------------------------
+
+struct BoxUnion {
+  __host__ __device__ Box operator()(const Box& a, const Box& b) const { return box_union(a, b); }
+};
+
+// Primitive i's centre as a point box: reduced with BoxUnion, this is the CPU's box_expand.
+template <class Boxes>
+struct CentreBox {
+  Boxes boxes;
+  __host__ __device__ Box operator()(int32_t i) const { return Box::of_point(box_centre(boxes(i))); }
+};
+
+template <class Boxes>
+__global__ void morton_kernel(Boxes boxes, int32_t n, const Box* centre_bounds, uint64_t* keys, int32_t* ids) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  keys[i] = morton_code(morton_frame(*centre_bounds), box_centre(boxes(int32_t(i))));
+  ids[i] = int32_t(i);
+}
+
+__global__ void internal_node_kernel(const uint64_t* keys, const int32_t* prims, int32_t n, BvhNode* nodes,
+                                     int32_t* leaf_parent) {
+  const int64_t i = global_index();
+  if (i < n - 1) build_internal_node(int32_t(i), keys, prims, n, nodes, leaf_parent);
+}
+
+template <class Boxes>
+__global__ void refit_kernel(Boxes boxes, int32_t n, const int32_t* leaf_parent, BvhNode* nodes, int32_t* arrivals) {
+  const int64_t p = global_index();
+  if (p < n) refit_from_leaf(int32_t(p), boxes(int32_t(p)), leaf_parent, nodes, arrivals);
+}
+
+// CpuTree::build step by step; the arrays start zeroed as the CPU's value-initialised vectors.
+class CudaTree {
+ public:
+  template <class Boxes>
+  void build(Boxes boxes, int32_t n) {
+    n_ = n;
+    const size_t num_nodes = size_t(n > 1 ? n - 1 : n);
+    nodes_.ensure(num_nodes);
+    leaf_parent_.ensure(size_t(n));
+    arrivals_.ensure(num_nodes);
+    zero(nodes_, num_nodes);
+    zero(leaf_parent_, size_t(n));
+    if (n == 0) return;
+    if (n == 1) {
+      BvhNode root{};
+      root.left = ~0;
+      root.right = kNoChild;
+      root.parent = -1;
+      copy(nodes_.data(), &root, sizeof(root), cudaMemcpyHostToDevice);
+      refit(boxes);
+      return;
+    }
+    // Bounds of the centres: min/max are exact, so the reduction order does not matter.
+    DeviceBuffer<Box> centre_bounds(1);
+    DeviceBuffer<char> temp;
+    size_t bytes = 0;
+    const thrust::counting_iterator<int32_t> ids(0);
+    for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
+      check(cub::DeviceReduce::TransformReduce(pass ? temp.data() : nullptr, bytes, ids, centre_bounds.data(), n,
+                                               BoxUnion{}, CentreBox<Boxes>{boxes}, Box::empty(), kStream),
+            "cub::DeviceReduce::TransformReduce");
+      temp.ensure(bytes);
+    }
+    DeviceBuffer<uint64_t> keys(n), sorted_keys(n);
+    DeviceBuffer<int32_t> order(n), sorted_prims(n);
+    launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, centre_bounds.data(), keys.data(),
+           order.data());
+    // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in
+    // the CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
+    for (int pass = 0; pass < 2; ++pass) {
+      check(cub::DeviceRadixSort::SortPairs(pass ? temp.data() : nullptr, bytes, keys.data(), sorted_keys.data(),
+                                            order.data(), sorted_prims.data(), n, 0, 63, kStream),
+            "cub::DeviceRadixSort::SortPairs");
+      temp.ensure(bytes);
+    }
+    launch("internal_node_kernel launch", internal_node_kernel, n - 1, kThreads, sorted_keys.data(),
+           sorted_prims.data(), n, nodes_.data(), leaf_parent_.data());
+    refit(boxes);
+  }
+
+  template <class Boxes>
+  void refit(Boxes boxes) {
+    zero(arrivals_, arrivals_.size());
+    launch("refit_kernel launch", refit_kernel<Boxes>, n_, kThreads, boxes, n_, leaf_parent_.data(), nodes_.data(),
+           arrivals_.data());
+  }
+
+  BvhView view() const { return {nodes_.data(), n_}; }
+
+ private:
+  int32_t n_ = 0;
+  DeviceBuffer<BvhNode> nodes_;
+  DeviceBuffer<int32_t> leaf_parent_;
+  DeviceBuffer<int32_t> arrivals_;
+};
+
+// ---- Queries --------------------------------------------------------------------------------
+
+// Where the pairs go: pair i at pairs[2i], pairs[2i + 1] if i < capacity; *count counts all.
+struct PairSlots {
+  int32_t* pairs;
+  unsigned long long capacity;
+  unsigned long long* count;
+};
+
+// emit() of one query's thread: buffers up to kFlush primitives and reserves their slots with
+// one atomicAdd, far fewer atomics than one per pair on dense scenes.
+class PairBuffer {
+ public:
+  static constexpr int kFlush = 16;
+  __device__ explicit PairBuffer(const PairSlots& slots) : slots_(slots) {}
+  __device__ void operator()(int32_t q, int32_t prim) {
+    q_ = q;  // the same for every pair of a thread
+    prims_[n_++] = prim;
+    if (n_ == kFlush) flush();
+  }
+  __device__ void flush() {
+    if (n_ == 0) return;
+    const unsigned long long first = atomicAdd(slots_.count, static_cast<unsigned long long>(n_));
+    for (int k = 0; k < n_; ++k) {
+      const unsigned long long slot = first + k;
+      if (slot >= slots_.capacity) break;
+      slots_.pairs[2 * slot] = q_;
+      slots_.pairs[2 * slot + 1] = prims_[k];
+    }
+    n_ = 0;
+  }
+
+ private:
+  PairSlots slots_;
+  int32_t q_ = 0;
+  int n_ = 0;
+  int32_t prims_[kFlush];
+};
+
+template <class Shape, class Queries>
+__global__ void __launch_bounds__(kQueryThreads) query_kernel(BvhView bvh, Queries queries, int32_t num_queries,
+                                                              PairSlots slots) {
+  const int64_t q = global_index();
+  if (q >= num_queries) return;
+  PairBuffer emit(slots);
+  run_query<Shape>(bvh, queries, int32_t(q), emit);
+  emit.flush();
+}
+
+__global__ void pack_pairs_kernel(const int32_t* pairs, int64_t n, uint64_t* keys) {
+  const int64_t i = global_index();
+  if (i < n) keys[i] = uint64_t(uint32_t(pairs[2 * i])) << 32 | uint32_t(pairs[2 * i + 1]);
+}
+
+__global__ void unpack_pairs_kernel(const uint64_t* keys, int64_t n, int32_t* pairs) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  pairs[2 * i] = int32_t(keys[i] >> 32);
+  pairs[2 * i + 1] = int32_t(keys[i] & 0xffffffffu);
+}
+
+// Device scratch a store keeps between queries, grown as needed.
+struct QueryWorkspace {
+  DeviceBuffer<unsigned long long> count;
+  DeviceBuffer<int32_t> pairs;  // host output: pairs are collected here first
+  DeviceBuffer<uint64_t> keys, sorted_keys;
+  DeviceBuffer<char> temp;
+};
+
+int bit_width(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }
+
+// Sorts n pairs in device memory lexicographically: as uint64 keys (query << 32 | prim).
+void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWorkspace& ws) {
+  if (n < 2) return;
+  ws.keys.ensure(size_t(n));
+  ws.sorted_keys.ensure(size_t(n));
+  launch("pack_pairs_kernel launch", pack_pairs_kernel, n, kThreads, pairs, n, ws.keys.data());
+  const int end_bit = 32 + bit_width(uint64_t(num_queries));  // query ids are < num_queries
+  size_t bytes = 0;
+  for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
+    check(cub::DeviceRadixSort::SortKeys(pass ? ws.temp.data() : nullptr, bytes, ws.keys.data(), ws.sorted_keys.data(),
+                                         n, 0, end_bit, kStream),
+          "cub::DeviceRadixSort::SortKeys");
+    ws.temp.ensure(bytes);
+  }
+  launch("unpack_pairs_kernel launch", unpack_pairs_kernel, n, kThreads, ws.sorted_keys.data(), n, pairs);
+}
+
+template <class Shape, class Queries>
+uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out,
+                     QueryWorkspace& ws) {
+  const bool to_host = out.memory == Memory::kHost;
+  // Host output goes through device scratch: first sized by a guess, then rerun at the exact
+  // count if the guess was short but the caller's buffer is not.
+  uint64_t capacity = out.capacity;
+  if (to_host)
+    capacity = std::min<uint64_t>(out.capacity, std::max<uint64_t>(ws.pairs.size() / 2, 8 * uint64_t(num_queries) + 65536));
+  ws.count.ensure(1);
+  uint64_t total = 0;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (to_host) ws.pairs.ensure(2 * size_t(capacity));
+    int32_t* const pairs = to_host ? ws.pairs.data() : out.pairs;
+    zero(ws.count, 1);
+    launch("query_kernel launch", query_kernel<Shape, Queries>, num_queries, kQueryThreads, bvh, queries,
+           num_queries, PairSlots{pairs, capacity, ws.count.data()});
+    unsigned long long count = 0;
+    copy(&count, ws.count.data(), sizeof(count), cudaMemcpyDeviceToHost);
+    total = count;
+    if (total > out.capacity) return total;  // the caller learns the exact count; nothing copied
+    if (total <= capacity) break;
+    capacity = total;
+  }
+  if (total > capacity) fail(Status::kInternal, "pair count changed between two runs of the same query");
+  int32_t* const pairs = to_host ? ws.pairs.data() : out.pairs;
+  if (out.canonical) sort_pairs(pairs, int64_t(total), num_queries, ws);
+  if (to_host) copy(out.pairs, pairs, total * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
+  else check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");  // report kernel faults here
+  return total;
+}
+
+template <class Queries>
+uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView& bvh, const Queries& queries,
+                  int32_t num_queries, const PairOutput& out, QueryWorkspace& ws) {
+  uint64_t total = 0;
+  with_shape(request.mode, point_queries, [&](auto shape) {
+    total = run_queries<decltype(shape)>(bvh, queries, num_queries, out, ws);
+  });
+  return total;
+}
+
+// ---- Stores and backend ---------------------------------------------------------------------
+
+// Selects the store's device for every public call. The final classes' destructors select it
+// too, before their members (and this base's) are freed.
+class CudaStore : public Store {
+ protected:
+  explicit CudaStore(int ordinal) : ordinal_(ordinal) { use_device(ordinal_); }
+  void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }  // errors belong to this call
+  int ordinal_;
+  QueryWorkspace ws_;
+};
+
+class CudaMeshStore final : public CudaStore {
+ public:
+  CudaMeshStore(int ordinal, const Strided& vertices, const std::vector<Triangle>& triangles,
+                const std::vector<Edge>& edges, bool triangle_tree, bool edge_tree)
+      : CudaStore(ordinal), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
+    gather_to_device(vertices, vertices_);
+    num_vertices_ = int32_t(vertices.count);
+    num_triangles_ = int32_t(triangles.size());
+    num_edges_ = int32_t(edges.size());
+    upload(triangles_, triangles.data(), triangles.size());
+    upload(edges_, edges.data(), edges.size());
+    if (has_triangle_tree_) triangle_tree_.build(triangle_boxes(), num_triangles_);
+    if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
+    finish();
+  }
+  ~CudaMeshStore() override { cudaSetDevice(ordinal_); }
+
+  void refit(const Strided& vertices) override {
+    use_device(ordinal_);
+    gather_to_device(vertices, vertices_);
+    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
+    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
+    finish();
+  }
+
+  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+    use_device(ordinal_);
+    if (request.kind == QueryKind::kVertexTriangle) {
+      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), request.r, request.filters};
+      return dispatch(request, true, triangle_tree_.view(), queries, num_vertices_, out, ws_);
+    }
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), request.r, request.filters};
+    return dispatch(request, false, edge_tree_.view(), queries, num_edges_, out, ws_);
+  }
+
+ private:
+  TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data()}; }
+  EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data()}; }
+
+  DeviceBuffer<Vec3> vertices_;
+  DeviceBuffer<Triangle> triangles_;
+  DeviceBuffer<Edge> edges_;
+  int32_t num_vertices_ = 0, num_triangles_ = 0, num_edges_ = 0;
+  bool has_triangle_tree_, has_edge_tree_;
+  CudaTree triangle_tree_, edge_tree_;
+};
+
+class CudaBoxStore final : public CudaStore {
+ public:
+  CudaBoxStore(int ordinal, const Strided& boxes) : CudaStore(ordinal) {
+    gather_to_device(boxes, boxes_);
+    num_boxes_ = int32_t(boxes.count);
+    tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
+    finish();
+  }
+  ~CudaBoxStore() override { cudaSetDevice(ordinal_); }
+
+  void refit(const Strided& boxes) override {
+    use_device(ordinal_);
+    gather_to_device(boxes, boxes_);
+    tree_.refit(GivenBoxes{boxes_.data()});
+    finish();
+  }
+
+  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+    use_device(ordinal_);
+    DeviceBuffer<Vec3> first, second;
+    gather_to_device(request.first, first);
+    gather_to_device(request.second, second);
+    const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
+    return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
+                    int32_t(request.first.count), out, ws_);
+  }
+
+ private:
+  DeviceBuffer<Box> boxes_;
+  int32_t num_boxes_ = 0;
+  CudaTree tree_;
+};
+
+class CudaBackend final : public Backend {
+ public:
+  CudaBackend(int ordinal, const std::string& device_name)
+      : ordinal_(ordinal), name_("cuda:" + std::to_string(ordinal) + " (" + device_name + ")"),
+        host_(make_cpu_backend()) {}
+
+  std::string name() const override { return name_; }
+  bool is_cuda() const override { return true; }
+
+  int64_t first_non_finite(const Strided& values, int floats) override {
+    if (values.memory == Memory::kHost) return host_->first_non_finite(values, floats);
+    use_device(ordinal_);
+    if (values.count == 0) return -1;
+    DeviceBuffer<unsigned long long> first(1);
+    const unsigned long long none = std::numeric_limits<unsigned long long>::max();
+    copy(first.data(), &none, sizeof(none), cudaMemcpyHostToDevice);
+    launch("first_non_finite_kernel launch", first_non_finite_kernel, values.count, kThreads,
+           static_cast<const char*>(values.data), values.stride, values.count, floats, is_aligned4(values),
+           first.data());
+    unsigned long long result = none;
+    copy(&result, first.data(), sizeof(result), cudaMemcpyDeviceToHost);
+    return result == none ? -1 : int64_t(result);
+  }
+
+  void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) override {
+    if (memory == Memory::kHost) return host_->copy_to_host(dst, src, bytes, memory);
+    use_device(ordinal_);
+    copy(dst, src, bytes, cudaMemcpyDeviceToHost);
+  }
+
+  std::unique_ptr<Store> create_mesh_store(const Strided& vertices, const std::vector<Triangle>& triangles,
+                                           const std::vector<Edge>& edges, bool triangle_tree,
+                                           bool edge_tree) override {
+    return std::make_unique<CudaMeshStore>(ordinal_, vertices, triangles, edges, triangle_tree, edge_tree);
+  }
+  std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
+    return std::make_unique<CudaBoxStore>(ordinal_, boxes);
+  }
+
+ private:
+  int ordinal_;
+  std::string name_;
+  std::unique_ptr<Backend> host_;  // host-memory inputs are checked and copied as on the CPU
+};
+
+}  // namespace
+
+bool built_with_cuda() { return true; }
+
+int cuda_device_count() {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) {
+    cudaGetLastError();  // no driver or no device: not an error for a count
+    return 0;
+  }
+  return count;
+}
+
+std::unique_ptr<Backend> make_cuda_backend(int ordinal) {
+  int count = 0;
+  const cudaError_t error = cudaGetDeviceCount(&count);
+  if (error != cudaSuccess) {
+    cudaGetLastError();
+    fail(Status::kUnsupported, std::string("no usable CUDA device: ") + cudaGetErrorString(error));
+  }
+  if (ordinal < 0 || ordinal >= count)
+    fail(Status::kUnsupported, "no CUDA device cuda:" + std::to_string(ordinal) + " (" + std::to_string(count) +
+                                   " device" + (count == 1 ? "" : "s") + " found)");
+  use_device(ordinal);
+  cudaDeviceProp properties;
+  check(cudaGetDeviceProperties(&properties, ordinal), "cudaGetDeviceProperties");
+  return std::make_unique<CudaBackend>(ordinal, properties.name);
+}
+
+}  // namespace minkq

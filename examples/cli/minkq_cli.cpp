@@ -1,0 +1,319 @@
+// minkq: the command-line tool. `demo` measures every query mode on a built-in scene against
+// the reference oracle; `query` runs one mode on a mesh file and prints comparable digests.
+#include "minkq.h"
+#include "minkq_reference.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace ref = minkq::reference;
+
+namespace {
+
+constexpr int kExitFalseNegatives = 1, kExitUsage = 2, kExitFailure = 3;
+
+const char* const kUsage = R"(usage: minkq <command> [options]
+
+commands:
+  demo [--backend B] [--size N] [--radius-factor F]
+      Twisted sheet of N x N vertices (default 388: 299,538 triangles), 3 turns, radius
+      F x mean edge length (default 0.25). Runs VT and EE queries in every mode, compares them
+      with the double-precision reference oracle and prints candidates, true contacts,
+      false-positive ratio, false negatives, query time (median of 3) and speedup over box.
+  query MESH --radius R [--mode M] [--backend B] [--out PREFIX]
+      Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) in mode M:
+        box            r-padded boxes
+        sphere         VT sphere, EE capsule_exact (the exact Minkowski node test of each)
+        capsule_ray    VT box (a point's ray test), EE capsule slab test
+        capsule_exact  VT sphere, EE segment-box distance
+        leaf_exact     capsule_exact plus the primitive distance at the leaves (default)
+      Prints "vt candidates N digest HEX" and "ee candidates N digest HEX" (xxHash64 of the
+      canonical pairs). --out writes PREFIX.vt.bin and PREFIX.ee.bin: little-endian int32
+      (a, b) pairs in canonical order.
+  version
+      Library, ABI and header versions, and the number of CUDA devices.
+
+options:
+  --backend B   cpu, cuda, cuda:N or auto (default: auto, CUDA when a GPU is usable)
+
+exit status: 0 success, 1 false negatives found (demo), 2 bad arguments, 3 failure (file, API)
+)";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void check(minkq_status status, const char* call) {
+  if (status != MINKQ_SUCCESS)
+    throw std::runtime_error(std::string(call) + " failed: " + minkq_status_name(status) + ": " +
+                             minkq_last_error_message());
+}
+
+// Owning handles for the C API objects.
+struct Release {
+  void operator()(minkq_device* d) const { minkq_device_release(d); }
+  void operator()(minkq_scene* s) const { minkq_scene_release(s); }
+  void operator()(minkq_result* r) const { minkq_result_release(r); }
+};
+using Device = std::unique_ptr<minkq_device, Release>;
+using Scene = std::unique_ptr<minkq_scene, Release>;
+using Result = std::unique_ptr<minkq_result, Release>;
+
+// "--name value" or "--name=value" options after the positional arguments.
+struct Args {
+  std::vector<std::string> positional;
+  std::vector<std::pair<std::string, std::string>> options;
+
+  Args(int argc, char** argv, int first, const std::vector<std::string>& known) {
+    for (int i = first; i < argc; ++i) {
+      std::string a = argv[i];
+      if (a.rfind("--", 0) != 0) {
+        positional.push_back(a);
+        continue;
+      }
+      std::string value;
+      const size_t eq = a.find('=');
+      if (eq != std::string::npos) {
+        value = a.substr(eq + 1), a = a.substr(0, eq);
+      } else {
+        if (i + 1 >= argc) throw UsageError("option " + a + " needs a value");
+        value = argv[++i];
+      }
+      if (std::find(known.begin(), known.end(), a) == known.end()) throw UsageError("unknown option " + a);
+      options.emplace_back(a, value);
+    }
+  }
+  const std::string* get(const std::string& name) const {
+    const std::string* v = nullptr;
+    for (const auto& [k, val] : options)
+      if (k == name) v = &val;  // the last one wins
+    return v;
+  }
+};
+
+double parse_number(const std::string& option, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v)) throw UsageError(option + ": not a finite number: '" + text + "'");
+  return v;
+}
+
+Device open_device(const std::string& spec) {
+  minkq_device* d = nullptr;
+  check(minkq_device_create(spec.c_str(), &d), ("minkq_device_create(\"" + spec + "\")").c_str());
+  return Device(d);
+}
+
+// A VT + EE scene with incident pairs dropped; edges are derived by the library.
+Scene make_scene(minkq_device* device, const ref::Mesh& m) {
+  minkq_scene_desc desc{};
+  desc.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
+  desc.vertices = {m.xyz.data(), 3 * sizeof(float), m.vertex_count(), MINKQ_MEMORY_HOST};
+  desc.triangles = {m.tris.data(), 3 * sizeof(int32_t), m.triangle_count(), MINKQ_MEMORY_HOST};
+  desc.edges = {nullptr, 0, 0, MINKQ_MEMORY_HOST};
+  minkq_scene* s = nullptr;
+  check(minkq_scene_create(device, &desc, &s), "minkq_scene_create");
+  return Scene(s);
+}
+
+ref::Pairs result_pairs(const minkq_result* r) {
+  const int32_t* p = minkq_result_pairs(r);
+  ref::Pairs out(minkq_result_count(r));
+  for (size_t i = 0; i < out.size(); ++i) out[i] = {p[2 * i], p[2 * i + 1]};
+  return out;
+}
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// ---- demo ----------------------------------------------------------------------------------
+struct DemoMode {
+  minkq_query_kind kind;
+  const char* name;
+  minkq_mode mode;
+  uint32_t flags;
+};
+
+int demo(const Args& args) {
+  if (!args.positional.empty()) throw UsageError("demo takes no positional arguments");
+  const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";
+  const double size = args.get("--size") ? parse_number("--size", *args.get("--size")) : 388;
+  const double factor = args.get("--radius-factor") ? parse_number("--radius-factor", *args.get("--radius-factor")) : 0.25;
+  if (size < 2 || size > 20000 || size != std::floor(size)) throw UsageError("--size: an integer from 2 to 20000");
+  if (factor < 0) throw UsageError("--radius-factor: must be >= 0");
+
+  const int n = int(size);
+  const ref::Mesh mesh = ref::twisted_sheet(n, 3.0);
+  const double h = ref::mean_edge_length(mesh);
+  // The library takes a float radius; the oracle gets the very same value.
+  const float r = float(factor * h);
+  if (!std::isfinite(r)) throw UsageError("--radius-factor: radius overflows a float");
+
+  Device device = open_device(backend);
+  std::printf("minkq demo: twisted sheet %dx%d, 3 turns: %zu vertices, %zu triangles, %zu edges\n", n, n,
+              mesh.vertex_count(), mesh.triangle_count(), mesh.edge_count());
+  std::printf("radius %.6g = %g x mean edge length %.6g; device %s\n", double(r), factor, h,
+              minkq_device_name(device.get()));
+
+  double t0 = now_ms();
+  Scene scene = make_scene(device.get(), mesh);
+  std::printf("scene build %.1f ms\n", now_ms() - t0);
+  // The oracle numbers edges with derive_edges; the library must number them the same way.
+  std::vector<int32_t> edges(2 * minkq_scene_edge_count(scene.get()));
+  check(minkq_scene_edges(scene.get(), edges.data(), edges.size() / 2), "minkq_scene_edges");
+  if (edges != mesh.edges) throw std::runtime_error("the library's edge numbering differs from derive_edges");
+
+  t0 = now_ms();
+  const ref::Pairs true_vt = ref::vt_contacts(mesh, r, true);
+  const double vt_ms = now_ms() - t0;
+  t0 = now_ms();
+  const ref::Pairs true_ee = ref::ee_contacts(mesh, r, true);
+  std::printf("reference oracle: %zu VT contacts in %.0f ms, %zu EE contacts in %.0f ms\n\n", true_vt.size(), vt_ms,
+              true_ee.size(), now_ms() - t0);
+
+  const DemoMode modes[] = {
+      {MINKQ_QUERY_VT, "box", MINKQ_MODE_BOX, 0},
+      {MINKQ_QUERY_VT, "sphere", MINKQ_MODE_SPHERE, 0},
+      {MINKQ_QUERY_VT, "sphere+leaf_exact", MINKQ_MODE_SPHERE, MINKQ_QUERY_LEAF_EXACT},
+      {MINKQ_QUERY_EE, "box", MINKQ_MODE_BOX, 0},
+      {MINKQ_QUERY_EE, "capsule_ray", MINKQ_MODE_CAPSULE_RAY, 0},
+      {MINKQ_QUERY_EE, "capsule_exact", MINKQ_MODE_CAPSULE_EXACT, 0},
+      {MINKQ_QUERY_EE, "capsule_exact+leaf_exact", MINKQ_MODE_CAPSULE_EXACT, MINKQ_QUERY_LEAF_EXACT},
+  };
+  std::printf("%-4s %-26s %12s %12s %9s %10s %10s %8s\n", "kind", "mode", "candidates", "true", "fp ratio",
+              "false neg", "query ms", "speedup");
+  Result result;
+  {
+    minkq_result* res = nullptr;
+    check(minkq_result_create(&res), "minkq_result_create");
+    result.reset(res);
+  }
+  uint64_t total_false_negatives = 0;
+  double box_ms = 0;
+  for (const DemoMode& m : modes) {
+    const minkq_query_desc q{m.kind, m.mode, m.flags, r};
+    double times[3];
+    for (double& t : times) {
+      const double start = now_ms();
+      check(minkq_scene_query_result(scene.get(), &q, result.get()), "minkq_scene_query_result");
+      t = now_ms() - start;
+    }
+    std::sort(times, times + 3);
+    const double ms = times[1];
+    if (m.mode == MINKQ_MODE_BOX) box_ms = ms;
+
+    ref::Pairs got = result_pairs(result.get());
+    std::sort(got.begin(), got.end());
+    const ref::Pairs& truth = m.kind == MINKQ_QUERY_VT ? true_vt : true_ee;
+    // Sorted merge: true pairs absent from the candidates.
+    uint64_t missing = 0;
+    for (size_t i = 0, j = 0; i < truth.size(); ++i) {
+      while (j < got.size() && got[j] < truth[i]) ++j;
+      if (j == got.size() || got[j] != truth[i]) ++missing;
+    }
+    total_false_negatives += missing;
+    const double fp = truth.empty() ? 0.0 : (double(got.size()) - double(truth.size())) / double(truth.size());
+    std::printf("%-4s %-26s %12zu %12zu %9.3f %10" PRIu64 " %10.2f %7.2fx\n", m.kind == MINKQ_QUERY_VT ? "VT" : "EE",
+                m.name, got.size(), truth.size(), fp, missing, ms, ms > 0 ? box_ms / ms : 0.0);
+  }
+  if (total_false_negatives) {
+    std::printf("\nFAIL: %" PRIu64 " true contacts missing from the candidates\n", total_false_negatives);
+    return kExitFalseNegatives;
+  }
+  std::printf("\nno false negatives\n");
+  return 0;
+}
+
+// ---- query ---------------------------------------------------------------------------------
+void write_pairs(const std::string& path, const minkq_result* r) {
+  const int32_t* p = minkq_result_pairs(r);
+  const size_t n = 2 * size_t(minkq_result_count(r));
+  std::vector<unsigned char> bytes(4 * n);
+  for (size_t i = 0; i < n; ++i)  // little-endian whatever the host
+    for (int b = 0; b < 4; ++b) bytes[4 * i + b] = uint8_t(uint32_t(p[i]) >> (8 * b));
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  if (!f) throw std::runtime_error("cannot write " + path);
+}
+
+int query(const Args& args) {
+  if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
+  if (!args.get("--radius")) throw UsageError("query needs --radius R");
+  const double radius = parse_number("--radius", *args.get("--radius"));
+  if (radius < 0) throw UsageError("--radius: must be >= 0");
+  if (!std::isfinite(float(radius))) throw UsageError("--radius: too large for a float");
+  const std::string mode = args.get("--mode") ? *args.get("--mode") : "leaf_exact";
+  const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";
+
+  // (VT mode, EE mode, flags) for each name; see the usage text.
+  minkq_mode vt_mode, ee_mode;
+  uint32_t flags = MINKQ_QUERY_DIGEST;
+  if (mode == "box") {
+    vt_mode = ee_mode = MINKQ_MODE_BOX;
+  } else if (mode == "sphere" || mode == "capsule_exact") {
+    vt_mode = MINKQ_MODE_SPHERE, ee_mode = MINKQ_MODE_CAPSULE_EXACT;
+  } else if (mode == "capsule_ray") {
+    vt_mode = MINKQ_MODE_CAPSULE_RAY, ee_mode = MINKQ_MODE_CAPSULE_RAY;
+  } else if (mode == "leaf_exact") {
+    vt_mode = MINKQ_MODE_SPHERE, ee_mode = MINKQ_MODE_CAPSULE_EXACT, flags |= MINKQ_QUERY_LEAF_EXACT;
+  } else {
+    throw UsageError("--mode: unknown mode '" + mode + "' (box, sphere, capsule_ray, capsule_exact, leaf_exact)");
+  }
+
+  const ref::Mesh mesh = ref::load_mesh(args.positional[0]);
+  Device device = open_device(backend);
+  Scene scene = make_scene(device.get(), mesh);
+  minkq_result* res = nullptr;
+  check(minkq_result_create(&res), "minkq_result_create");
+  Result result(res);
+  const std::string* out = args.get("--out");
+  for (const auto& [kind, name, m] : {std::tuple{MINKQ_QUERY_VT, "vt", vt_mode}, std::tuple{MINKQ_QUERY_EE, "ee", ee_mode}}) {
+    const minkq_query_desc q{kind, m, flags, float(radius)};
+    check(minkq_scene_query_result(scene.get(), &q, result.get()), "minkq_scene_query_result");
+    std::printf("%s candidates %" PRIu64 " digest %016" PRIx64 "\n", name, minkq_result_count(result.get()),
+                minkq_result_digest(result.get()));
+    if (out) write_pairs(*out + "." + name + ".bin", result.get());
+  }
+  return 0;
+}
+
+int version() {
+  const uint32_t v = minkq_version();
+  std::printf("minkq %u.%u.%u (ABI %u; built against header %d.%d.%d, ABI %d)\n", v / 10000, v / 100 % 100, v % 100,
+              minkq_abi_version(), MINKQ_VERSION_MAJOR, MINKQ_VERSION_MINOR, MINKQ_VERSION_PATCH, MINKQ_ABI_VERSION);
+  std::printf("CUDA devices: %d\n", minkq_cuda_device_count());
+  return minkq_abi_version() == MINKQ_ABI_VERSION ? 0 : kExitFailure;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "";
+  try {
+    if (command == "--help" || command == "-h" || command == "help") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (command == "version" || command == "--version") return version();
+    if (command == "demo") return demo(Args(argc, argv, 2, {"--backend", "--size", "--radius-factor"}));
+    if (command == "query") return query(Args(argc, argv, 2, {"--radius", "--mode", "--backend", "--out"}));
+    throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "minkq: %s\n(run 'minkq --help' for usage)\n", e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "minkq: %s\n", e.what());
+    return kExitFailure;
+  }
+}

@@ -1,0 +1,476 @@
+// The CUDA backend against the CPU backend through the C API: the same trees and the same
+// per-element code, so every query must give the identical canonical pair list (and digest)
+// in every mode, after refits, with strided and device-memory inputs, and with small output
+// buffers. Skips (saying why) where no CUDA device is usable.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "capi_util.h"
+#include "test_util.h"
+
+#if defined(MINKQ_TEST_HAVE_CUDART)
+#include <cuda_runtime.h>
+#endif
+
+namespace minkq {
+namespace {
+
+using reference::Mesh;
+using test::host_buffer;
+
+constexpr uint32_t kBoth = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
+
+#define SKIP_WITHOUT_CUDA()                                                                          \
+  if (minkq_cuda_device_count() == 0)                                                                \
+  GTEST_SKIP() << "no CUDA device: minkq_cuda_device_count() == 0 (built without CUDA, no driver or " \
+                  "no GPU)"
+
+struct SceneDeleter {
+  void operator()(minkq_scene* s) const { minkq_scene_release(s); }
+};
+struct BvhDeleter {
+  void operator()(minkq_bvh* b) const { minkq_bvh_release(b); }
+};
+using ScenePtr = std::unique_ptr<minkq_scene, SceneDeleter>;
+using BvhPtr = std::unique_ptr<minkq_bvh, BvhDeleter>;
+
+ScenePtr make_scene(minkq_device* device, const minkq_scene_desc& desc) {
+  minkq_scene* scene = nullptr;
+  EXPECT_EQ(minkq_scene_create(device, &desc, &scene), MINKQ_SUCCESS) << minkq_last_error_message();
+  return ScenePtr(scene);
+}
+
+ScenePtr make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags, minkq_buffer vertices) {
+  minkq_scene_desc desc{};
+  desc.flags = flags;
+  desc.vertices = vertices;
+  desc.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
+  return make_scene(device, desc);
+}
+
+ScenePtr make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags) {
+  return make_scene(device, mesh, flags, host_buffer(mesh.xyz.data(), mesh.vertex_count()));
+}
+
+// One query's outcome: exact count, digest and the pairs (2 int32 each, host memory).
+struct Outcome {
+  uint64_t count = 0;
+  uint64_t digest = 0;
+  std::vector<int32_t> pairs;
+};
+
+// Runs a query twice: once to learn the count, once into a buffer of exactly that size.
+template <class Query>
+Outcome run_exact(Query query) {
+  Outcome out;
+  minkq_query_info info{};
+  minkq_status status = query(nullptr, 0, &info);
+  if (status == MINKQ_ERROR_CAPACITY) {
+    out.pairs.resize(2 * info.count);
+    status = query(out.pairs.data(), info.count, &info);
+  }
+  EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
+  out.count = info.count;
+  out.digest = info.digest;
+  out.pairs.resize(2 * info.count);
+  return out;
+}
+
+Outcome scene_query(minkq_scene* scene, minkq_query_kind kind, minkq_mode mode, float r, uint32_t flags) {
+  const minkq_query_desc desc{kind, mode, flags, r};
+  return run_exact([&](int32_t* pairs, size_t capacity, minkq_query_info* info) {
+    return minkq_scene_query(scene, &desc, pairs, capacity, MINKQ_MEMORY_HOST, info);
+  });
+}
+
+// Lexicographic order, for comparing outputs that were not asked to be canonical.
+std::vector<int32_t> sorted_pairs(const std::vector<int32_t>& raw) {
+  std::vector<uint64_t> keys(raw.size() / 2);
+  for (size_t i = 0; i < keys.size(); ++i) keys[i] = uint64_t(uint32_t(raw[2 * i])) << 32 | uint32_t(raw[2 * i + 1]);
+  std::sort(keys.begin(), keys.end());
+  std::vector<int32_t> out(raw.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    out[2 * i] = int32_t(keys[i] >> 32);
+    out[2 * i + 1] = int32_t(keys[i] & 0xffffffffu);
+  }
+  return out;
+}
+
+// Equal pair lists, reported by count and first difference rather than by dumping them.
+void expect_same_pairs(const std::vector<int32_t>& cpu, const std::vector<int32_t>& cuda, const std::string& what) {
+  ASSERT_EQ(cpu.size(), cuda.size()) << what << ": " << cpu.size() / 2 << " pairs on cpu, " << cuda.size() / 2
+                                     << " on cuda";
+  const auto diff = std::mismatch(cpu.begin(), cpu.end(), cuda.begin());
+  if (diff.first != cpu.end()) {
+    const size_t i = size_t(diff.first - cpu.begin()) / 2;
+    ADD_FAILURE() << what << ": pair " << i << " is (" << cpu[2 * i] << "," << cpu[2 * i + 1] << ") on cpu but ("
+                  << cuda[2 * i] << "," << cuda[2 * i + 1] << ") on cuda";
+  }
+}
+
+void expect_same(const Outcome& cpu, const Outcome& cuda, const std::string& what) {
+  EXPECT_EQ(cpu.count, cuda.count) << what;
+  EXPECT_EQ(cpu.digest, cuda.digest) << what;
+  expect_same_pairs(cpu.pairs, cuda.pairs, what);
+}
+
+struct ModeCase {
+  minkq_query_kind kind;
+  minkq_mode mode;
+  const char* name;
+};
+// Every mode each kind accepts (sphere is for point queries only).
+const ModeCase kModes[] = {
+    {MINKQ_QUERY_VT, MINKQ_MODE_BOX, "VT box"},
+    {MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, "VT sphere"},
+    {MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_RAY, "VT capsule_ray"},
+    {MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_EXACT, "VT capsule_exact"},
+    {MINKQ_QUERY_EE, MINKQ_MODE_BOX, "EE box"},
+    {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, "EE capsule_ray"},
+    {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, "EE capsule_exact"},
+};
+
+// Every mode, with and without the leaf test: identical canonical pairs and digests; the
+// non-canonical CUDA output is the same set in some order.
+void compare_all_modes(minkq_scene* cpu, minkq_scene* cuda, float r, const std::string& label) {
+  for (const ModeCase& m : kModes)
+    for (uint32_t leaf : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)}) {
+      const std::string what = label + " " + m.name + (leaf ? " leaf_exact" : "") + " r=" + std::to_string(r);
+      const uint32_t flags = leaf | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
+      const Outcome expected = scene_query(cpu, m.kind, m.mode, r, flags);
+      expect_same(expected, scene_query(cuda, m.kind, m.mode, r, flags), what);
+      const Outcome unordered = scene_query(cuda, m.kind, m.mode, r, leaf);
+      EXPECT_EQ(unordered.count, expected.count) << what << " (not canonical)";
+      expect_same_pairs(expected.pairs, sorted_pairs(unordered.pairs), what + " (not canonical)");
+    }
+}
+
+struct Scenes {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  explicit Scenes(uint64_t seed) {
+    meshes.emplace_back("soup", reference::random_soup(3000, seed, 0.08));
+    meshes.emplace_back("twisted sheet", reference::twisted_sheet(40, 3.0));
+  }
+};
+
+class Cuda : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SKIP_WITHOUT_CUDA();
+    seed = test::fresh_seed();
+  }
+  uint64_t seed = 0;
+};
+
+TEST_F(Cuda, device_is_named_and_missing_ordinals_are_unsupported) {
+  test::Device cuda("cuda");
+  ASSERT_NE(cuda.handle, nullptr);
+  EXPECT_EQ(minkq_device_backend(cuda.handle), MINKQ_BACKEND_CUDA);
+  EXPECT_EQ(std::string(minkq_device_name(cuda.handle)).rfind("cuda:0 (", 0), 0u) << minkq_device_name(cuda.handle);
+  minkq_device* missing = nullptr;
+  const std::string spec = "cuda:" + std::to_string(minkq_cuda_device_count());
+  EXPECT_EQ(minkq_device_create(spec.c_str(), &missing), MINKQ_ERROR_UNSUPPORTED);
+  EXPECT_EQ(missing, nullptr);
+  EXPECT_FALSE(std::string(minkq_last_error_message()).empty());
+}
+
+TEST_F(Cuda, every_mode_matches_cpu_with_and_without_leaf_test) {
+  test::Device cpu("cpu"), cuda("cuda");
+  for (const auto& [name, mesh] : Scenes(seed).meshes)
+    for (bool drop : {false, true}) {
+      const uint32_t flags = kBoth | (drop ? MINKQ_SCENE_DROP_INCIDENT : 0u);
+      ScenePtr a = make_scene(cpu.handle, mesh, flags), b = make_scene(cuda.handle, mesh, flags);
+      ASSERT_TRUE(a && b);
+      const double edge = reference::mean_edge_length(mesh);
+      for (double factor : {0.1, 1.0})
+        compare_all_modes(a.get(), b.get(), float(factor * edge), name + (drop ? " drop_incident" : ""));
+    }
+}
+
+TEST_F(Cuda, refit_matches_cpu_after_moving_vertices) {
+  test::Device cpu("cpu"), cuda("cuda");
+  test::Random rng(seed);
+  for (const auto& [name, mesh] : Scenes(seed).meshes) {
+    ScenePtr a = make_scene(cpu.handle, mesh, kBoth), b = make_scene(cuda.handle, mesh, kBoth);
+    ASSERT_TRUE(a && b);
+    const float r = float(0.5 * reference::mean_edge_length(mesh));
+    for (int step = 0; step < 3; ++step) {
+      // Moved vertices, passed with a 16-byte stride (padding float) to exercise the gather.
+      std::vector<float> moved(4 * mesh.vertex_count());
+      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const float angle = 0.2f * float(step + 1) * mesh.xyz[3 * v];
+        const float y = mesh.xyz[3 * v + 1], z = mesh.xyz[3 * v + 2];
+        moved[4 * v] = mesh.xyz[3 * v] + rng.uniform(-0.01f, 0.01f);
+        moved[4 * v + 1] = std::cos(angle) * y - std::sin(angle) * z;
+        moved[4 * v + 2] = std::sin(angle) * y + std::cos(angle) * z;
+        moved[4 * v + 3] = std::numeric_limits<float>::quiet_NaN();  // never read
+      }
+      const minkq_buffer buffer = host_buffer(moved.data(), mesh.vertex_count(), 4 * sizeof(float));
+      ASSERT_EQ(minkq_scene_refit(a.get(), buffer), MINKQ_SUCCESS) << minkq_last_error_message();
+      ASSERT_EQ(minkq_scene_refit(b.get(), buffer), MINKQ_SUCCESS) << minkq_last_error_message();
+      compare_all_modes(a.get(), b.get(), r, name + " refit " + std::to_string(step));
+    }
+  }
+}
+
+TEST_F(Cuda, capacity_returns_the_exact_count_and_writes_nothing_past_the_buffer) {
+  test::Device cpu("cpu"), cuda("cuda");
+  const Mesh mesh = reference::random_soup(3000, seed, 0.08);
+  ScenePtr a = make_scene(cpu.handle, mesh, kBoth), b = make_scene(cuda.handle, mesh, kBoth);
+  ASSERT_TRUE(a && b);
+  const minkq_query_desc desc{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST,
+                              float(reference::mean_edge_length(mesh))};
+  const Outcome expected = scene_query(a.get(), desc.kind, desc.mode, desc.radius, desc.flags);
+  ASSERT_GT(expected.count, 2u);
+  minkq_query_info info{};
+  EXPECT_EQ(minkq_scene_query(b.get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_CAPACITY);
+  EXPECT_EQ(info.count, expected.count);
+
+  const size_t capacity = size_t(expected.count) - 1, guard = 64;
+  const int32_t sentinel = -7;
+  std::vector<int32_t> buffer(2 * (capacity + guard), sentinel);
+  EXPECT_EQ(minkq_scene_query(b.get(), &desc, buffer.data(), capacity, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_CAPACITY);
+  EXPECT_EQ(info.count, expected.count);
+  for (size_t i = 2 * capacity; i < buffer.size(); ++i) ASSERT_EQ(buffer[i], sentinel) << "written past capacity at " << i;
+
+  // Exactly enough room, and more than enough: all pairs, nothing past the count.
+  for (size_t room : {size_t(expected.count), size_t(expected.count) + guard}) {
+    std::vector<int32_t> out(2 * (room + guard), sentinel);
+    ASSERT_EQ(minkq_scene_query(b.get(), &desc, out.data(), room, MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    EXPECT_EQ(info.count, expected.count);
+    EXPECT_EQ(info.digest, expected.digest);
+    for (size_t i = 2 * expected.count; i < out.size(); ++i) ASSERT_EQ(out[i], sentinel) << "written past count at " << i;
+    out.resize(2 * expected.count);
+    expect_same_pairs(expected.pairs, out, "room " + std::to_string(room));
+  }
+}
+
+// Pairs of a user-box BVH query, host buffers in and out.
+Outcome bvh_query(minkq_bvh* bvh, minkq_shape shape, minkq_mode mode, float r, const std::vector<Vec3>& first,
+                  const std::vector<Vec3>& second) {
+  minkq_bvh_query_desc desc{};
+  desc.shape = shape;
+  desc.mode = mode;
+  desc.flags = MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
+  desc.radius = r;
+  desc.first = host_buffer(first.data(), first.size());
+  desc.second = host_buffer(second.empty() ? nullptr : second.data(), second.size());
+  return run_exact([&](int32_t* pairs, size_t capacity, minkq_query_info* info) {
+    return minkq_bvh_query(bvh, &desc, pairs, capacity, MINKQ_MEMORY_HOST, info);
+  });
+}
+
+BvhPtr make_bvh(minkq_device* device, const std::vector<Box>& boxes) {
+  minkq_bvh* bvh = nullptr;
+  EXPECT_EQ(minkq_bvh_create(device, host_buffer(boxes.data(), boxes.size()), &bvh), MINKQ_SUCCESS)
+      << minkq_last_error_message();
+  return BvhPtr(bvh);
+}
+
+TEST_F(Cuda, user_box_queries_match_cpu_for_every_shape_and_after_refit) {
+  test::Device cpu("cpu"), cuda("cuda");
+  test::Random rng(seed);
+  auto random_boxes = [&](int n, float scale) {
+    std::vector<Box> boxes(static_cast<size_t>(n));
+    for (Box& b : boxes) b = rng.box(rng.vec3(0.0f, 1.0f), scale);
+    return boxes;
+  };
+  std::vector<Box> boxes = random_boxes(4000, 0.02f);
+  BvhPtr a = make_bvh(cpu.handle, boxes), b = make_bvh(cuda.handle, boxes);
+  ASSERT_TRUE(a && b);
+  const int nq = 3000;
+  std::vector<Vec3> p0(nq), p1(nq), lo(nq), hi(nq);
+  for (int i = 0; i < nq; ++i) {
+    p0[i] = rng.vec3(0.0f, 1.0f);
+    p1[i] = p0[i] + rng.vec3(-0.05f, 0.05f);
+    const Box q = rng.box(p0[i], 0.03f);
+    lo[i] = q.lo;
+    hi[i] = q.hi;
+  }
+  for (int round = 0; round < 2; ++round) {
+    const std::string tag = round ? " after refit" : "";
+    for (float r : {0.0f, 0.01f, 0.04f}) {
+      const std::string at = " r=" + std::to_string(r) + tag;
+      for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
+        expect_same(bvh_query(a.get(), MINKQ_SHAPE_SPHERE, mode, r, p0, {}),
+                    bvh_query(b.get(), MINKQ_SHAPE_SPHERE, mode, r, p0, {}), "spheres mode " + std::to_string(mode) + at);
+      for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+        expect_same(bvh_query(a.get(), MINKQ_SHAPE_CAPSULE, mode, r, p0, p1),
+                    bvh_query(b.get(), MINKQ_SHAPE_CAPSULE, mode, r, p0, p1), "capsules mode " + std::to_string(mode) + at);
+    }
+    expect_same(bvh_query(a.get(), MINKQ_SHAPE_BOX, MINKQ_MODE_BOX, 0.0f, lo, hi),
+                bvh_query(b.get(), MINKQ_SHAPE_BOX, MINKQ_MODE_BOX, 0.0f, lo, hi), "boxes" + tag);
+    boxes = random_boxes(int(boxes.size()), 0.03f);
+    ASSERT_EQ(minkq_bvh_refit(a.get(), host_buffer(boxes.data(), boxes.size())), MINKQ_SUCCESS);
+    ASSERT_EQ(minkq_bvh_refit(b.get(), host_buffer(boxes.data(), boxes.size())), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+  }
+}
+
+TEST_F(Cuda, single_box_and_tiny_scenes_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  for (int n : {1, 2, 3}) {
+    std::vector<Box> boxes;
+    for (int i = 0; i < n; ++i) boxes.push_back({{float(i), 0, 0}, {float(i) + 0.5f, 1, 1}});
+    BvhPtr a = make_bvh(cpu.handle, boxes), b = make_bvh(cuda.handle, boxes);
+    ASSERT_TRUE(a && b);
+    const std::vector<Vec3> centres = {{0.25f, 0.5f, 0.5f}, {1.7f, 0.5f, 0.5f}, {9, 9, 9}};
+    expect_same(bvh_query(a.get(), MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0.3f, centres, {}),
+                bvh_query(b.get(), MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0.3f, centres, {}),
+                std::to_string(n) + " boxes");
+  }
+}
+
+#if defined(MINKQ_TEST_HAVE_CUDART)
+
+// One cudaMalloc block, freed on scope exit.
+struct DeviceMemory {
+  void* ptr = nullptr;
+  explicit DeviceMemory(size_t bytes) { EXPECT_EQ(cudaMalloc(&ptr, bytes ? bytes : 1), cudaSuccess); }
+  ~DeviceMemory() { cudaFree(ptr); }
+  DeviceMemory(DeviceMemory&& other) noexcept : ptr(other.ptr) { other.ptr = nullptr; }
+  DeviceMemory& operator=(const DeviceMemory&) = delete;
+  template <class T>
+  T* as() const { return static_cast<T*>(ptr); }
+};
+
+// Vertices copied to device memory as records of `stride` bytes (any stride >= 12; strides
+// that are not a multiple of 4 make the backend read bytes).
+DeviceMemory device_vertices(const std::vector<float>& xyz, size_t stride) {
+  const size_t n = xyz.size() / 3;
+  std::vector<unsigned char> records(n * stride, 0xAB);
+  for (size_t v = 0; v < n; ++v) std::memcpy(&records[v * stride], &xyz[3 * v], 3 * sizeof(float));
+  DeviceMemory memory(records.size());
+  EXPECT_EQ(cudaMemcpy(memory.ptr, records.data(), records.size(), cudaMemcpyHostToDevice), cudaSuccess);
+  return memory;
+}
+
+minkq_buffer device_buffer(const void* data, size_t count, size_t stride) {
+  return minkq_buffer{data, stride, count, MINKQ_MEMORY_DEVICE};
+}
+
+TEST_F(Cuda, device_memory_vertices_with_any_stride_match_host_input) {
+  test::Device cpu("cpu"), cuda("cuda");
+  const Mesh mesh = reference::twisted_sheet(40, 3.0);
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  ScenePtr reference_scene = make_scene(cpu.handle, mesh, kBoth);
+  for (size_t stride : {size_t(12), size_t(16), size_t(14)}) {
+    DeviceMemory vertices = device_vertices(mesh.xyz, stride);
+    ScenePtr scene = make_scene(cuda.handle, mesh, kBoth, device_buffer(vertices.ptr, mesh.vertex_count(), stride));
+    ASSERT_TRUE(scene);
+    compare_all_modes(reference_scene.get(), scene.get(), r, "device vertices stride " + std::to_string(stride));
+    // Refit from device memory too: move every vertex, on both sides.
+    Mesh moved = mesh;
+    reference::transform(moved, 1.5, 0.25);
+    DeviceMemory moved_vertices = device_vertices(moved.xyz, stride);
+    ScenePtr moved_cpu = make_scene(cpu.handle, moved, kBoth);
+    ASSERT_EQ(minkq_scene_refit(scene.get(), device_buffer(moved_vertices.ptr, mesh.vertex_count(), stride)),
+              MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    compare_all_modes(moved_cpu.get(), scene.get(), 1.5f * r, "device refit stride " + std::to_string(stride));
+  }
+}
+
+TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
+  test::Device cuda("cuda");
+  Mesh mesh = reference::twisted_sheet(40, 3.0);
+  const size_t bad = mesh.vertex_count() / 3;
+  mesh.xyz[3 * bad + 2] = std::numeric_limits<float>::infinity();
+  mesh.xyz[3 * (bad + 5)] = std::numeric_limits<float>::quiet_NaN();
+  for (size_t stride : {size_t(12), size_t(14)}) {
+    DeviceMemory vertices = device_vertices(mesh.xyz, stride);
+    minkq_scene_desc desc{};
+    desc.flags = kBoth;
+    desc.vertices = device_buffer(vertices.ptr, mesh.vertex_count(), stride);
+    desc.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
+    minkq_scene* scene = nullptr;
+    EXPECT_EQ(minkq_scene_create(cuda.handle, &desc, &scene), MINKQ_ERROR_NON_FINITE);
+    EXPECT_EQ(scene, nullptr);
+    const std::string message = minkq_last_error_message();
+    EXPECT_NE(message.find("vertex " + std::to_string(bad) + " "), std::string::npos) << message;
+    minkq_scene_release(scene);
+  }
+}
+
+TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {
+  test::Device cpu("cpu"), cuda("cuda");
+  const Mesh mesh = reference::random_soup(3000, seed, 0.08);
+  ScenePtr a = make_scene(cpu.handle, mesh, kBoth), b = make_scene(cuda.handle, mesh, kBoth);
+  ASSERT_TRUE(a && b);
+  const float r = float(reference::mean_edge_length(mesh));
+  for (const ModeCase& m : kModes) {
+    const minkq_query_desc desc{m.kind, m.mode, MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST, r};
+    const Outcome expected = scene_query(a.get(), m.kind, m.mode, r, desc.flags);
+    const size_t guard = 64, room = size_t(expected.count) + guard;
+    DeviceMemory pairs(2 * room * sizeof(int32_t));
+    ASSERT_EQ(cudaMemset(pairs.ptr, 0xFF, 2 * room * sizeof(int32_t)), cudaSuccess);
+    minkq_query_info info{};
+    // Too small by one: CAPACITY, exact count, nothing past the buffer.
+    if (expected.count > 0) {
+      EXPECT_EQ(minkq_scene_query(b.get(), &desc, pairs.as<int32_t>(), size_t(expected.count) - 1, MINKQ_MEMORY_DEVICE,
+                                  &info),
+                MINKQ_ERROR_CAPACITY)
+          << m.name;
+      EXPECT_EQ(info.count, expected.count) << m.name;
+      std::vector<int32_t> tail(2 * (guard + 1));
+      ASSERT_EQ(cudaMemcpy(tail.data(), pairs.as<int32_t>() + 2 * (expected.count - 1), tail.size() * sizeof(int32_t),
+                           cudaMemcpyDeviceToHost),
+                cudaSuccess);
+      for (int32_t value : tail) ASSERT_EQ(value, -1) << m.name << ": written past capacity";
+    }
+    ASSERT_EQ(minkq_scene_query(b.get(), &desc, pairs.as<int32_t>(), room, MINKQ_MEMORY_DEVICE, &info), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    Outcome got;
+    got.count = info.count;
+    got.digest = info.digest;
+    got.pairs.resize(2 * size_t(info.count));
+    ASSERT_EQ(cudaMemcpy(got.pairs.data(), pairs.ptr, got.pairs.size() * sizeof(int32_t), cudaMemcpyDeviceToHost),
+              cudaSuccess);
+    expect_same(expected, got, std::string(m.name) + " device output");
+  }
+}
+
+TEST_F(Cuda, user_queries_from_device_memory_match_host_queries) {
+  test::Device cpu("cpu"), cuda("cuda");
+  test::Random rng(seed);
+  std::vector<Box> boxes(3000);
+  for (Box& box : boxes) box = rng.box(rng.vec3(0.0f, 1.0f), 0.02f);
+  BvhPtr a = make_bvh(cpu.handle, boxes), b = make_bvh(cuda.handle, boxes);
+  ASSERT_TRUE(a && b);
+  std::vector<Vec3> p0(2000), p1(2000);
+  for (size_t i = 0; i < p0.size(); ++i) {
+    p0[i] = rng.vec3(0.0f, 1.0f);
+    p1[i] = p0[i] + rng.vec3(-0.05f, 0.05f);
+  }
+  std::vector<float> flat0, flat1;
+  for (size_t i = 0; i < p0.size(); ++i) {
+    flat0.insert(flat0.end(), {p0[i].x, p0[i].y, p0[i].z});
+    flat1.insert(flat1.end(), {p1[i].x, p1[i].y, p1[i].z});
+  }
+  DeviceMemory d0 = device_vertices(flat0, 16), d1 = device_vertices(flat1, 14);
+  minkq_bvh_query_desc desc{};
+  desc.shape = MINKQ_SHAPE_CAPSULE;
+  desc.mode = MINKQ_MODE_CAPSULE_EXACT;
+  desc.flags = MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
+  desc.radius = 0.01f;
+  desc.first = device_buffer(d0.ptr, p0.size(), 16);
+  desc.second = device_buffer(d1.ptr, p1.size(), 14);
+  const Outcome got = run_exact([&](int32_t* pairs, size_t capacity, minkq_query_info* info) {
+    return minkq_bvh_query(b.get(), &desc, pairs, capacity, MINKQ_MEMORY_HOST, info);
+  });
+  expect_same(bvh_query(a.get(), MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_EXACT, 0.01f, p0, p1), got,
+              "device capsule queries");
+}
+
+#endif  // MINKQ_TEST_HAVE_CUDART
+
+}  // namespace
+}  // namespace minkq
