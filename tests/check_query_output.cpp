@@ -1,0 +1,84 @@
+// Checks what `minkq query` writes on a real mesh: its leaf_exact pairs (PREFIX.vt.bin,
+// PREFIX.ee.bin) contain every VT/EE contact of the independent double-precision oracle, in
+// the same numbering, and every extra pair lies within r + 2^-19 * S.
+// usage: check_query_output MINKQ_BINARY MESH RADIUS_FACTOR WORK_DIR
+#include <cstdio>
+#include <cstring>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "contact_checks.h"
+
+using minkq::reference::Pairs;
+
+Pairs read_pairs(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw std::runtime_error("cannot read " + path);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (bytes.size() % 8) throw std::runtime_error(path + ": size is not a multiple of 8 bytes");
+  Pairs pairs(bytes.size() / 8);
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    int32_t ab[2];
+    std::memcpy(ab, bytes.data() + 8 * i, 8);  // little-endian int32, as the host
+    pairs[i] = {ab[0], ab[1]};
+  }
+  return pairs;
+}
+
+template <class Distance>
+int compare(const char* kind, const Pairs& reported, const Pairs& truth, float r, Distance distance) {
+  Pairs missing, extra;
+  std::set_difference(truth.begin(), truth.end(), reported.begin(), reported.end(), std::back_inserter(missing));
+  std::set_difference(reported.begin(), reported.end(), truth.begin(), truth.end(), std::back_inserter(extra));
+  int failures = 0;
+  for (const auto& [a, b] : missing) {
+    if (++failures <= 5) std::printf("%s MISSING true contact (%d, %d)\n", kind, a, b);
+  }
+  double worst = 0;
+  for (const auto& [a, b] : extra) {
+    double s;
+    const long double d = distance(a, b, &s);
+    worst = std::max(worst, double((d - r) / s));
+    if (d > (long double)r + std::ldexp(s, -19) && ++failures <= 10)
+      std::printf("%s extra pair (%d, %d) at distance %.17Lg beyond r + 2^-19 S\n", kind, a, b, d);
+  }
+  std::printf("%s: %zu reported, %zu true, %zu missing, %zu extra (worst excess %.3g S)\n", kind, reported.size(),
+              truth.size(), missing.size(), extra.size(), worst);
+  if (!std::is_sorted(reported.begin(), reported.end())) {
+    std::printf("%s pairs are not in canonical order\n", kind);
+    ++failures;
+  }
+  return failures;
+}
+
+int main(int argc, char** argv) {
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: check_query_output MINKQ_BINARY MESH RADIUS_FACTOR WORK_DIR\n");
+    return 2;
+  }
+  try {
+    const std::string binary = argv[1], mesh_path = argv[2], work = argv[4];
+    minkq::reference::Mesh mesh = minkq::reference::load_mesh(mesh_path);
+    const float r = float(std::atof(argv[3]) * minkq::reference::mean_edge_length(mesh));
+    char radius[32];
+    std::snprintf(radius, sizeof radius, "%.9g", double(r));  // round-trips the float exactly
+    const std::string prefix = work + "/out";
+    const std::string command = "\"" + binary + "\" query \"" + mesh_path + "\" --radius " + radius +
+                                " --mode leaf_exact --backend cpu --out \"" + prefix + "\"";
+    std::printf("%s\n", command.c_str());
+    std::fflush(stdout);
+    if (std::system(command.c_str()) != 0) throw std::runtime_error("minkq query failed");
+    const Pairs vt = read_pairs(prefix + ".vt.bin"), ee = read_pairs(prefix + ".ee.bin");
+    int failures = compare("VT", vt, minkq::reference::vt_contacts(mesh, r, true), r,
+                           [&](int32_t v, int32_t t, double* s) { return minkq::test::vt_distance(mesh, v, t, s); });
+    failures += compare("EE", ee, minkq::reference::ee_contacts(mesh, r, true), r, [&](int32_t e, int32_t f, double* s) {
+      return minkq::test::ee_distance(mesh, mesh.edges, e, f, s);
+    });
+    return failures == 0 ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "check_query_output: %s\n", e.what());
+    return 3;
+  }
+}

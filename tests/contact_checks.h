@@ -1,0 +1,47 @@
+// Distances of reported pairs by the reference oracle, with the operand size S of
+// predicates.h, for checking that leaf-exact extras lie within r + 2^-19 * S.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "minkq_reference.h"
+
+namespace minkq::test {
+
+using reference::Mesh;
+
+// Largest distance between the points of a pair (the operand size S of predicates.h).
+inline double pair_scale(const std::vector<const float*>& points) {
+  double s = 0;
+  for (const float* a : points)
+    for (const float* b : points) {
+      const double dx = double(a[0]) - b[0], dy = double(a[1]) - b[1], dz = double(a[2]) - b[2];
+      s = std::max(s, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  return s;
+}
+
+inline const float* vertex(const Mesh& mesh, int32_t v) { return &mesh.xyz[3 * size_t(v)]; }
+
+inline long double vt_distance(const Mesh& mesh, int32_t v, int32_t t, double* scale) {
+  double p[3], a[3], b[3], c[3];
+  const float* pts[4] = {vertex(mesh, v), vertex(mesh, mesh.tris[3 * t]), vertex(mesh, mesh.tris[3 * t + 1]),
+                         vertex(mesh, mesh.tris[3 * t + 2])};
+  for (int k = 0; k < 3; ++k) { p[k] = pts[0][k]; a[k] = pts[1][k]; b[k] = pts[2][k]; c[k] = pts[3][k]; }
+  *scale = pair_scale({pts[0], pts[1], pts[2], pts[3]});
+  return reference::point_triangle_distance(p, a, b, c);
+}
+
+inline long double ee_distance(const Mesh& mesh, const std::vector<int32_t>& edges, int32_t e, int32_t f, double* scale) {
+  const float* pts[4] = {vertex(mesh, edges[2 * e]), vertex(mesh, edges[2 * e + 1]), vertex(mesh, edges[2 * f]),
+                         vertex(mesh, edges[2 * f + 1])};
+  double d[4][3];
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) d[i][k] = pts[i][k];
+  *scale = pair_scale({pts[0], pts[1], pts[2], pts[3]});
+  return reference::segment_segment_distance(d[0], d[1], d[2], d[3]);
+}
+
+}  // namespace minkq::test
