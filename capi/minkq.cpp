@@ -138,6 +138,16 @@ void require_indices(const std::vector<T>& elements, size_t vertex_count, const 
     }
 }
 
+// User boxes need lo <= hi on every axis (validated on the host: device boxes are copied).
+void require_ordered_boxes(minkq::Backend& backend, const minkq::Strided& values) {
+  const std::vector<minkq::Box> boxes = host_copy<minkq::Box>(backend, values);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const minkq::Box& b = boxes[i];
+    require(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z, Status::kInvalidArgument,
+            "box " + std::to_string(i) + " has lo > hi");
+  }
+}
+
 // Every distinct undirected triangle edge as (min, max), in lexicographic order. A triangle
 // with a repeated vertex contributes its zero-length edge (v, v) too.
 std::vector<minkq::Edge> derive_edges(const std::vector<minkq::Triangle>& triangles) {
@@ -383,15 +393,10 @@ minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bv
     require(device != nullptr, Status::kInvalidArgument, "device is NULL");
     const minkq::Strided values = checked_buffer(device, boxes, 24, "boxes");
     require_finite(*device->backend, values, 6, "box");
-    const std::vector<minkq::Box> host = host_copy<minkq::Box>(*device->backend, values);
-    for (size_t i = 0; i < host.size(); ++i) {
-      const minkq::Box& b = host[i];
-      require(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z, Status::kInvalidArgument,
-              "box " + std::to_string(i) + " has lo > hi");
-    }
+    require_ordered_boxes(*device->backend, values);
     auto bvh = std::make_unique<minkq_bvh>();
     bvh->device = device;
-    bvh->box_count = host.size();
+    bvh->box_count = size_t(values.count);
     bvh->store = device->backend->create_box_store(values);
     *out_bvh = bvh.release();
   });
@@ -406,12 +411,7 @@ minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes) {
     require(size_t(values.count) == bvh->box_count, Status::kInvalidArgument,
             "refit with " + std::to_string(values.count) + " boxes but the bvh has " + std::to_string(bvh->box_count));
     require_finite(*bvh->device->backend, values, 6, "box");
-    const std::vector<minkq::Box> host = host_copy<minkq::Box>(*bvh->device->backend, values);
-    for (size_t i = 0; i < host.size(); ++i) {
-      const minkq::Box& b = host[i];
-      require(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z, Status::kInvalidArgument,
-              "box " + std::to_string(i) + " has lo > hi");
-    }
+    require_ordered_boxes(*bvh->device->backend, values);
     bvh->store->refit(values);
   });
 }

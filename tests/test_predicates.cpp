@@ -25,8 +25,6 @@ LD exact_point_box_distance(Vec3 p, const Box& b) {
 }
 
 LD point_at_distance(Vec3 p0, Vec3 p1, LD s, const Box& b) {
-  Vec3 unused{};
-  (void)unused;
   LD d2 = 0;
   for (int k = 0; k < 3; ++k) {
     const LD x = LD(component(p0, k)) + s * (LD(component(p1, k)) - LD(component(p0, k)));

@@ -170,8 +170,9 @@ MINKQ_HD void refit_from_leaf(int32_t prim, const Box& box, const int32_t* leaf_
 // ---- Traversal ---------------------------------------------------------------------------------
 
 // The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim) is called
-// for every primitive whose box the shape overlaps (and only if every ancestor box overlaps,
-// which holds for every shape here as each test is monotone under box inclusion).
+// for every primitive whose box the shape overlaps, provided the test also accepts every
+// ancestor box (monotone under box inclusion: true of each shape here; tests/test_queries.cpp
+// checks traversal against the test applied to every primitive).
 template <class Shape, class OnLeaf>
 MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, OnLeaf& on_leaf) {
   if (bvh.num_prims <= 0) return;
