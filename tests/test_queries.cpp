@@ -163,6 +163,16 @@ TEST_F(Queries, extreme_offsets_radii_and_degenerate_elements) {
   }
 }
 
+TEST_F(Queries, coordinates_near_float_max_lose_no_contact) {
+  // Sums and differences of coordinates overflow to infinity here; every test must still err
+  // towards "may be within r".
+  for (double s : {1e30, 1e37, 3e38}) {
+    Mesh mesh = reference::random_soup(150, seed, 0.2);
+    reference::transform(mesh, s, -0.5 * s);
+    for (double factor : {0.01, 0.3}) check_scene(mesh, float(factor * s), false, "near FLT_MAX");
+  }
+}
+
 TEST_F(Queries, scaling_by_powers_of_two_gives_identical_pairs) {
   const Mesh mesh = reference::twisted_sheet(20, 2.0);
   const float r = float(0.3 * reference::mean_edge_length(mesh));
