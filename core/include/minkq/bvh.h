@@ -77,11 +77,12 @@ MINKQ_HD int count_leading_zeros64(uint64_t x) {
 }
 
 // Length of the common prefix of sorted keys i and j, the position breaking ties; -1 outside.
-MINKQ_HD int common_prefix(const uint64_t* keys, int32_t n, int32_t i, int32_t j) {
+// j is 64-bit: the search below probes up to 2n positions away.
+MINKQ_HD int common_prefix(const uint64_t* keys, int32_t n, int32_t i, int64_t j) {
   if (j < 0 || j >= n) return -1;
   const uint64_t a = keys[i], b = keys[j];
   if (a != b) return count_leading_zeros64(a ^ b);
-  return 64 + count_leading_zeros64(uint64_t(uint32_t(i) ^ uint32_t(j))) - 32;
+  return 64 + count_leading_zeros64(uint64_t(uint32_t(i) ^ uint32_t(j))) - 32;  // index tie-break
 }
 
 // Internal node i of the Karras tree over n >= 2 sorted leaves. sorted_prims maps leaf
@@ -90,20 +91,20 @@ MINKQ_HD void build_internal_node(int32_t i, const uint64_t* keys, const int32_t
                                   int32_t n, BvhNode* nodes, int32_t* leaf_parent) {
   const int dir = common_prefix(keys, n, i, i + 1) - common_prefix(keys, n, i, i - 1) > 0 ? 1 : -1;
   const int delta_min = common_prefix(keys, n, i, i - dir);
-  int32_t lmax = 2;
+  int64_t lmax = 2;
   while (common_prefix(keys, n, i, i + lmax * dir) > delta_min) lmax *= 2;
-  int32_t l = 0;
-  for (int32_t t = lmax / 2; t >= 1; t /= 2)
+  int64_t l = 0;
+  for (int64_t t = lmax / 2; t >= 1; t /= 2)
     if (common_prefix(keys, n, i, i + (l + t) * dir) > delta_min) l += t;
-  const int32_t j = i + l * dir;
+  const int32_t j = int32_t(i + l * dir);
   const int delta_node = common_prefix(keys, n, i, j);
-  int32_t s = 0;
-  for (int32_t div = 2;; div *= 2) {
-    const int32_t t = (l + div - 1) / div;
+  int64_t s = 0;
+  for (int64_t div = 2;; div *= 2) {
+    const int64_t t = (l + div - 1) / div;
     if (common_prefix(keys, n, i, i + (s + t) * dir) > delta_node) s += t;
     if (t <= 1) break;
   }
-  const int32_t split = i + s * dir + (dir < 0 ? -1 : 0);
+  const int32_t split = int32_t(i + s * dir + (dir < 0 ? -1 : 0));
   const int32_t first = i < j ? i : j, last = i < j ? j : i;
   BvhNode& node = nodes[i];
   if (first == split) {
