@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set-up and entry points on a fresh Debian 12 machine:
 #   ./build.sh demo   installs what is missing, builds, runs `minkq demo` on the default scene
-#   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest)
+#   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest, then
+#                     cargo test and pytest for the bindings)
 #   ./build.sh build  installs what is missing and builds only
 # PRESET=cpu|cuda|default (default: default = CUDA when nvcc is found).
 set -euo pipefail
@@ -28,7 +29,11 @@ build() {
 
 case "${1:-}" in
   demo) build; "./$binary_dir/bin/minkq" demo "${@:2}" ;;
-  test) build; ctest --preset "$preset" -j "$(nproc)" ;;
+  test)
+    build
+    ctest --preset "$preset" -j "$(nproc)"
+    MINKQ_LIB_DIR="$PWD/$binary_dir/capi" bindings/test.sh  # cargo test (with doctests) and pytest
+    ;;
   build) build ;;
   *) sed -n '2,7p' "$0"; exit 2 ;;
 esac

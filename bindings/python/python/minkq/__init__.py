@@ -1,0 +1,57 @@
+"""minkq: which pairs of mesh elements may lie within distance r of each other?
+
+Builds a BVH over triangles, edges or boxes and runs batched sphere, capsule and box queries
+against it, on the CPU or with CUDA, with zero false negatives. Cloth and soft-body simulators
+use it for their per-step vertex-triangle (VT) and edge-edge (EE) broad phase::
+
+    import numpy as np, minkq
+    scene = minkq.Scene(minkq.Device("auto"), vertices, triangles)  # (n, 3) float32, (m, 3) int32
+    vt = scene.query("vt", "sphere", r, leaf_exact=True)            # (k, 2) int32 (vertex, triangle)
+    ee = scene.query("ee", "capsule_exact", r)                      # (k, 2) int32 (e, f), e < f
+    scene.refit(new_vertices)                                       # every step
+
+Errors raise subclasses of :class:`MinkqError` named after the C error codes.
+"""
+
+from . import _native
+from ._api import BVH, KINDS, MODES, Device, QueryInfo, Scene, abi_version, cuda_device_count, version
+from ._errors import (
+    CapacityError,
+    DeviceError,
+    IndexOutOfRangeError,
+    InternalError,
+    InvalidArgumentError,
+    MinkqError,
+    NonFiniteError,
+    OutOfMemoryError,
+    SizeOverflowError,
+    UnsupportedError,
+)
+
+ABI_VERSION: int = _native.ABI_VERSION
+"""The ABI version the bindings were generated against (MINKQ_ABI_VERSION)."""
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ABI_VERSION",
+    "BVH",
+    "KINDS",
+    "MODES",
+    "CapacityError",
+    "Device",
+    "DeviceError",
+    "IndexOutOfRangeError",
+    "InternalError",
+    "InvalidArgumentError",
+    "MinkqError",
+    "NonFiniteError",
+    "OutOfMemoryError",
+    "QueryInfo",
+    "Scene",
+    "SizeOverflowError",
+    "UnsupportedError",
+    "abi_version",
+    "cuda_device_count",
+    "version",
+]

@@ -1,0 +1,391 @@
+"""The typed Python surface over minkq._native: argument checks with messages naming the
+argument, numpy arrays in and out, output arrays sized from the exact counts."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple
+
+import numpy as np
+
+from . import _native
+from ._errors import CapacityError
+
+if TYPE_CHECKING:
+    from typing import Literal
+
+    import numpy.typing as npt
+
+    Kind = Literal["vt", "ee"]
+    Mode = Literal["box", "sphere", "capsule_ray", "capsule_exact"]
+    Shape = Literal["sphere", "capsule", "box"]
+    Pairs = npt.NDArray[np.int32]
+
+KINDS = ("vt", "ee")
+MODES = ("box", "sphere", "capsule_ray", "capsule_exact")
+_DEFAULT_BVH_MODE = {"sphere": "sphere", "capsule": "capsule_exact", "box": "box"}
+
+
+@dataclass(frozen=True)
+class QueryInfo:
+    """What :meth:`Scene.query_into` and :meth:`BVH.query_into` report."""
+
+    count: int
+    """The exact number of pairs written."""
+    digest: Optional[int]
+    """With ``digest=True``: xxHash64 (seed 0) of the canonical little-endian int32 pairs."""
+
+
+def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.ndarray:
+    """``value`` as a C-contiguous array of shape (n, *trailing) and dtype ``dtype``.
+
+    A numpy array must already have the dtype (no hidden conversion of a large array) and is
+    used without a copy when it is C-contiguous; a list or tuple is converted.
+    """
+    dtype = np.dtype(dtype)
+    if isinstance(value, np.ndarray):
+        array = value
+        if array.dtype != dtype:
+            raise TypeError(
+                f"{name}: expected a {dtype.name} array, got {array.dtype} "
+                f"(convert with {name}.astype(np.{dtype.name}))"
+            )
+    else:
+        try:
+            array = np.asarray(value)
+        except (TypeError, ValueError) as e:
+            raise TypeError(f"{name}: expected an array of {dtype.name}, got {type(value).__name__}: {e}") from None
+        if array.size == 0:
+            array = array.astype(dtype)
+        elif dtype.kind == "f" and array.dtype.kind in "fiu":
+            array = array.astype(dtype)
+        elif dtype.kind == "i" and array.dtype.kind in "iu":
+            info = np.iinfo(dtype)
+            if array.min() < info.min or array.max() > info.max:
+                raise ValueError(f"{name}: a value does not fit in {dtype.name}")
+            array = array.astype(dtype)
+        else:
+            raise TypeError(f"{name}: expected {dtype.name} values, got {array.dtype}")
+        if array.size == 0 and array.ndim == 1:
+            array = array.reshape((0,) + trailing)
+    if array.ndim != 1 + len(trailing) or array.shape[1:] != trailing:
+        wanted = ", ".join(["n"] + [str(d) for d in trailing])
+        raise ValueError(f"{name}: expected shape ({wanted}), got {array.shape}")
+    if not (array.flags.c_contiguous and array.flags.aligned):
+        array = np.require(array, requirements=("C", "A"))  # the only copy: strided input
+    return array
+
+
+def _boxes(value: Any, name: str) -> np.ndarray:
+    """Boxes as (n, 2, 3) float32 (lo, hi); (n, 6) is accepted as (lo x, y, z, hi x, y, z)."""
+    if getattr(value, "ndim", None) == 2 or (isinstance(value, (list, tuple)) and value and len(value[0]) == 6):
+        flat = _rows(value, name, np.float32, (6,))
+        return flat.reshape(-1, 2, 3)
+    return _rows(value, name, np.float32, (2, 3))
+
+
+def _radius(radius: Any) -> float:
+    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)):
+        raise TypeError(f"radius: expected a number, got {type(radius).__name__}")
+    return float(radius)
+
+
+def _choice(value: Any, name: str, choices: Tuple[str, ...]) -> str:
+    if value not in choices:
+        raise ValueError(f"{name}: expected one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+    return str(value)
+
+
+def _out(out: Any) -> np.ndarray:
+    if not isinstance(out, np.ndarray):
+        raise TypeError(f"out: expected a numpy array, got {type(out).__name__}")
+    if out.dtype != np.int32:
+        raise TypeError(f"out: expected an int32 array, got {out.dtype}")
+    if out.ndim != 2 or out.shape[1] != 2:
+        raise ValueError(f"out: expected shape (capacity, 2), got {out.shape}")
+    if not (out.flags.c_contiguous and out.flags.aligned):
+        raise ValueError("out: expected a C-contiguous array")
+    if not out.flags.writeable:
+        raise ValueError("out: the array is read-only")
+    return out
+
+
+class _SizedQueries:
+    """Runs queries into arrays sized by the last count of the same query (one run in the
+    steady state of a simulation) and regrown to the exact count on CapacityError."""
+
+    def __init__(self) -> None:
+        self._last_count: Dict[Tuple[Any, ...], int] = {}
+
+    def _run(self, key: Tuple[Any, ...], run: Callable[[np.ndarray], Tuple[int, Optional[int]]]) -> Tuple[np.ndarray, Optional[int]]:
+        out = np.empty((self._last_count.get(key, 0), 2), dtype=np.int32)
+        try:
+            count, digest = run(out)
+        except CapacityError as e:
+            out = np.empty((e.needed, 2), dtype=np.int32)
+            count, digest = run(out)
+        self._last_count[key] = count
+        pairs = out[:count]
+        if 2 * count < len(out):  # do not keep a much larger array alive behind a small result
+            pairs = pairs.copy()
+        return pairs, digest
+
+
+class Device:
+    """A compute device: ``"cpu"``, ``"cuda"`` (GPU 0), ``"cuda:N"`` or ``"auto"`` (CUDA when a GPU
+    is usable, else the CPU). Scenes and BVHs are built on a device and keep it alive.
+
+    >>> import minkq
+    >>> minkq.Device("cpu").backend
+    'cpu'
+
+    Raises :class:`InvalidArgumentError` for an unknown spec and :class:`UnsupportedError` for CUDA
+    where there is none.
+    """
+
+    def __init__(self, spec: str = "auto") -> None:
+        if not isinstance(spec, str):
+            raise TypeError(f"spec: expected a str, got {type(spec).__name__}")
+        self._native = _native.Device(spec)
+
+    @property
+    def name(self) -> str:
+        """A description such as ``"cpu (8 threads)"`` or ``"cuda:0 (NVIDIA H100 80GB HBM3)"``."""
+        return self._native.name
+
+    @property
+    def backend(self) -> str:
+        """``"cpu"`` or ``"cuda"``."""
+        return self._native.backend
+
+    def __repr__(self) -> str:
+        return f"minkq.Device({self.name!r})"
+
+
+class Scene(_SizedQueries):
+    """A triangle mesh on a device with the BVHs for VT and/or EE queries.
+
+    ``vertices``: (n, 3) float32; ``triangles``: (m, 3) int32; ``edges``: (e, 2) int32 or None
+    to derive them from the triangles (every distinct undirected edge as (min, max), sorted).
+    numpy arrays must have exactly these dtypes and are used without a copy when C-contiguous.
+    ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
+    a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
+
+    The GIL is released while the scene is built, refitted and queried. One scene may be used
+    from several threads: calls on it wait for each other (as do builds on one device). Do not
+    change an input array from another thread while a call that reads it runs.
+
+    >>> import numpy as np, minkq
+    >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
+    >>> t = np.array([[0, 1, 2], [3, 4, 5]], np.int32)
+    >>> scene = minkq.Scene(minkq.Device("cpu"), v, t)
+    >>> scene.query("vt", "sphere", 0.2, leaf_exact=True, canonical=True).tolist()
+    [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
+
+    Raises :class:`NonFiniteError`, :class:`IndexOutOfRangeError`, :class:`SizeOverflowError` or
+    :class:`InvalidArgumentError` (with the library's message) for bad input, and
+    TypeError / ValueError naming the argument for a wrong dtype or shape.
+    """
+
+    def __init__(
+        self,
+        device: Device,
+        vertices: Any,
+        triangles: Any,
+        edges: Any = None,
+        *,
+        vt: bool = True,
+        ee: bool = True,
+        drop_incident: bool = True,
+    ) -> None:
+        super().__init__()
+        if not isinstance(device, Device):
+            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
+        self.device = device
+        vertices = _rows(vertices, "vertices", np.float32, (3,))
+        triangles = _rows(triangles, "triangles", np.int32, (3,))
+        if edges is not None:
+            edges = _rows(edges, "edges", np.int32, (2,))
+        self._native = _native.Scene(device._native, vertices, triangles, edges, bool(vt), bool(ee), bool(drop_incident))
+
+    @property
+    def vertex_count(self) -> int:
+        """The number of vertices."""
+        return self._native.vertex_count
+
+    @property
+    def triangle_count(self) -> int:
+        """The number of triangles."""
+        return self._native.triangle_count
+
+    @property
+    def edge_count(self) -> int:
+        """The number of edges (given, or derived for an EE scene)."""
+        return self._native.edge_count
+
+    def edges(self) -> "Pairs":
+        """The scene's edges as an (edge_count, 2) int32 array, numbered as EE pairs number them."""
+        out = np.empty((self.edge_count, 2), dtype=np.int32)
+        self._native.edges_into(out)
+        return out
+
+    def refit(self, vertices: Any) -> None:
+        """Moves the vertices ((n, 3) float32, same n) and refits the trees in place: the
+        per-step call of a simulation. On error the scene keeps its previous positions."""
+        self._native.refit(_rows(vertices, "vertices", np.float32, (3,)))
+
+    def query(
+        self,
+        kind: "Kind",
+        mode: "Mode",
+        radius: float,
+        *,
+        leaf_exact: bool = False,
+        canonical: bool = False,
+    ) -> "Pairs":
+        """Pairs within ``radius`` as a (k, 2) int32 array: (vertex, triangle) for ``kind="vt"``,
+        (e, f) with e < f for ``"ee"``.
+
+        ``mode`` is the node test, from fast to tight: ``"box"``, ``"sphere"`` (VT only),
+        ``"capsule_ray"``, ``"capsule_exact"``. ``leaf_exact=True`` tests the primitives at the
+        leaves, so that the pairs are the true contacts (plus, at most, pairs within
+        r + 2**-19 S). ``canonical=True`` sorts the pairs.
+        """
+        return self._query(kind, mode, radius, leaf_exact, canonical, False)[0]
+
+    def query_digest(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> Tuple["Pairs", int]:
+        """Like :meth:`query`, canonical, with the xxHash64 (seed 0) of the little-endian pairs:
+        equal across backends, runs and language bindings."""
+        pairs, digest = self._query(kind, mode, radius, leaf_exact, True, True)
+        assert digest is not None
+        return pairs, digest
+
+    def query_into(
+        self,
+        out: np.ndarray,
+        kind: "Kind",
+        mode: "Mode",
+        radius: float,
+        *,
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        digest: bool = False,
+    ) -> QueryInfo:
+        """Runs a query into ``out``, a writable C-contiguous (capacity, 2) int32 array; pairs go
+        to ``out[:count]``. Raises :class:`CapacityError` (``needed``: the exact count) when
+        ``out`` is too small, writing nothing past it."""
+        checked = (_out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
+        count, dig = self._native.query_into(*checked, bool(leaf_exact), bool(canonical), bool(digest))
+        return QueryInfo(count, dig)
+
+    def _query(self, kind: Any, mode: Any, radius: Any, leaf_exact: bool, canonical: bool, digest: bool) -> Tuple[np.ndarray, Optional[int]]:
+        kind = _choice(kind, "kind", KINDS)
+        mode = _choice(mode, "mode", MODES)
+        r = _radius(radius)
+        flags = (bool(leaf_exact), bool(canonical), bool(digest))
+        return self._run((kind, mode) + flags, lambda out: self._native.query_into(out, kind, mode, r, *flags))
+
+    def __repr__(self) -> str:
+        return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges)"
+
+
+class BVH(_SizedQueries):
+    """A BVH over user boxes: (n, 2, 3) float32 (lo, hi), or (n, 6) as lo x, y, z, hi x, y, z,
+    with lo <= hi. Answers sphere, capsule and box queries; pairs are (query, box).
+
+    >>> import numpy as np, minkq
+    >>> boxes = np.array([[[0, 0, 0], [1, 1, 1]], [[2, 2, 2], [3, 3, 3]]], np.float32)
+    >>> bvh = minkq.BVH(minkq.Device("cpu"), boxes)
+    >>> centres = np.array([[1.5, 1.5, 1.5], [0.5, 0.5, 0.5]], np.float32)
+    >>> bvh.query("sphere", centres, 0.5).tolist()
+    [[1, 0]]
+    """
+
+    def __init__(self, device: Device, boxes: Any) -> None:
+        super().__init__()
+        if not isinstance(device, Device):
+            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
+        self.device = device
+        self._native = _native.Bvh(device._native, _boxes(boxes, "boxes"))
+
+    def __len__(self) -> int:
+        return self._native.box_count
+
+    def refit(self, boxes: Any) -> None:
+        """New boxes (same count); refits in place."""
+        self._native.refit(_boxes(boxes, "boxes"))
+
+    def query(
+        self,
+        shape: "Shape",
+        queries: Any,
+        radius: float = 0.0,
+        *,
+        mode: Optional["Mode"] = None,
+        canonical: bool = False,
+    ) -> "Pairs":
+        """(query, box) pairs for every query shape overlapping a box, as a (k, 2) int32 array.
+
+        ``shape="sphere"``: ``queries`` are centres (n, 3) float32; modes ``"box"``, ``"sphere"``
+        (default). ``"capsule"``: segments (n, 2, 3) float32; modes ``"box"``, ``"capsule_ray"``,
+        ``"capsule_exact"`` (default). ``"box"``: boxes (n, 2, 3) or (n, 6); mode ``"box"``,
+        radius 0.
+        """
+        return self._query(shape, queries, radius, mode, canonical, False)[0]
+
+    def query_digest(self, shape: "Shape", queries: Any, radius: float = 0.0, *, mode: Optional["Mode"] = None) -> Tuple["Pairs", int]:
+        """Like :meth:`query`, canonical, with the xxHash64 of the pairs."""
+        pairs, digest = self._query(shape, queries, radius, mode, True, True)
+        assert digest is not None
+        return pairs, digest
+
+    def query_into(
+        self,
+        out: np.ndarray,
+        shape: "Shape",
+        queries: Any,
+        radius: float = 0.0,
+        *,
+        mode: Optional["Mode"] = None,
+        canonical: bool = False,
+        digest: bool = False,
+    ) -> QueryInfo:
+        """Runs queries into ``out`` ((capacity, 2) int32); :class:`CapacityError` when too small."""
+        args = self._args(shape, queries, radius, mode)
+        count, dig = self._native.query_into(_out(out), *args, bool(canonical), bool(digest))
+        return QueryInfo(count, dig)
+
+    def _args(self, shape: Any, queries: Any, radius: Any, mode: Any) -> Tuple[str, np.ndarray, str, float]:
+        shape = _choice(shape, "shape", ("sphere", "capsule", "box"))
+        mode = _DEFAULT_BVH_MODE[shape] if mode is None else _choice(mode, "mode", MODES)
+        if shape == "sphere":
+            array = _rows(queries, "centres", np.float32, (3,))
+        elif shape == "capsule":
+            array = _rows(queries, "segments", np.float32, (2, 3))
+        else:
+            array = _boxes(queries, "boxes")
+        return shape, array, mode, _radius(radius)
+
+    def _query(self, shape: Any, queries: Any, radius: Any, mode: Any, canonical: bool, digest: bool) -> Tuple[np.ndarray, Optional[int]]:
+        args = self._args(shape, queries, radius, mode)
+        key = (args[0], args[2], len(args[1]), bool(canonical), bool(digest))
+        return self._run(key, lambda out: self._native.query_into(out, *args, bool(canonical), bool(digest)))
+
+    def __repr__(self) -> str:
+        return f"minkq.BVH({len(self)} boxes)"
+
+
+def cuda_device_count() -> int:
+    """The number of usable CUDA devices (0 where minkq was built without CUDA or has no GPU)."""
+    return _native.cuda_device_count()
+
+
+def version() -> Tuple[int, int, int]:
+    """The library's run-time version (major, minor, patch)."""
+    return _native.version()
+
+
+def abi_version() -> int:
+    """The library's run-time ABI version (``minkq.ABI_VERSION`` is the one the bindings were
+    generated against)."""
+    return _native.abi_version()

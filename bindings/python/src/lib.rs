@@ -1,0 +1,352 @@
+//! minkq._native: the pyo3 extension under the `minkq` Python package. It takes arrays through
+//! the buffer protocol (no copy; the package has already checked dtype, shape and contiguity
+//! and says which argument is wrong), releases the GIL around every build, refit and query, and
+//! raises the package's exceptions (minkq._errors) named after the C error codes.
+//!
+//! Every object holds its minkq handle in a Mutex: the C API lets one thread at a time use an
+//! object, so Python threads sharing one Scene wait for each other instead of racing.
+use std::mem;
+use std::slice;
+use std::sync::{Mutex, MutexGuard};
+
+use minkq::{Aabb, Bvh, BvhQuery, Device, Mode, Query, QueryFlags, QueryKind, Scene, SceneDesc, SceneFlags};
+use pyo3::buffer::{Element, PyBuffer};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+
+/// The package exception for a minkq error (minkq._errors._from_status builds it).
+fn to_py_err(py: Python<'_>, err: minkq::Error) -> PyErr {
+    let needed = match &err {
+        minkq::Error::Capacity { needed, .. } => Some(*needed),
+        _ => None,
+    };
+    let made = py
+        .import("minkq._errors")
+        .and_then(|m| m.getattr("_from_status"))
+        .and_then(|f| f.call1((err.status(), err.message(), needed)));
+    match made {
+        Ok(exception) => PyErr::from_value(exception),
+        Err(import_failed) => import_failed,
+    }
+}
+
+fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
+    // A panic while locked cannot leave a minkq object half-changed (the C API keeps its state
+    // on error), so a poisoned lock is still usable.
+    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// A buffer viewed as rows of `R` (each `per_row` items of `T`, with trailing dimensions
+/// `trailing`): a C-contiguous array of shape (n, *trailing).
+struct Rows<T: Element> {
+    buffer: PyBuffer<T>,
+    rows: usize,
+}
+
+impl<T: Element> Rows<T> {
+    fn get(obj: &PyAny, name: &str, trailing: &[usize], writable: bool) -> PyResult<Rows<T>> {
+        let buffer = PyBuffer::<T>::get(obj).map_err(|e| {
+            PyTypeError::new_err(format!("{name}: expected a {} array: {e}", std::any::type_name::<T>()))
+        })?;
+        let shape = buffer.shape();
+        if shape.len() != trailing.len() + 1 || shape[1..] != *trailing {
+            let wanted: Vec<String> = trailing.iter().map(|d| d.to_string()).collect();
+            return Err(PyValueError::new_err(format!(
+                "{name}: expected shape (n, {}), got {shape:?}",
+                wanted.join(", ")
+            )));
+        }
+        if !buffer.is_c_contiguous() {
+            return Err(PyValueError::new_err(format!("{name}: expected a C-contiguous array")));
+        }
+        if writable && buffer.readonly() {
+            return Err(PyValueError::new_err(format!("{name}: the array is read-only")));
+        }
+        let rows = shape[0];
+        Ok(Rows { buffer, rows })
+    }
+
+    /// The rows as a slice of `R`, which must be `trailing`'s product of `T`s.
+    ///
+    /// # Safety
+    /// `R` is a plain array (or repr(C) struct) of that many `T`s.
+    unsafe fn as_slice<R>(&self) -> &[R] {
+        debug_assert_eq!(mem::size_of::<R>() * self.rows, self.buffer.item_count() * mem::size_of::<T>());
+        if self.rows == 0 {
+            &[]
+        } else {
+            slice::from_raw_parts(self.buffer.buf_ptr() as *const R, self.rows)
+        }
+    }
+
+    /// # Safety
+    /// As `as_slice`, and the buffer is writable (checked in `get`) and not otherwise
+    /// borrowed while the slice lives.
+    unsafe fn as_mut_slice<R>(&mut self) -> &mut [R] {
+        if self.rows == 0 {
+            &mut []
+        } else {
+            slice::from_raw_parts_mut(self.buffer.buf_ptr() as *mut R, self.rows)
+        }
+    }
+}
+
+fn parse_kind(kind: &str) -> PyResult<QueryKind> {
+    kind.parse().map_err(|_| PyValueError::new_err(format!("kind: expected 'vt' or 'ee', got {kind:?}")))
+}
+
+fn parse_mode(mode: &str) -> PyResult<Mode> {
+    mode.parse().map_err(|_| {
+        PyValueError::new_err(format!("mode: expected 'box', 'sphere', 'capsule_ray' or 'capsule_exact', got {mode:?}"))
+    })
+}
+
+fn query_flags(leaf_exact: bool, canonical: bool, digest: bool) -> QueryFlags {
+    let mut flags = QueryFlags::empty();
+    if leaf_exact {
+        flags |= QueryFlags::LEAF_EXACT;
+    }
+    if canonical {
+        flags |= QueryFlags::CANONICAL;
+    }
+    if digest {
+        flags |= QueryFlags::DIGEST;
+    }
+    flags
+}
+
+/// A compute device: "cpu", "cuda", "cuda:N" or "auto".
+#[pyclass(module = "minkq._native", name = "Device")]
+struct PyDevice {
+    inner: Mutex<Device>,
+    #[pyo3(get)]
+    name: String,
+    #[pyo3(get)]
+    backend: &'static str,
+}
+
+#[pymethods]
+impl PyDevice {
+    #[new]
+    fn new(py: Python<'_>, spec: &str) -> PyResult<Self> {
+        let device = Device::new(spec).map_err(|e| to_py_err(py, e))?;
+        let name = device.name().to_string();
+        let backend = match device.backend() {
+            minkq::Backend::Cpu => "cpu",
+            minkq::Backend::Cuda => "cuda",
+        };
+        Ok(PyDevice { inner: Mutex::new(device), name, backend })
+    }
+}
+
+/// A mesh scene: VT and EE queries.
+#[pyclass(module = "minkq._native", name = "Scene")]
+struct PyScene {
+    inner: Mutex<Scene>,
+    #[pyo3(get)]
+    vertex_count: usize,
+    #[pyo3(get)]
+    triangle_count: usize,
+    #[pyo3(get)]
+    edge_count: usize,
+}
+
+#[pymethods]
+impl PyScene {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        device: PyRef<'_, PyDevice>,
+        vertices: &PyAny,
+        triangles: &PyAny,
+        edges: Option<&PyAny>,
+        vt: bool,
+        ee: bool,
+        drop_incident: bool,
+    ) -> PyResult<Self> {
+        let vertices = Rows::<f32>::get(vertices, "vertices", &[3], false)?;
+        let triangles = Rows::<i32>::get(triangles, "triangles", &[3], false)?;
+        let edges = edges.map(|e| Rows::<i32>::get(e, "edges", &[2], false)).transpose()?;
+        let mut flags = SceneFlags::empty();
+        if vt {
+            flags |= SceneFlags::VT;
+        }
+        if ee {
+            flags |= SceneFlags::EE;
+        }
+        if drop_incident {
+            flags |= SceneFlags::DROP_INCIDENT;
+        }
+        // SAFETY: shapes checked above: rows of 3 floats, 3 and 2 int32.
+        let desc = unsafe {
+            SceneDesc {
+                vertices: vertices.as_slice(),
+                triangles: triangles.as_slice(),
+                edges: edges.as_ref().map_or(&[][..], |e| e.as_slice()),
+                flags,
+            }
+        };
+        let device = &device.inner;
+        let scene = py.allow_threads(|| Scene::new(&lock(device), &desc)).map_err(|e| to_py_err(py, e))?;
+        Ok(PyScene {
+            vertex_count: scene.vertex_count(),
+            triangle_count: scene.triangle_count(),
+            edge_count: scene.edge_count(),
+            inner: Mutex::new(scene),
+        })
+    }
+
+    fn refit(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
+        let vertices = Rows::<f32>::get(vertices, "vertices", &[3], false)?;
+        // SAFETY: rows of 3 floats.
+        let vertices: &[[f32; 3]] = unsafe { vertices.as_slice() };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).refit(vertices)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// Writes the edges into `out`, an (edge_count, 2) int32 array.
+    fn edges_into(&self, py: Python<'_>, out: &PyAny) -> PyResult<()> {
+        let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
+        let edges = lock(&self.inner).edges().map_err(|e| to_py_err(py, e))?;
+        if edges.len() != out.rows {
+            return Err(PyValueError::new_err(format!("out: expected {} rows, got {}", edges.len(), out.rows)));
+        }
+        // SAFETY: rows of 2 int32, writable.
+        unsafe { out.as_mut_slice::<[i32; 2]>() }.copy_from_slice(&edges);
+        Ok(())
+    }
+
+    /// Runs a query into `out`, a writable (capacity, 2) int32 array; returns (count, digest).
+    #[allow(clippy::too_many_arguments)]
+    fn query_into(
+        &self,
+        py: Python<'_>,
+        out: &PyAny,
+        kind: &str,
+        mode: &str,
+        radius: f32,
+        leaf_exact: bool,
+        canonical: bool,
+        digest: bool,
+    ) -> PyResult<(u64, Option<u64>)> {
+        let query = Query::new(parse_kind(kind)?, parse_mode(mode)?, radius)
+            .with_flags(query_flags(leaf_exact, canonical, digest));
+        let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
+        // SAFETY: rows of 2 int32, writable, used only here.
+        let pairs: &mut [[i32; 2]] = unsafe { out.as_mut_slice() };
+        let scene = &self.inner;
+        let info = py.allow_threads(|| lock(scene).query_into(&query, pairs)).map_err(|e| to_py_err(py, e))?;
+        Ok((info.count, info.digest))
+    }
+}
+
+/// A BVH over user boxes: sphere, capsule and box queries.
+#[pyclass(module = "minkq._native", name = "Bvh")]
+struct PyBvh {
+    inner: Mutex<Bvh>,
+    #[pyo3(get)]
+    box_count: usize,
+}
+
+#[pymethods]
+impl PyBvh {
+    #[new]
+    fn new(py: Python<'_>, device: PyRef<'_, PyDevice>, boxes: &PyAny) -> PyResult<Self> {
+        let boxes = Rows::<f32>::get(boxes, "boxes", &[2, 3], false)?;
+        // SAFETY: rows of 6 floats (lo, hi), Aabb's repr(C) layout.
+        let boxes: &[Aabb] = unsafe { boxes.as_slice() };
+        let device = &device.inner;
+        let bvh = py.allow_threads(|| Bvh::new(&lock(device), boxes)).map_err(|e| to_py_err(py, e))?;
+        Ok(PyBvh { box_count: bvh.len(), inner: Mutex::new(bvh) })
+    }
+
+    fn refit(&self, py: Python<'_>, boxes: &PyAny) -> PyResult<()> {
+        let boxes = Rows::<f32>::get(boxes, "boxes", &[2, 3], false)?;
+        // SAFETY: as in new.
+        let boxes: &[Aabb] = unsafe { boxes.as_slice() };
+        let bvh = &self.inner;
+        py.allow_threads(|| lock(bvh).refit(boxes)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// Runs sphere ("sphere": centres (n, 3)), capsule ("capsule": segments (n, 2, 3)) or box
+    /// ("box": boxes (n, 2, 3)) queries into `out`; returns (count, digest).
+    #[allow(clippy::too_many_arguments)]
+    fn query_into(
+        &self,
+        py: Python<'_>,
+        out: &PyAny,
+        shape: &str,
+        queries: &PyAny,
+        mode: &str,
+        radius: f32,
+        canonical: bool,
+        digest: bool,
+    ) -> PyResult<(u64, Option<u64>)> {
+        let mode = parse_mode(mode)?;
+        let flags = query_flags(false, canonical, digest);
+        let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
+        let (rows, name, trailing): (_, _, &[usize]) = match shape {
+            "sphere" => (queries, "centres", &[3]),
+            "capsule" => (queries, "segments", &[2, 3]),
+            "box" => (queries, "boxes", &[2, 3]),
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "shape: expected 'sphere', 'capsule' or 'box', got {shape:?}"
+                )))
+            }
+        };
+        let rows = Rows::<f32>::get(rows, name, trailing, false)?;
+        // SAFETY: the shapes checked above match each slice type; `out` is writable.
+        let query = unsafe {
+            match shape {
+                "sphere" => BvhQuery::spheres(rows.as_slice(), mode, radius),
+                "capsule" => BvhQuery::capsules(rows.as_slice(), mode, radius),
+                _ => BvhQuery { radius, mode, ..BvhQuery::boxes(rows.as_slice()) },
+            }
+        }
+        .with_flags(flags);
+        let pairs: &mut [[i32; 2]] = unsafe { out.as_mut_slice() };
+        let bvh = &self.inner;
+        let info = py.allow_threads(|| lock(bvh).query_into(&query, pairs)).map_err(|e| to_py_err(py, e))?;
+        Ok((info.count, info.digest))
+    }
+}
+
+/// Number of usable CUDA devices.
+#[pyfunction]
+fn cuda_device_count() -> usize {
+    minkq::cuda_device_count()
+}
+
+/// The library's run-time version (major, minor, patch).
+#[pyfunction]
+fn version() -> (u32, u32, u32) {
+    minkq::version()
+}
+
+/// The library's run-time ABI version.
+#[pyfunction]
+fn abi_version() -> u32 {
+    minkq::abi_version()
+}
+
+/// Raises the exception minkq raises for a C status (for the tests of the mapping).
+#[pyfunction]
+#[pyo3(name = "_raise_status")]
+fn raise_status(py: Python<'_>, status: u32, message: &str) -> PyResult<()> {
+    Err(to_py_err(py, minkq::Error::from_status(status, message)))
+}
+
+#[pymodule]
+fn _native(_py: Python<'_>, m: &PyModule) -> PyResult<()> {
+    m.add_class::<PyDevice>()?;
+    m.add_class::<PyScene>()?;
+    m.add_class::<PyBvh>()?;
+    m.add_function(wrap_pyfunction!(cuda_device_count, m)?)?;
+    m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(abi_version, m)?)?;
+    m.add_function(wrap_pyfunction!(raise_status, m)?)?;
+    m.add("ABI_VERSION", minkq::ABI_VERSION)?;
+    Ok(())
+}

@@ -1,0 +1,155 @@
+"""The package around the extension: typing files, docstring examples, zero-copy inputs, the
+GIL released during build, refit and queries, threads, and the demo's default scene."""
+
+import doctest
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import minkq
+from minkq import _api
+from oracle import rolled_sheet
+
+
+def test_package_ships_type_information():
+    root = os.path.dirname(minkq.__file__)
+    for name in ("py.typed", "_native.pyi", "__init__.py", "_errors.py", "_api.py"):
+        assert os.path.exists(os.path.join(root, name)), name
+    assert minkq.abi_version() == minkq.ABI_VERSION
+    assert minkq.version()[:2] == (0, 1)
+    assert set(minkq.__all__) <= set(dir(minkq))
+
+
+def test_public_items_have_docstrings():
+    for name in minkq.__all__:
+        item = getattr(minkq, name)
+        if callable(item):
+            assert item.__doc__, name
+    for cls in (minkq.Device, minkq.Scene, minkq.BVH):
+        for attr, member in vars(cls).items():
+            if not attr.startswith("_") and (callable(member) or isinstance(member, property)):
+                assert member.__doc__, f"{cls.__name__}.{attr}"
+
+
+def test_docstring_examples_run():
+    failures, tried = doctest.testmod(_api, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert tried >= 5 and failures == 0
+
+
+def test_c_contiguous_inputs_are_not_copied():
+    xyz, tris = rolled_sheet(5, 0)
+    assert _api._rows(xyz, "vertices", np.float32, (3,)) is xyz
+    assert _api._rows(tris, "triangles", np.int32, (3,)) is tris
+    boxes = np.zeros((4, 6), np.float32)
+    assert np.shares_memory(_api._boxes(boxes, "boxes"), boxes)
+    strided = np.zeros((5, 6), np.float32)[:, ::2]
+    assert not np.shares_memory(_api._rows(strided, "vertices", np.float32, (3,)), strided)
+
+
+def test_repr_and_properties(device):
+    xyz, tris = rolled_sheet(4, 0)
+    scene = minkq.Scene(device, xyz, tris)
+    assert (scene.vertex_count, scene.triangle_count, scene.edge_count) == (16, 18, 33)
+    assert repr(scene) == "minkq.Scene(16 vertices, 18 triangles, 33 edges)"
+    assert repr(device).startswith("minkq.Device('cpu (")
+    assert device.backend == "cpu" and scene.device is device
+
+
+def _longest_pause_while(work) -> tuple:
+    """Runs `work` in a thread while this thread counts; returns (work's seconds, the longest
+    gap between two of this thread's steps). A call that kept the GIL would stall this thread
+    for its whole duration."""
+    done = threading.Event()
+    spent = []
+
+    def worker():
+        start = time.perf_counter()
+        work()
+        spent.append(time.perf_counter() - start)
+        done.set()
+
+    thread = threading.Thread(target=worker)
+    last = time.perf_counter()
+    longest = 0.0
+    thread.start()
+    while not done.is_set():
+        now = time.perf_counter()
+        longest = max(longest, now - last)
+        last = now
+    thread.join()
+    return spent[0], longest
+
+
+def test_gil_is_released_during_build_refit_and_query(device):
+    import demo
+
+    xyz, tris = demo.twisted_sheet(160, 3.0)
+    r = 0.25 * demo.mean_edge_length(xyz, demo.derive_edges(tris))
+    moved = xyz * np.float32(1.001)
+    holder = {}
+    calls = {
+        "build": lambda: [holder.update(scene=minkq.Scene(device, xyz, tris)) for _ in range(3)],
+        "refit": lambda: [holder["scene"].refit(moved) for _ in range(6)],
+        "query": lambda: holder["scene"].query("ee", "capsule_exact", r, leaf_exact=True),
+    }
+    for name, call in calls.items():
+        spent, longest = _longest_pause_while(call)
+        # The counting thread shares 2 cores with the library's threads, so it is not idle; but
+        # it is never stalled for the call's whole duration.
+        assert spent > 0.1, f"{name}: too quick to tell ({spent:.3f} s)"
+        assert longest < 0.5 * spent, f"{name}: this thread stalled {longest:.3f} s of {spent:.3f} s"
+
+
+def test_threads_share_a_scene_and_a_device(device):
+    xyz, tris = rolled_sheet(14, 3)
+    scene = minkq.Scene(device, xyz, tris)
+    expected = scene.query_digest("ee", "capsule_exact", 0.03)[1]
+    results, errors = [], []
+
+    def work(seed):
+        try:
+            own = minkq.Scene(device, *rolled_sheet(10, seed))  # builds on the shared device
+            for _ in range(5):
+                results.append(scene.query_digest("ee", "capsule_exact", 0.03)[1])
+                own.query("vt", "sphere", 0.03)
+        except Exception as e:  # pragma: no cover - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=work, args=(s,)) for s in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert results == [expected] * 20
+
+
+def test_default_demo_scene_true_contacts_equal_minkq_demo_reference(device):
+    """examples/python/demo.py rebuilds `minkq demo`'s scene bit for bit: its leaf_exact counts
+    are the reference oracle's 62694 VT and 192090 EE contacts."""
+    import demo
+
+    xyz, tris = demo.twisted_sheet(demo.DEFAULT_SIZE, 3.0)
+    edges = demo.derive_edges(tris)
+    assert (len(xyz), len(tris), len(edges)) == (150544, 299538, 450081)
+    h = demo.mean_edge_length(xyz, edges)
+    r = float(np.float32(demo.DEFAULT_FACTOR * h))
+    assert (f"{r:.6g}", f"{h:.6g}") == ("0.00235628", "0.00942512")  # as `minkq demo` prints them
+    scene = minkq.Scene(device, xyz, tris)
+    assert np.array_equal(scene.edges(), edges)
+    vt = len(scene.query("vt", "sphere", r, leaf_exact=True))
+    ee = len(scene.query("ee", "capsule_exact", r, leaf_exact=True))
+    assert {"vt": vt, "ee": ee} == demo.REFERENCE_CONTACTS
+
+
+def test_demo_prints_the_table(capsys):
+    import demo
+
+    assert demo.main(["--backend", "cpu", "--size", "40", "--repeat", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "kind mode                         candidates         true  fp ratio  false neg   query ms  speedup" in out
+    assert out.count("\nVT ") == 3 and out.count("\nEE ") == 4
+    assert "no false negatives" in out

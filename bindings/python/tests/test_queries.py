@@ -1,0 +1,170 @@
+"""Every mode against the brute-force oracle: zero false negatives, the containment chain
+true <= leaf_exact <= capsule_exact <= capsule_ray <= box (EE) and
+true <= leaf_exact <= sphere <= box (VT), refit after moving vertices, BVH queries."""
+
+import numpy as np
+import pytest
+
+import minkq
+from oracle import as_set, degenerate_soup, derive_edges, ee_contacts, point_segment_sq, rolled_sheet, vt_contacts
+
+SCENES = [
+    pytest.param(lambda: rolled_sheet(12, 1), 0.04, id="rolled-12"),
+    pytest.param(lambda: rolled_sheet(16, 2), 0.02, id="rolled-16"),
+    pytest.param(lambda: rolled_sheet(9, 3), 0.1, id="rolled-9-wide"),
+    pytest.param(lambda: degenerate_soup(90, 4), 0.03, id="degenerate-soup"),
+]
+
+
+def check_modes(scene: minkq.Scene, xyz: np.ndarray, tris: np.ndarray, r: float) -> None:
+    edges = scene.edges()
+    true_vt = vt_contacts(xyz, tris, r)
+    true_ee = ee_contacts(xyz, edges, r)
+    assert len(true_vt) > 5 and len(true_ee) > 5, "the scene must have contacts"
+    loose = r + 1e-5  # leaf_exact pairs lie within r + 2**-19 S
+
+    vt = {mode: as_set(scene.query("vt", mode, r)) for mode in minkq.MODES}
+    vt_leaf = as_set(scene.query("vt", "sphere", r, leaf_exact=True))
+    assert true_vt <= vt_leaf, "VT false negatives"
+    assert vt_leaf <= vt_contacts(xyz, tris, loose)
+    assert vt_leaf <= vt["sphere"] <= vt["box"]
+    # Points are zero-length capsules: capsule_ray is the box test, capsule_exact the sphere.
+    assert vt["capsule_ray"] == vt["box"] and vt["capsule_exact"] == vt["sphere"]
+
+    ee = {mode: as_set(scene.query("ee", mode, r)) for mode in ("box", "capsule_ray", "capsule_exact")}
+    ee_leaf = as_set(scene.query("ee", "capsule_exact", r, leaf_exact=True))
+    assert true_ee <= ee_leaf, "EE false negatives"
+    assert ee_leaf <= ee_contacts(xyz, edges, loose)
+    assert ee_leaf <= ee["capsule_exact"] <= ee["capsule_ray"] <= ee["box"]
+    assert all(e < f for e, f in ee["box"])
+
+
+@pytest.mark.parametrize("make, r", SCENES)
+def test_every_mode_contains_the_true_contacts_and_the_chain_holds(device, make, r):
+    xyz, tris = make()
+    scene = minkq.Scene(device, xyz, tris)
+    assert np.array_equal(scene.edges(), derive_edges(tris))
+    check_modes(scene, xyz, tris, r)
+
+
+def test_refit_after_moving_vertices(device):
+    xyz, tris = rolled_sheet(12, 7)
+    scene = minkq.Scene(device, xyz, tris)
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        xyz = xyz.copy()
+        xyz[:, [0, 2]] *= 0.9  # squash the roll: contacts change from step to step
+        xyz[:, 2] += (0.01 * (rng.random(len(xyz)) - 0.5)).astype(np.float32)
+        scene.refit(xyz)
+        check_modes(scene, xyz, tris, 0.03)
+        fresh = minkq.Scene(device, xyz, tris)
+        for kind, mode in [("vt", "box"), ("vt", "sphere"), ("ee", "box"), ("ee", "capsule_ray"), ("ee", "capsule_exact")]:
+            for leaf in (False, True):
+                a = scene.query_digest(kind, mode, 0.03, leaf_exact=leaf)
+                b = fresh.query_digest(kind, mode, 0.03, leaf_exact=leaf)
+                assert np.array_equal(a[0], b[0]) and a[1] == b[1], (kind, mode, leaf)
+
+
+def test_without_drop_incident_every_vertex_touches_its_triangles(device):
+    xyz, tris = rolled_sheet(6, 5)
+    scene = minkq.Scene(device, xyz, tris, drop_incident=False)
+    pairs = as_set(scene.query("vt", "sphere", 0.0, leaf_exact=True))
+    assert {(int(v), t) for t, tri in enumerate(tris) for v in tri} <= pairs
+    assert vt_contacts(xyz, tris, 0.02, drop_incident=False) <= as_set(scene.query("vt", "sphere", 0.02))
+
+
+def test_explicit_edges_and_single_query_kind(device):
+    xyz, tris = rolled_sheet(10, 8)
+    edges = derive_edges(tris)[::2].copy()  # any edge list works, not only the derived one
+    scene = minkq.Scene(device, xyz, tris, edges, vt=False)
+    assert scene.edge_count == len(edges)
+    assert np.array_equal(scene.edges(), edges)
+    assert ee_contacts(xyz, edges, 0.04) <= as_set(scene.query("ee", "capsule_exact", 0.04, leaf_exact=True))
+    with pytest.raises(minkq.InvalidArgumentError, match="VT query on a scene created without MINKQ_SCENE_VT"):
+        scene.query("vt", "sphere", 0.04)
+
+
+def test_canonical_query_into_and_capacity(device):
+    xyz, tris = rolled_sheet(12, 9)
+    scene = minkq.Scene(device, xyz, tris)
+    pairs = scene.query("ee", "box", 0.04, canonical=True)
+    assert pairs.dtype == np.int32 and pairs.shape == (len(pairs), 2) and pairs.flags.c_contiguous
+    keys = pairs[:, 0].astype(np.int64) << 32 | pairs[:, 1]
+    assert np.all(np.diff(keys) > 0), "canonical: sorted, no duplicates"
+    out = np.full((len(pairs) + 5, 2), -1, np.int32)
+    info = scene.query_into(out, "ee", "box", 0.04, canonical=True, digest=True)
+    assert info.count == len(pairs) and info.digest is not None
+    assert np.array_equal(out[: info.count], pairs) and np.all(out[info.count :] == -1)
+    small = np.full((len(pairs) - 1, 2), -7, np.int32)
+    with pytest.raises(minkq.CapacityError) as e:
+        scene.query_into(small, "ee", "box", 0.04)
+    assert e.value.needed == len(pairs)
+    # Nothing is written past the buffer; pairs (e < f) never hold -7.
+    assert np.all(small == -7)
+
+
+def test_repeated_queries_reuse_their_size_and_return_fresh_arrays(device):
+    xyz, tris = rolled_sheet(10, 10)
+    scene = minkq.Scene(device, xyz, tris)
+    first = scene.query("vt", "box", 0.05, canonical=True)
+    second = scene.query("vt", "box", 0.05, canonical=True)
+    assert np.array_equal(first, second) and not np.shares_memory(first, second)
+    smaller = scene.query("vt", "box", 0.01, canonical=True)
+    assert set(map(tuple, smaller.tolist())) <= set(map(tuple, first.tolist()))
+
+
+def test_bvh_sphere_capsule_and_box_queries(device):
+    rng = np.random.default_rng(21)
+    centres = rng.random((200, 3)).astype(np.float32)
+    boxes = np.stack([centres - [0.02, 0.03, 0.01], centres + [0.02, 0.01, 0.04]], axis=1).astype(np.float32)
+    bvh = minkq.BVH(device, boxes)
+    assert len(bvh) == 200
+    queries = rng.random((100, 3)).astype(np.float32)
+    r = 0.05
+
+    def box_distance_sq(p):  # (q, 3) -> (q, boxes)
+        lo, hi = boxes[None, :, 0, :].astype(np.float64), boxes[None, :, 1, :].astype(np.float64)
+        d = np.maximum(np.maximum(lo - p[:, None, :], 0), p[:, None, :] - hi)
+        return (d * d).sum(-1)
+
+    brute = set(zip(*map(np.ndarray.tolist, np.nonzero(box_distance_sq(queries.astype(np.float64)) <= r * r))))
+    sphere = as_set(bvh.query("sphere", queries, r))
+    padded = as_set(bvh.query("sphere", queries, r, mode="box"))
+    assert brute <= sphere <= padded
+
+    segments = np.stack([queries, queries + [0.1, 0.0, 0.05]], axis=1).astype(np.float32)
+    exact = as_set(bvh.query("capsule", segments, r))
+    ray = as_set(bvh.query("capsule", segments, r, mode="capsule_ray"))
+    padded = as_set(bvh.query("capsule", segments, r, mode="box"))
+    assert exact <= ray <= padded
+    # Points sampled on each segment: every box within r of one of them is reported.
+    for t in np.linspace(0, 1, 21):
+        p = segments[:, 0].astype(np.float64) * (1 - t) + segments[:, 1].astype(np.float64) * t
+        near = set(zip(*map(np.ndarray.tolist, np.nonzero(box_distance_sq(p) <= 0.999 * r * r))))
+        assert near <= exact
+
+    # Box queries after a refit that shifts every box; (n, 6) boxes are accepted too.
+    shifted = boxes + np.array([1.0, 0, 0], np.float32)
+    bvh.refit(shifted.reshape(-1, 6))
+    query_boxes = np.stack([queries + [1, 0, 0], queries + [1.05, 0.05, 0.05]], axis=1).astype(np.float32)
+    got, digest = bvh.query_digest("box", query_boxes)
+    lo_ok = query_boxes[:, None, 0, :] <= shifted[None, :, 1, :]
+    hi_ok = shifted[None, :, 0, :] <= query_boxes[:, None, 1, :]
+    expected = np.argwhere(np.all(lo_ok & hi_ok, axis=-1)).astype(np.int32)
+    assert np.array_equal(got, expected)
+    out = np.empty((len(expected), 2), np.int32)
+    info = bvh.query_into(out, "box", query_boxes, canonical=True, digest=True)
+    assert (info.count, info.digest) == (len(expected), digest)
+
+
+def test_strided_and_list_inputs_give_the_same_pairs(device):
+    xyz, tris = rolled_sheet(8, 12)
+    base = minkq.Scene(device, xyz, tris).query_digest("ee", "capsule_exact", 0.05)
+    wide = np.zeros((len(xyz), 5), np.float32)
+    wide[:, 1:4] = xyz
+    strided = wide[:, 1:4]  # not contiguous: copied once
+    assert not strided.flags.c_contiguous
+    from_strided = minkq.Scene(device, strided, np.asfortranarray(tris)).query_digest("ee", "capsule_exact", 0.05)
+    from_lists = minkq.Scene(device, xyz.tolist(), tris.tolist()).query_digest("ee", "capsule_exact", 0.05)
+    assert base[1] == from_strided[1] == from_lists[1]
+    assert point_segment_sq(np.zeros(3), np.ones(3), np.ones(3)) == 3.0  # the oracle's own sanity

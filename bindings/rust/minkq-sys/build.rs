@@ -1,0 +1,63 @@
+//! Links libminkq.so: from `MINKQ_LIB_DIR` when set (the CMake build's `capi/` folder), else
+//! built here with CMake from the repository this crate lives in (CPU backend unless
+//! `MINKQ_WITH_CUDA` says otherwise). Dependents get the folder as `DEP_MINKQ_LIB_DIR`.
+use std::env;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn main() {
+    println!("cargo:rerun-if-env-changed=MINKQ_LIB_DIR");
+    println!("cargo:rerun-if-env-changed=MINKQ_WITH_CUDA");
+    let lib_dir = match env::var_os("MINKQ_LIB_DIR") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => build_with_cmake(),
+    };
+    let lib_dir = lib_dir.canonicalize().unwrap_or_else(|e| {
+        panic!("MINKQ_LIB_DIR={}: {e}", lib_dir.display());
+    });
+    if !lib_dir.join("libminkq.so").exists() {
+        panic!(
+            "{} holds no libminkq.so: point MINKQ_LIB_DIR at the CMake build's capi folder \
+             (e.g. build/capi) or unset it to build the library here",
+            lib_dir.display()
+        );
+    }
+    println!("cargo:rerun-if-changed={}", lib_dir.join("libminkq.so").display());
+    println!("cargo:rustc-link-search=native={}", lib_dir.display());
+    println!("cargo:rustc-link-lib=dylib=minkq");
+    println!("cargo:lib_dir={}", lib_dir.display());
+    println!("cargo:rustc-link-arg=-Wl,-rpath,{}", lib_dir.display());
+}
+
+fn run(command: &mut Command) {
+    let status = command.status().unwrap_or_else(|e| panic!("cannot run {command:?}: {e}"));
+    if !status.success() {
+        panic!("{command:?} failed with {status}");
+    }
+}
+
+fn build_with_cmake() -> PathBuf {
+    let manifest = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").unwrap());
+    let root = manifest.join("../../..");
+    if !root.join("capi/minkq.h").exists() {
+        panic!("MINKQ_LIB_DIR is unset and {} is not the minkq source tree", root.display());
+    }
+    for dir in ["capi", "core", "CMakeLists.txt"] {
+        println!("cargo:rerun-if-changed={}", root.join(dir).display());
+    }
+    let build = PathBuf::from(env::var_os("OUT_DIR").unwrap()).join("cmake-build");
+    let cuda = env::var("MINKQ_WITH_CUDA").unwrap_or_else(|_| "OFF".into());
+    run(Command::new("cmake").arg("-S").arg(&root).arg("-B").arg(&build).args([
+        "-DCMAKE_BUILD_TYPE=Release",
+        &format!("-DMINKQ_WITH_CUDA={cuda}"),
+        "-DMINKQ_BUILD_TESTS=OFF",
+        "-DMINKQ_BUILD_EXAMPLES=OFF",
+    ]));
+    let jobs = env::var("NUM_JOBS").unwrap_or_else(|_| "2".into());
+    run(Command::new("cmake").arg("--build").arg(&build).args(["--target", "minkq", "-j", &jobs]));
+    lib_dir_of(&build)
+}
+
+fn lib_dir_of(build: &Path) -> PathBuf {
+    build.join("capi")
+}

@@ -1,0 +1,304 @@
+use std::fmt;
+use std::mem;
+use std::ptr::{self, NonNull};
+use std::sync::Arc;
+
+use crate::device::{Device, DeviceHandle};
+use crate::error::{check, Error, Result};
+use crate::pairs::query_vec;
+use crate::query::{Mode, QueryFlags, QueryInfo};
+use crate::scene::host_buffer;
+use crate::sys;
+
+/// An axis-aligned box, `lo <= hi` on every axis: 6 floats, the C API's box layout.
+///
+/// ```
+/// let b = minkq::Aabb::new([0.0, 0.0, 0.0], [1.0, 2.0, 3.0]);
+/// assert_eq!(b.hi[2], 3.0);
+/// assert_eq!(std::mem::size_of::<minkq::Aabb>(), 24);
+/// ```
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Aabb {
+    /// The low corner.
+    pub lo: [f32; 3],
+    /// The high corner.
+    pub hi: [f32; 3],
+}
+
+impl Aabb {
+    /// The box from `lo` to `hi`.
+    ///
+    /// ```
+    /// let b = minkq::Aabb::new([0.0; 3], [1.0; 3]);
+    /// assert_eq!(b.lo, [0.0; 3]);
+    /// ```
+    pub fn new(lo: [f32; 3], hi: [f32; 3]) -> Aabb {
+        Aabb { lo, hi }
+    }
+}
+
+/// The query shapes of a [`BvhQuery`] (`minkq_shape` with its buffers).
+///
+/// ```
+/// use minkq::Shapes;
+/// let centres = [[0.5f32, 0.5, 0.5]];
+/// let shapes = Shapes::Spheres(&centres);
+/// assert!(matches!(shapes, Shapes::Spheres(c) if c.len() == 1));
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub enum Shapes<'a> {
+    /// Spheres of the query's radius around these centres; modes `Box`, `Sphere`.
+    Spheres(&'a [[f32; 3]]),
+    /// Capsules of the query's radius around these segments (start, end); modes `Box`,
+    /// `CapsuleRay`, `CapsuleExact`.
+    Capsules(&'a [[[f32; 3]; 2]]),
+    /// Boxes; mode `Box`, radius 0.
+    Boxes(&'a [Aabb]),
+}
+
+/// A batch of sphere, capsule or box queries against a [`Bvh`] (`minkq_bvh_query_desc`).
+///
+/// ```
+/// use minkq::{BvhQuery, Mode, QueryFlags};
+/// let segments = [[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0]]];
+/// let q = BvhQuery::capsules(&segments, Mode::CapsuleExact, 0.1).with_flags(QueryFlags::CANONICAL);
+/// assert_eq!(q.mode, Mode::CapsuleExact);
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct BvhQuery<'a> {
+    /// The query shapes.
+    pub shapes: Shapes<'a>,
+    /// The node test.
+    pub mode: Mode,
+    /// `CANONICAL` and `DIGEST` (`LEAF_EXACT` does not apply to boxes).
+    pub flags: QueryFlags,
+    /// The same r for every query: finite, >= 0.
+    pub radius: f32,
+}
+
+impl<'a> BvhQuery<'a> {
+    /// Spheres of radius `radius` around `centres`.
+    ///
+    /// ```
+    /// let q = minkq::BvhQuery::spheres(&[[0.0; 3]], minkq::Mode::Sphere, 0.5);
+    /// assert_eq!(q.radius, 0.5);
+    /// ```
+    pub fn spheres(centres: &'a [[f32; 3]], mode: Mode, radius: f32) -> BvhQuery<'a> {
+        BvhQuery { shapes: Shapes::Spheres(centres), mode, flags: QueryFlags::empty(), radius }
+    }
+
+    /// Capsules of radius `radius` around `segments`.
+    ///
+    /// ```
+    /// let q = minkq::BvhQuery::capsules(&[[[0.0; 3], [1.0; 3]]], minkq::Mode::CapsuleRay, 0.5);
+    /// assert_eq!(q.mode, minkq::Mode::CapsuleRay);
+    /// ```
+    pub fn capsules(segments: &'a [[[f32; 3]; 2]], mode: Mode, radius: f32) -> BvhQuery<'a> {
+        BvhQuery { shapes: Shapes::Capsules(segments), mode, flags: QueryFlags::empty(), radius }
+    }
+
+    /// Box–box overlap queries (mode `Box`, radius 0).
+    ///
+    /// ```
+    /// let boxes = [minkq::Aabb::new([0.0; 3], [1.0; 3])];
+    /// let q = minkq::BvhQuery::boxes(&boxes);
+    /// assert_eq!((q.mode, q.radius), (minkq::Mode::Box, 0.0));
+    /// ```
+    pub fn boxes(boxes: &'a [Aabb]) -> BvhQuery<'a> {
+        BvhQuery { shapes: Shapes::Boxes(boxes), mode: Mode::Box, flags: QueryFlags::empty(), radius: 0.0 }
+    }
+
+    /// The same query with `flags` added.
+    ///
+    /// ```
+    /// use minkq::{BvhQuery, QueryFlags};
+    /// let q = BvhQuery::boxes(&[]).with_flags(QueryFlags::DIGEST);
+    /// assert!(q.flags.contains(QueryFlags::DIGEST));
+    /// ```
+    pub fn with_flags(mut self, flags: QueryFlags) -> BvhQuery<'a> {
+        self.flags |= flags;
+        self
+    }
+
+    fn raw(&self) -> sys::minkq_bvh_query_desc {
+        // Capsule ends and box corners are read in place: two strided views of one array.
+        fn strided<T>(values: &[T], offset: usize) -> sys::minkq_buffer {
+            sys::minkq_buffer {
+                data: if values.is_empty() {
+                    ptr::null()
+                } else {
+                    values.as_ptr().cast::<u8>().wrapping_add(offset).cast()
+                },
+                byte_stride: mem::size_of::<T>(),
+                count: values.len(),
+                memory: sys::MINKQ_MEMORY_HOST,
+            }
+        }
+        let (shape, first, second) = match self.shapes {
+            Shapes::Spheres(centres) => (sys::MINKQ_SHAPE_SPHERE, host_buffer(centres), host_buffer::<[f32; 3]>(&[])),
+            Shapes::Capsules(segments) => (sys::MINKQ_SHAPE_CAPSULE, strided(segments, 0), strided(segments, 12)),
+            Shapes::Boxes(boxes) => (sys::MINKQ_SHAPE_BOX, strided(boxes, 0), strided(boxes, 12)),
+        };
+        sys::minkq_bvh_query_desc {
+            shape,
+            mode: self.mode.raw(),
+            flags: self.flags.bits(),
+            radius: self.radius,
+            first,
+            second,
+        }
+    }
+}
+
+/// A BVH over user boxes, answering sphere, capsule and box queries (`minkq_bvh`). Released
+/// when dropped; keeps its device alive.
+///
+/// Threads: `Send` but not `Sync`, as [`Scene`](crate::Scene) and for the same reason: the C
+/// API lets one thread at a time use an object.
+///
+/// ```
+/// use minkq::{Aabb, Bvh, BvhQuery, Device, Mode, QueryFlags};
+/// let device = Device::cpu()?;
+/// let boxes = [Aabb::new([0.0; 3], [1.0; 3]), Aabb::new([2.0; 3], [3.0; 3])];
+/// let bvh = Bvh::new(&device, &boxes)?;
+/// let centres = [[1.5f32, 1.5, 1.5], [0.5, 0.5, 0.5]];
+/// let mut pairs = Vec::new();
+/// bvh.query_vec(&BvhQuery::spheres(&centres, Mode::Sphere, 0.5).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
+/// assert_eq!(pairs, vec![[1, 0]]); // (query, box): only the second centre is inside a box
+/// # Ok::<(), minkq::Error>(())
+/// ```
+///
+/// ```compile_fail
+/// fn shared_between_threads<T: Sync>() {}
+/// shared_between_threads::<minkq::Bvh>(); // Bvh is not Sync
+/// ```
+pub struct Bvh {
+    raw: NonNull<sys::minkq_bvh>,
+    len: usize,
+    _device: Arc<DeviceHandle>,
+}
+
+// SAFETY: as for Scene: one thread at a time, enforced by `Bvh: !Sync`.
+unsafe impl Send for Bvh {}
+
+impl Bvh {
+    /// Builds a BVH over `boxes`.
+    ///
+    /// Errors: [`Error::NonFinite`], [`Error::InvalidArgument`] (`"box 3 has lo > hi"`),
+    /// [`Error::SizeOverflow`].
+    ///
+    /// ```
+    /// use minkq::{Aabb, Bvh, Device, Error};
+    /// let device = Device::cpu()?;
+    /// let err = Bvh::new(&device, &[Aabb::new([1.0; 3], [0.0; 3])]).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("box 0 has lo > hi".into()));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn new(device: &Device, boxes: &[Aabb]) -> Result<Bvh> {
+        let mut raw = ptr::null_mut();
+        // SAFETY: a live device and a buffer describing a live slice.
+        check(unsafe { sys::minkq_bvh_create(device.handle.as_ptr(), host_buffer(boxes), &mut raw) })?;
+        let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_bvh_create returned NULL".into()))?;
+        Ok(Bvh { raw, len: boxes.len(), _device: Arc::clone(&device.handle) })
+    }
+
+    /// New boxes (same count); refits in place.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let mut boxes = vec![Aabb::new([0.0; 3], [1.0; 3])];
+    /// let mut bvh = Bvh::new(&Device::cpu()?, &boxes)?;
+    /// boxes[0] = Aabb::new([5.0; 3], [6.0; 3]);
+    /// bvh.refit(&boxes)?;
+    /// let mut pairs = Vec::new();
+    /// bvh.query_vec(&BvhQuery::spheres(&[[5.5; 3]], Mode::Sphere, 0.0), &mut pairs)?;
+    /// assert_eq!(pairs, vec![[0, 0]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn refit(&mut self, boxes: &[Aabb]) -> Result<()> {
+        // SAFETY: a live BVH and a buffer describing a live slice.
+        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), host_buffer(boxes)) })
+    }
+
+    /// The number of boxes.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::default(); 3])?;
+    /// assert_eq!(bvh.len(), 3);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the BVH holds no box.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// assert!(Bvh::new(&Device::cpu()?, &[])?.is_empty());
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Pairs (query, box) for every query shape overlapping a box, into the caller's buffer;
+    /// [`Error::Capacity`] with the exact count when it is too small.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
+    /// let segments = [[[-1.0, 0.5, 0.5], [2.0, 0.5, 0.5]], [[-1.0, 3.0, 0.5], [2.0, 3.0, 0.5]]];
+    /// let mut out = [[0; 2]; 4];
+    /// let info = bvh.query_into(&BvhQuery::capsules(&segments, Mode::CapsuleExact, 0.1), &mut out)?;
+    /// assert_eq!(&out[..info.count as usize], &[[0, 0]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_into(&self, query: &BvhQuery<'_>, out: &mut [[i32; 2]]) -> Result<QueryInfo> {
+        self.query_raw(query, out.as_mut_ptr().cast(), out.len())
+    }
+
+    /// Pairs (query, box) into a `Vec`, grown to the exact count when too small.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3]), Aabb::new([0.5; 3], [2.0; 3])])?;
+    /// let mut pairs = Vec::new();
+    /// let info = bvh.query_vec(&BvhQuery::boxes(&[Aabb::new([0.9; 3], [1.1; 3])]).with_flags(QueryFlags::DIGEST), &mut pairs)?;
+    /// assert_eq!(pairs, vec![[0, 0], [0, 1]]);
+    /// assert!(info.digest.is_some());
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_vec(&self, query: &BvhQuery<'_>, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
+        query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity))
+    }
+
+    fn query_raw(&self, query: &BvhQuery<'_>, pairs: *mut i32, capacity: usize) -> Result<QueryInfo> {
+        let desc = query.raw();
+        let mut info = sys::minkq_query_info { count: 0, digest: 0 };
+        // SAFETY: the description's buffers view live slices; `pairs` holds 2 * capacity int32.
+        let status = unsafe {
+            sys::minkq_bvh_query(self.raw.as_ptr(), &desc, pairs, capacity, sys::MINKQ_MEMORY_HOST, &mut info)
+        };
+        match check(status) {
+            Ok(()) => Ok(QueryInfo::from_raw(&info, query.flags)),
+            Err(Error::Capacity { message, .. }) => Err(Error::Capacity { needed: info.count, message }),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+impl Drop for Bvh {
+    fn drop(&mut self) {
+        // SAFETY: created by minkq_bvh_create and released once, before its device.
+        unsafe { sys::minkq_bvh_release(self.raw.as_ptr()) }
+    }
+}
+
+impl fmt::Debug for Bvh {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Bvh").field("boxes", &self.len).finish()
+    }
+}

@@ -1,0 +1,101 @@
+//! Safe Rust API for minkq: which pairs of mesh elements may lie within distance r of each
+//! other?
+//!
+//! minkq builds a BVH over triangles, edges or boxes and runs batched sphere, capsule and box
+//! queries against it, on the CPU or with CUDA. Cloth and soft-body simulators use it for their
+//! per-step broad phase: **VT** pairs (vertex within r of a triangle) and **EE** pairs (edge
+//! within r of an edge). Every pair within r is reported, in every [`Mode`], for every finite
+//! input; finer modes report subsets of coarser ones.
+//!
+//! This crate wraps the C ABI (`capi/minkq.h`, bound raw in [`sys`]): every handle is owned by
+//! a type that releases it in `Drop`, every call returns [`Result`] with the library's message,
+//! and pairs come back as slices of `[i32; 2]`.
+//!
+//! ```
+//! use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
+//!
+//! let device = Device::new("auto")?;
+//! // Two triangles, one 0.1 above the other.
+//! let mut vertices = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+//!                         [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+//! let triangles = [[0, 1, 2], [3, 4, 5]];
+//! let mut scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+//! let mut pairs = PairBuffer::new()?;
+//! let r = 0.2;
+//! let vt = scene.query(&Query::vt(Mode::Sphere, r).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
+//! assert_eq!(vt.len(), 6);
+//! let ee = scene.query(&Query::ee(Mode::CapsuleExact, r), &mut pairs)?;
+//! assert!(ee.len() >= 9);
+//!
+//! // Every simulation step: move the vertices, refit, query again.
+//! for v in &mut vertices[3..] {
+//!     v[2] += 1.0;
+//! }
+//! scene.refit(&vertices)?;
+//! assert!(scene.query(&Query::ee(Mode::CapsuleExact, r), &mut pairs)?.is_empty());
+//! # Ok::<(), minkq::Error>(())
+//! ```
+//!
+//! # Threads
+//! The C API allows different objects to be used from different threads at once, but one
+//! object only from one thread at a time, and lets scenes on different threads share a device.
+//! So [`Device`], [`Scene`], [`Bvh`] and [`PairBuffer`] are `Send` (they can move to another
+//! thread) and not `Sync` (a shared reference cannot cross threads, which would let two threads
+//! call into the same object). Scenes and BVHs keep their device alive, and can be sent to
+//! other threads independently of it.
+//!
+//! # Linking
+//! `minkq-sys` links `libminkq.so` from `MINKQ_LIB_DIR` (the CMake build's `capi/` folder) or
+//! builds it with CMake; this crate's tests and examples find it at run time through an rpath.
+#![deny(missing_docs)]
+
+mod bvh;
+mod device;
+mod error;
+mod pairs;
+mod query;
+mod scene;
+
+/// The raw FFI bindings (`minkq-sys`), for what the safe API does not cover (device memory).
+///
+/// ```
+/// assert_eq!(minkq::sys::MINKQ_ABI_VERSION, minkq::ABI_VERSION);
+/// ```
+pub use minkq_sys as sys;
+
+pub use bvh::{Aabb, Bvh, BvhQuery, Shapes};
+pub use device::{cuda_device_count, Backend, Device};
+pub use error::{Error, Result};
+pub use pairs::PairBuffer;
+pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, SceneFlags};
+pub use scene::{Scene, SceneDesc};
+
+/// The ABI version this crate was generated against (`MINKQ_ABI_VERSION`).
+///
+/// ```
+/// assert_eq!(minkq::abi_version(), minkq::ABI_VERSION);
+/// ```
+pub const ABI_VERSION: u32 = sys::MINKQ_ABI_VERSION;
+
+/// The run-time library's ABI version; differs from [`ABI_VERSION`] when a mismatched
+/// libminkq.so was loaded.
+///
+/// ```
+/// assert_eq!(minkq::abi_version(), minkq::ABI_VERSION);
+/// ```
+pub fn abi_version() -> u32 {
+    // SAFETY: no arguments.
+    unsafe { sys::minkq_abi_version() }
+}
+
+/// The run-time library's version as (major, minor, patch).
+///
+/// ```
+/// let (major, minor, patch) = minkq::version();
+/// assert_eq!((major, minor, patch), (minkq::sys::MINKQ_VERSION_MAJOR, minkq::sys::MINKQ_VERSION_MINOR, minkq::sys::MINKQ_VERSION_PATCH));
+/// ```
+pub fn version() -> (u32, u32, u32) {
+    // SAFETY: no arguments.
+    let v = unsafe { sys::minkq_version() };
+    (v / 10000, v / 100 % 100, v % 100)
+}

@@ -1,0 +1,333 @@
+use std::fmt;
+use std::ops::{BitOr, BitOrAssign};
+use std::str::FromStr;
+
+use crate::error::Error;
+use crate::sys;
+
+/// What a mesh query pairs up.
+///
+/// ```
+/// use minkq::QueryKind;
+/// assert_eq!("ee".parse::<QueryKind>()?, QueryKind::Ee);
+/// assert_eq!(QueryKind::Vt.name(), "vt");
+/// # Ok::<(), minkq::Error>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum QueryKind {
+    /// Pairs (vertex, triangle): the vertex lies within r of the triangle (a sphere query).
+    Vt,
+    /// Pairs (e, f) with e < f: edge e lies within r of edge f (a capsule query).
+    Ee,
+}
+
+/// The node test, from fast to tight. For every finite input the pairs nest:
+/// true contacts ⊆ leaf_exact ⊆ `CapsuleExact` ⊆ `CapsuleRay` ⊆ `Box` (EE) and
+/// true contacts ⊆ leaf_exact ⊆ `Sphere` ⊆ `Box` (VT). Points are zero-length capsules: for
+/// VT, `CapsuleRay` is the box test and `CapsuleExact` the sphere test.
+///
+/// ```
+/// use minkq::Mode;
+/// assert_eq!("capsule_exact".parse::<Mode>()?, Mode::CapsuleExact);
+/// assert_eq!(Mode::ALL.map(|m| m.name()), ["box", "sphere", "capsule_ray", "capsule_exact"]);
+/// # Ok::<(), minkq::Error>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// The r-padded box of the query element against node boxes.
+    Box,
+    /// Point–box distance (point queries only: VT and spheres).
+    Sphere,
+    /// Segment against the r-inflated box (slab test).
+    CapsuleRay,
+    /// Segment–box distance.
+    CapsuleExact,
+}
+
+impl QueryKind {
+    /// `"vt"` or `"ee"`.
+    ///
+    /// ```
+    /// assert_eq!(minkq::QueryKind::Ee.name(), "ee");
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            QueryKind::Vt => "vt",
+            QueryKind::Ee => "ee",
+        }
+    }
+
+    pub(crate) fn raw(self) -> sys::minkq_query_kind {
+        match self {
+            QueryKind::Vt => sys::MINKQ_QUERY_VT,
+            QueryKind::Ee => sys::MINKQ_QUERY_EE,
+        }
+    }
+}
+
+impl Mode {
+    /// Every mode, from fast to tight.
+    ///
+    /// ```
+    /// assert_eq!(minkq::Mode::ALL.len(), 4);
+    /// ```
+    pub const ALL: [Mode; 4] = [Mode::Box, Mode::Sphere, Mode::CapsuleRay, Mode::CapsuleExact];
+
+    /// `"box"`, `"sphere"`, `"capsule_ray"` or `"capsule_exact"`.
+    ///
+    /// ```
+    /// assert_eq!(minkq::Mode::CapsuleRay.name(), "capsule_ray");
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Box => "box",
+            Mode::Sphere => "sphere",
+            Mode::CapsuleRay => "capsule_ray",
+            Mode::CapsuleExact => "capsule_exact",
+        }
+    }
+
+    pub(crate) fn raw(self) -> sys::minkq_mode {
+        match self {
+            Mode::Box => sys::MINKQ_MODE_BOX,
+            Mode::Sphere => sys::MINKQ_MODE_SPHERE,
+            Mode::CapsuleRay => sys::MINKQ_MODE_CAPSULE_RAY,
+            Mode::CapsuleExact => sys::MINKQ_MODE_CAPSULE_EXACT,
+        }
+    }
+}
+
+impl FromStr for QueryKind {
+    type Err = Error;
+    /// Parses `"vt"` or `"ee"`.
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s {
+            "vt" => Ok(QueryKind::Vt),
+            "ee" => Ok(QueryKind::Ee),
+            _ => Err(Error::InvalidArgument(format!("unknown query kind {s:?} (use \"vt\" or \"ee\")"))),
+        }
+    }
+}
+
+impl FromStr for Mode {
+    type Err = Error;
+    /// Parses a mode's [`name`](Mode::name).
+    fn from_str(s: &str) -> Result<Self, Error> {
+        Mode::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+            Error::InvalidArgument(format!(
+                "unknown mode {s:?} (use \"box\", \"sphere\", \"capsule_ray\" or \"capsule_exact\")"
+            ))
+        })
+    }
+}
+
+impl fmt::Display for QueryKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+macro_rules! flags {
+    ($(#[$doc:meta])* $name:ident { $($(#[$fdoc:meta])* $flag:ident = $value:expr;)* }) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+        pub struct $name(u32);
+
+        impl $name {
+            $(
+                $(#[$fdoc])*
+                ///
+                /// ```
+                #[doc = concat!("assert_eq!(minkq::", stringify!($name), "::", stringify!($flag), ".bits(), minkq::", stringify!($value), ");")]
+                /// ```
+                pub const $flag: $name = $name($value as u32);
+            )*
+
+            /// No flag set.
+            ///
+            /// ```
+            #[doc = concat!("assert_eq!(minkq::", stringify!($name), "::empty().bits(), 0);")]
+            /// ```
+            pub const fn empty() -> $name {
+                $name(0)
+            }
+
+            /// The C bit mask.
+            ///
+            /// ```
+            #[doc = concat!("let all = ", $("minkq::", stringify!($name), "::", stringify!($flag), " | ",)* "minkq::", stringify!($name), "::empty();")]
+            #[doc = concat!("assert_eq!(all.bits(), 0", $(" | minkq::", stringify!($value),)* ");")]
+            /// ```
+            pub const fn bits(self) -> u32 {
+                self.0
+            }
+
+            /// Whether every flag of `other` is set in `self`.
+            ///
+            /// ```
+            #[doc = concat!("use minkq::", stringify!($name), ";")]
+            #[doc = concat!("assert!(!", stringify!($name), "::empty().contains(", $(stringify!($name), "::", stringify!($flag), " | ",)* stringify!($name), "::empty()));")]
+            /// ```
+            pub const fn contains(self, other: $name) -> bool {
+                self.0 & other.0 == other.0
+            }
+        }
+
+        impl BitOr for $name {
+            type Output = $name;
+            fn bitor(self, other: $name) -> $name {
+                $name(self.0 | other.0)
+            }
+        }
+
+        impl BitOrAssign for $name {
+            fn bitor_assign(&mut self, other: $name) {
+                self.0 |= other.0;
+            }
+        }
+    };
+}
+
+flags! {
+    /// What a scene is built for (`minkq_scene_flags`): at least one of `VT` and `EE`.
+    ///
+    /// ```
+    /// use minkq::SceneFlags;
+    /// let flags = SceneFlags::VT | SceneFlags::EE;
+    /// assert!(flags.contains(SceneFlags::EE) && !flags.contains(SceneFlags::DROP_INCIDENT));
+    /// ```
+    SceneFlags {
+        /// Build the triangle tree for vertex–triangle queries.
+        VT = sys::MINKQ_SCENE_VT;
+        /// Build the edge tree for edge–edge queries.
+        EE = sys::MINKQ_SCENE_EE;
+        /// Drop (v, t) with v a vertex of t, and pairs of edges sharing a vertex.
+        DROP_INCIDENT = sys::MINKQ_SCENE_DROP_INCIDENT;
+    }
+}
+
+flags! {
+    /// Query options (`minkq_query_flags`).
+    ///
+    /// ```
+    /// use minkq::QueryFlags;
+    /// let flags = QueryFlags::LEAF_EXACT | QueryFlags::DIGEST;
+    /// assert_eq!(flags.bits(), 5);
+    /// ```
+    QueryFlags {
+        /// Primitive distance test at the leaves: candidates are the true contacts (plus, at
+        /// most, pairs within r + 2^-19 S). Mesh scenes only.
+        LEAF_EXACT = sys::MINKQ_QUERY_LEAF_EXACT;
+        /// Pairs sorted lexicographically.
+        CANONICAL = sys::MINKQ_QUERY_CANONICAL;
+        /// xxHash64 (seed 0) of the canonical little-endian int32 pairs; implies `CANONICAL`.
+        DIGEST = sys::MINKQ_QUERY_DIGEST;
+    }
+}
+
+/// A mesh query: kind, mode, flags and radius (`minkq_query_desc`).
+///
+/// ```
+/// use minkq::{Mode, Query, QueryFlags, QueryKind};
+/// let q = Query::ee(Mode::CapsuleExact, 0.01).with_flags(QueryFlags::LEAF_EXACT);
+/// assert_eq!((q.kind, q.mode, q.radius), (QueryKind::Ee, Mode::CapsuleExact, 0.01));
+/// assert!(q.flags.contains(QueryFlags::LEAF_EXACT));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Query {
+    /// VT or EE.
+    pub kind: QueryKind,
+    /// The node test.
+    pub mode: Mode,
+    /// Leaf-exact, canonical order, digest.
+    pub flags: QueryFlags,
+    /// r: finite and >= 0.
+    pub radius: f32,
+}
+
+impl Query {
+    /// A query of `kind` in `mode` with radius `radius` and no flags.
+    ///
+    /// ```
+    /// use minkq::{Mode, Query, QueryKind};
+    /// assert_eq!(Query::new(QueryKind::Vt, Mode::Sphere, 0.5), Query::vt(Mode::Sphere, 0.5));
+    /// ```
+    pub fn new(kind: QueryKind, mode: Mode, radius: f32) -> Query {
+        Query { kind, mode, flags: QueryFlags::empty(), radius }
+    }
+
+    /// A vertex–triangle query.
+    ///
+    /// ```
+    /// let q = minkq::Query::vt(minkq::Mode::Sphere, 0.1);
+    /// assert_eq!(q.kind, minkq::QueryKind::Vt);
+    /// ```
+    pub fn vt(mode: Mode, radius: f32) -> Query {
+        Query::new(QueryKind::Vt, mode, radius)
+    }
+
+    /// An edge–edge query.
+    ///
+    /// ```
+    /// let q = minkq::Query::ee(minkq::Mode::CapsuleRay, 0.1);
+    /// assert_eq!(q.kind, minkq::QueryKind::Ee);
+    /// ```
+    pub fn ee(mode: Mode, radius: f32) -> Query {
+        Query::new(QueryKind::Ee, mode, radius)
+    }
+
+    /// The same query with `flags` added.
+    ///
+    /// ```
+    /// use minkq::{Mode, Query, QueryFlags};
+    /// let q = Query::vt(Mode::Sphere, 0.1).with_flags(QueryFlags::CANONICAL).with_flags(QueryFlags::DIGEST);
+    /// assert_eq!(q.flags, QueryFlags::CANONICAL | QueryFlags::DIGEST);
+    /// ```
+    pub fn with_flags(mut self, flags: QueryFlags) -> Query {
+        self.flags |= flags;
+        self
+    }
+
+    pub(crate) fn raw(&self) -> sys::minkq_query_desc {
+        sys::minkq_query_desc {
+            kind: self.kind.raw(),
+            mode: self.mode.raw(),
+            flags: self.flags.bits(),
+            radius: self.radius,
+        }
+    }
+}
+
+/// What a query into a caller's buffer reports.
+///
+/// ```
+/// # use minkq::*;
+/// # let device = Device::cpu()?;
+/// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+/// # let triangles = [[0, 1, 2], [3, 4, 5]];
+/// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+/// let mut pairs = [[0i32; 2]; 16];
+/// let info = scene.query_into(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::DIGEST), &mut pairs)?;
+/// assert_eq!(info.count, 6);
+/// assert!(info.digest.is_some());
+/// # Ok::<(), minkq::Error>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QueryInfo {
+    /// The exact number of pairs written.
+    pub count: u64,
+    /// With [`QueryFlags::DIGEST`]: xxHash64 (seed 0) of the canonical little-endian pairs.
+    pub digest: Option<u64>,
+}
+
+impl QueryInfo {
+    pub(crate) fn from_raw(info: &sys::minkq_query_info, flags: QueryFlags) -> QueryInfo {
+        QueryInfo { count: info.count, digest: flags.contains(QueryFlags::DIGEST).then_some(info.digest) }
+    }
+}

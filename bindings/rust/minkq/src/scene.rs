@@ -1,0 +1,336 @@
+use std::fmt;
+use std::mem;
+use std::ptr::{self, NonNull};
+use std::sync::Arc;
+
+use crate::device::{Device, DeviceHandle};
+use crate::error::{check, Error, Result};
+use crate::pairs::{query_vec, PairBuffer};
+use crate::query::{Query, QueryInfo, SceneFlags};
+use crate::sys;
+
+/// A host buffer description of a packed slice.
+pub(crate) fn host_buffer<T>(values: &[T]) -> sys::minkq_buffer {
+    sys::minkq_buffer {
+        data: if values.is_empty() { ptr::null() } else { values.as_ptr().cast() },
+        byte_stride: mem::size_of::<T>(),
+        count: values.len(),
+        memory: sys::MINKQ_MEMORY_HOST,
+    }
+}
+
+/// The mesh and options a [`Scene`] is built from (`minkq_scene_desc`).
+///
+/// ```
+/// use minkq::{SceneDesc, SceneFlags};
+/// let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+/// let triangles = [[0, 1, 2]];
+/// let desc = SceneDesc::new(&vertices, &triangles).flags(SceneFlags::VT);
+/// assert_eq!(desc.flags, SceneFlags::VT);
+/// assert!(desc.edges.is_empty()); // derived from the triangles
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct SceneDesc<'a> {
+    /// Vertex positions.
+    pub vertices: &'a [[f32; 3]],
+    /// Vertex indices of each triangle.
+    pub triangles: &'a [[i32; 3]],
+    /// Vertex indices of each edge, or empty to derive them from the triangles: every distinct
+    /// undirected triangle edge as (min, max), in lexicographic order.
+    pub edges: &'a [[i32; 2]],
+    /// Which trees to build (at least one of VT and EE) and whether to drop incident pairs.
+    pub flags: SceneFlags,
+}
+
+impl<'a> SceneDesc<'a> {
+    /// A scene for VT and EE queries with incident pairs dropped (the cloth self-collision
+    /// set-up), edges derived from the triangles.
+    ///
+    /// ```
+    /// use minkq::{SceneDesc, SceneFlags};
+    /// let desc = SceneDesc::new(&[[0.0; 3]; 3], &[[0, 1, 2]]);
+    /// assert_eq!(desc.flags, SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT);
+    /// ```
+    pub fn new(vertices: &'a [[f32; 3]], triangles: &'a [[i32; 3]]) -> SceneDesc<'a> {
+        SceneDesc {
+            vertices,
+            triangles,
+            edges: &[],
+            flags: SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT,
+        }
+    }
+
+    /// The same description with explicit edges.
+    ///
+    /// ```
+    /// let edges = [[0, 1], [1, 2]];
+    /// let desc = minkq::SceneDesc::new(&[[0.0; 3]; 3], &[[0, 1, 2]]).edges(&edges);
+    /// assert_eq!(desc.edges.len(), 2);
+    /// ```
+    pub fn edges(mut self, edges: &'a [[i32; 2]]) -> SceneDesc<'a> {
+        self.edges = edges;
+        self
+    }
+
+    /// The same description with other flags.
+    ///
+    /// ```
+    /// use minkq::SceneFlags;
+    /// let desc = minkq::SceneDesc::new(&[[0.0; 3]; 3], &[[0, 1, 2]]).flags(SceneFlags::EE);
+    /// assert_eq!(desc.flags, SceneFlags::EE);
+    /// ```
+    pub fn flags(mut self, flags: SceneFlags) -> SceneDesc<'a> {
+        self.flags = flags;
+        self
+    }
+}
+
+/// A triangle mesh on a device with the BVHs its flags ask for, answering VT and EE queries
+/// (`minkq_scene`). Released when dropped; keeps its device alive.
+///
+/// Threads: `Send` but not `Sync`. The C API says one scene must not be used by two threads at
+/// the same time, so a `&Scene` may not cross threads (its queries would then run
+/// concurrently); moving the scene to another thread is allowed. Wrap it in a `Mutex` to share
+/// it.
+///
+/// ```
+/// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
+/// let device = Device::cpu()?;
+/// // Two triangles, one 0.1 above the other.
+/// let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+///                 [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+/// let triangles = [[0, 1, 2], [3, 4, 5]];
+/// let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+/// let mut pairs = PairBuffer::new()?;
+/// let vt = scene.query(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
+/// assert_eq!(vt.len(), 6); // each vertex against the other triangle
+/// # Ok::<(), minkq::Error>(())
+/// ```
+///
+/// ```compile_fail
+/// fn shared_between_threads<T: Sync>() {}
+/// shared_between_threads::<minkq::Scene>(); // Scene is not Sync
+/// ```
+pub struct Scene {
+    raw: NonNull<sys::minkq_scene>,
+    _device: Arc<DeviceHandle>,
+}
+
+// SAFETY: the C API allows an object to be used from any thread, one thread at a time. A
+// `Scene` is not `Sync`, so only its owner (or a `&mut`) can call into it; its device may be
+// shared by scenes on other threads (documented by the C API).
+unsafe impl Send for Scene {}
+
+impl Scene {
+    /// Copies the mesh to the device and builds the trees `desc.flags` asks for.
+    ///
+    /// Errors: [`Error::NonFinite`] (`"vertex 12 has a non-finite coordinate (...)"`),
+    /// [`Error::IndexOutOfRange`], [`Error::SizeOverflow`], [`Error::InvalidArgument`] (no
+    /// query kind in the flags).
+    ///
+    /// ```
+    /// use minkq::{Device, Error, Scene, SceneDesc};
+    /// let device = Device::cpu()?;
+    /// let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, f32::NAN, 0.0]];
+    /// let err = Scene::new(&device, &SceneDesc::new(&vertices, &[[0, 1, 2]])).unwrap_err();
+    /// assert!(matches!(&err, Error::NonFinite(m) if m.starts_with("vertex 2 ")));
+    /// let err = Scene::new(&device, &SceneDesc::new(&vertices[..2], &[[0, 1, 2]])).unwrap_err();
+    /// assert!(matches!(err, Error::IndexOutOfRange(_)));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn new(device: &Device, desc: &SceneDesc<'_>) -> Result<Scene> {
+        let raw_desc = sys::minkq_scene_desc {
+            flags: desc.flags.bits(),
+            vertices: host_buffer(desc.vertices),
+            triangles: host_buffer(desc.triangles),
+            edges: host_buffer(desc.edges),
+        };
+        let mut raw = ptr::null_mut();
+        // SAFETY: the buffers describe live slices of the right element sizes; the library
+        // copies them before returning.
+        check(unsafe { sys::minkq_scene_create(device.handle.as_ptr(), &raw_desc, &mut raw) })?;
+        let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_scene_create returned NULL".into()))?;
+        Ok(Scene { raw, _device: Arc::clone(&device.handle) })
+    }
+
+    /// Moves the vertices (same count) and refits the trees in place: the per-step call of a
+    /// simulation. On error the scene keeps its previous positions.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// let mut vertices = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+    ///                         [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// let mut scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let query = Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::LEAF_EXACT);
+    /// let mut pairs = PairBuffer::new()?;
+    /// assert_eq!(scene.query(&query, &mut pairs)?.len(), 6);
+    /// for v in &mut vertices[3..] {
+    ///     v[2] = 1.0; // lift the upper triangle away
+    /// }
+    /// scene.refit(&vertices)?;
+    /// assert!(scene.query(&query, &mut pairs)?.is_empty());
+    /// assert!(matches!(scene.refit(&vertices[..5]), Err(Error::InvalidArgument(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn refit(&mut self, vertices: &[[f32; 3]]) -> Result<()> {
+        // SAFETY: a live scene and a buffer describing a live slice.
+        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), host_buffer(vertices)) })
+    }
+
+    /// The number of vertices.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[[0, 1, 2]]))?;
+    /// assert_eq!(scene.vertex_count(), 3);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn vertex_count(&self) -> usize {
+        // SAFETY: a live scene.
+        unsafe { sys::minkq_scene_vertex_count(self.raw.as_ptr()) }
+    }
+
+    /// The number of triangles.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[[0, 1, 2]]))?;
+    /// assert_eq!(scene.triangle_count(), 1);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn triangle_count(&self) -> usize {
+        // SAFETY: a live scene.
+        unsafe { sys::minkq_scene_triangle_count(self.raw.as_ptr()) }
+    }
+
+    /// The number of edges (given, or derived for an EE scene).
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[[0, 1, 2]]))?;
+    /// assert_eq!(scene.edge_count(), 3);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn edge_count(&self) -> usize {
+        // SAFETY: a live scene.
+        unsafe { sys::minkq_scene_edge_count(self.raw.as_ptr()) }
+    }
+
+    /// The scene's edges, numbered as EE pairs number them.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[[2, 1, 0]]))?;
+    /// assert_eq!(scene.edges()?, vec![[0, 1], [0, 2], [1, 2]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn edges(&self) -> Result<Vec<[i32; 2]>> {
+        let mut edges = vec![[0i32; 2]; self.edge_count()];
+        // SAFETY: `edges` holds 2 * len int32.
+        check(unsafe { sys::minkq_scene_edges(self.raw.as_ptr(), edges.as_mut_ptr().cast(), edges.len()) })?;
+        Ok(edges)
+    }
+
+    /// Runs a query into a library-owned buffer that grows as needed; returns its pairs,
+    /// (vertex, triangle) for VT and (e, f) with e < f for EE.
+    ///
+    /// Errors: [`Error::InvalidArgument`] (a VT query on a scene built without VT, sphere
+    /// mode for EE, a negative radius), [`Error::NonFinite`] (radius).
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let mut pairs = PairBuffer::new()?;
+    /// let ee = scene.query(&Query::ee(Mode::CapsuleExact, 0.2).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
+    /// assert_eq!(ee.len(), 9); // every lower edge against every upper edge
+    /// assert!(ee.iter().all(|&[e, f]| e < f));
+    /// let err = scene.query(&Query::ee(Mode::Sphere, 0.2), &mut pairs).unwrap_err();
+    /// assert!(matches!(err, Error::InvalidArgument(_)));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query<'r>(&self, query: &Query, out: &'r mut PairBuffer) -> Result<&'r [[i32; 2]]> {
+        let desc = query.raw();
+        // SAFETY: a live scene and result, a valid description.
+        check(unsafe { sys::minkq_scene_query_result(self.raw.as_ptr(), &desc, out.as_ptr()) })?;
+        Ok(out.pairs())
+    }
+
+    /// Runs a query into the caller's buffer. If more pairs exist than `out` holds, nothing is
+    /// written past it and the error is [`Error::Capacity`] with the exact count needed.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let query = Query::vt(Mode::Sphere, 0.2);
+    /// let mut small = [[0; 2]; 4];
+    /// match scene.query_into(&query, &mut small) {
+    ///     Err(Error::Capacity { needed, .. }) => assert_eq!(needed, 6),
+    ///     other => panic!("{other:?}"),
+    /// }
+    /// let mut enough = vec![[0; 2]; 6];
+    /// assert_eq!(scene.query_into(&query, &mut enough)?.count, 6);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_into(&self, query: &Query, out: &mut [[i32; 2]]) -> Result<QueryInfo> {
+        self.query_raw(query, out.as_mut_ptr().cast(), out.len())
+    }
+
+    /// Runs a query into a `Vec`, growing it to the exact count when it is too small (the
+    /// query then runs twice); on success the `Vec` holds exactly the pairs.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let mut pairs = Vec::new();
+    /// let info = scene.query_vec(&Query::ee(Mode::Box, 0.2).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
+    /// assert_eq!(info.count as usize, pairs.len());
+    /// assert!(pairs.windows(2).all(|w| w[0] < w[1]));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_vec(&self, query: &Query, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
+        query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity))
+    }
+
+    fn query_raw(&self, query: &Query, pairs: *mut i32, capacity: usize) -> Result<QueryInfo> {
+        let desc = query.raw();
+        let mut info = sys::minkq_query_info { count: 0, digest: 0 };
+        // SAFETY: `pairs` holds 2 * capacity int32 of host memory.
+        let status = unsafe {
+            sys::minkq_scene_query(self.raw.as_ptr(), &desc, pairs, capacity, sys::MINKQ_MEMORY_HOST, &mut info)
+        };
+        match check(status) {
+            Ok(()) => Ok(QueryInfo::from_raw(&info, query.flags)),
+            Err(Error::Capacity { message, .. }) => Err(Error::Capacity { needed: info.count, message }),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+impl Drop for Scene {
+    fn drop(&mut self) {
+        // SAFETY: created by minkq_scene_create and released once, before its device (whose
+        // handle this scene still holds).
+        unsafe { sys::minkq_scene_release(self.raw.as_ptr()) }
+    }
+}
+
+impl fmt::Debug for Scene {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Scene")
+            .field("vertices", &self.vertex_count())
+            .field("triangles", &self.triangle_count())
+            .field("edges", &self.edge_count())
+            .finish()
+    }
+}

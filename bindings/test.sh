@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# Builds and tests minkq's Rust and Python bindings on a fresh Debian 12 machine that has cargo
+# and python3 (build.sh's `test` command calls it after ctest):
+#   - installs what is missing: Debian's librust-*-dev crates (there is no crates.io here;
+#     .cargo/config.toml points cargo at /usr/share/cargo/registry), bindgen, cbindgen,
+#     libclang, the C++ build dependencies, python3-venv; maturin, numpy and pytest from PyPI
+#     into a virtual environment under the build folder;
+#   - takes libminkq.so from MINKQ_LIB_DIR (the CMake build's capi/ folder) or builds a
+#     CPU-only one under the build folder;
+#   - runs `cargo test` for the workspace (unit, integration and doc tests: minkq-sys with its
+#     bindgen freshness and cbindgen ABI round trip, the safe crate, the Rust example);
+#   - runs pytest on the build tree, builds the wheel with maturin, installs it and runs the
+#     error and digest tests again on the installed package;
+#   - runs both demos on a small scene.
+# Environment: MINKQ_LIB_DIR (see above); MINKQ_BINDINGS_BUILD_DIR (default: build-bindings at
+# the repository root) for the library, the virtual environment and the wheel.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${MINKQ_BINDINGS_BUILD_DIR:-$root/build-bindings}
+venv=$build/venv
+started=$SECONDS
+step() { printf '\n== bindings: %s (%ds)\n' "$*" $((SECONDS - started)); }
+
+# ---- Debian packages ---------------------------------------------------------------------------
+packages=(
+  librust-pyo3-dev bindgen cbindgen libclang-dev gcc
+  cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev
+)
+missing=()
+for p in "${packages[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+python3 -m venv --help >/dev/null 2>&1 && python3 -c 'import ensurepip' 2>/dev/null || missing+=(python3-venv)
+if [ ${#missing[@]} -gt 0 ]; then
+  step "installing ${missing[*]}"
+  sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
+  $sudo apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "${missing[@]}"
+fi
+
+# ---- libminkq.so -------------------------------------------------------------------------------
+if [ -z "${MINKQ_LIB_DIR:-}" ]; then
+  step "building libminkq.so (CPU backend) in $build"
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA=OFF \
+    -DMINKQ_BUILD_TESTS=OFF -DMINKQ_BUILD_EXAMPLES=OFF >/dev/null
+  cmake --build "$build" --target minkq -j "$(nproc)"
+  MINKQ_LIB_DIR=$build/capi
+fi
+MINKQ_LIB_DIR=$(cd "$MINKQ_LIB_DIR" && pwd)
+export MINKQ_LIB_DIR
+[ -e "$MINKQ_LIB_DIR/libminkq.so" ] || { echo "no libminkq.so in MINKQ_LIB_DIR=$MINKQ_LIB_DIR" >&2; exit 1; }
+
+# ---- Python tools ------------------------------------------------------------------------------
+if ! "$venv/bin/python" -c 'import numpy, pytest' 2>/dev/null || [ ! -x "$venv/bin/maturin" ]; then
+  step "installing maturin, numpy and pytest into $venv"
+  mkdir -p "$build"
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest
+fi
+
+# ---- Rust --------------------------------------------------------------------------------------
+cd "$root/bindings"
+target=${CARGO_TARGET_DIR:-$root/bindings/target}
+step "cargo test --workspace (MINKQ_LIB_DIR=$MINKQ_LIB_DIR)"
+cargo test --workspace
+cargo build -p minkq-python -p minkq-demo
+
+# ---- Python ------------------------------------------------------------------------------------
+step "pytest on the build tree"
+# The debug extension (Rust glue; the library itself is the Release libminkq.so), beside the
+# libminkq.so.1 that its build script copied into the package.
+cp "$target/debug/lib_native.so" python/python/minkq/_native.so
+PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+
+step "wheel (maturin), pip install, pytest on the installed package"
+rm -f "$build"/wheels/minkq-*.whl
+(cd python && "$venv/bin/maturin" build --release -q -i "$venv/bin/python" -o "$build/wheels")
+"$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$build"/wheels/minkq-*.whl
+(cd "$build" && "$venv/bin/python" -c 'import minkq, sys; assert "site-packages" in minkq.__file__, minkq.__file__; print("installed:", minkq.__file__)')
+"$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests/test_errors.py python/tests/test_digest.py
+
+# ---- Examples ----------------------------------------------------------------------------------
+step "examples on a 64 x 64 sheet"
+"$target/debug/minkq-demo" --backend cpu --size 64
+PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" "$root/examples/python/demo.py" --backend cpu --size 64 --repeat 1
+
+step "done"
