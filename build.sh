@@ -2,7 +2,7 @@
 # Set-up and entry points on a fresh Debian 12 machine:
 #   ./build.sh demo   installs what is missing, builds, runs `minkq demo` on the default scene
 #   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest, then
-#                     cargo test and pytest for the bindings)
+#                     cargo test and pytest for the bindings, then both fuzzers for a minute)
 #   ./build.sh build  installs what is missing and builds only
 # PRESET=cpu|cuda|default (default: default = CUDA when nvcc is found).
 set -euo pipefail
@@ -33,6 +33,7 @@ case "${1:-}" in
     build
     ctest --preset "$preset" -j "$(nproc)"
     MINKQ_LIB_DIR="$PWD/$binary_dir/capi" bindings/test.sh  # cargo test (with doctests) and pytest
+    fuzz/run.sh 60  # differential (vs Embree and the oracle) and C API fuzzers, a minute each
     ;;
   build) build ;;
   *) sed -n '2,7p' "$0"; exit 2 ;;

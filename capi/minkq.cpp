@@ -10,6 +10,7 @@
 #include <cstring>
 #include <new>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "backend.h"
@@ -70,6 +71,17 @@ minkq_status guarded(Fn&& fn) {
   }
 }
 
+// The integer a caller stored in an enum-typed field or argument. C lets any int live there,
+// but loading a value outside the enumerators' range as the C++ enum type is undefined
+// behaviour, so enum arguments are validated through their object representation.
+template <class E>
+int64_t enum_value(const E& value) {
+  std::underlying_type_t<E> raw;
+  static_assert(sizeof raw == sizeof value, "enum layout");
+  std::memcpy(&raw, &value, sizeof raw);
+  return int64_t(raw);
+}
+
 void require(bool condition, Status status, const std::string& message) {
   if (!condition) fail(status, message);
 }
@@ -84,7 +96,8 @@ std::string format_float(float v) {
 minkq::Strided checked_buffer(const minkq_device* device, const minkq_buffer& buffer, size_t element_size,
                               const char* what) {
   const std::string name(what);
-  require(buffer.memory == MINKQ_MEMORY_HOST || buffer.memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
+  const int64_t memory = enum_value(buffer.memory);
+  require(memory == MINKQ_MEMORY_HOST || memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
           name + ".memory is not a minkq_memory value");
   require(buffer.memory == MINKQ_MEMORY_HOST || device->kind == MINKQ_BACKEND_CUDA, Status::kInvalidArgument,
           name + " is in device memory but the device is " + device->name);
@@ -174,9 +187,10 @@ constexpr uint32_t kKnownQueryFlags = MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANON
 
 // Runs a request against a store with the common output checks, CAPACITY and digest.
 void run_and_report(minkq_device* device, minkq::Store& store, const minkq::QueryRequest& request, uint32_t flags,
-                    int32_t* out_pairs, size_t capacity, minkq_memory out_memory, minkq_query_info* info) {
+                    int32_t* out_pairs, size_t capacity, const minkq_memory& out_memory, minkq_query_info* info) {
   require(info != nullptr, Status::kInvalidArgument, "info is NULL");
-  require(out_memory == MINKQ_MEMORY_HOST || out_memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
+  const int64_t memory = enum_value(out_memory);
+  require(memory == MINKQ_MEMORY_HOST || memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
           "out_memory is not a minkq_memory value");
   require(out_memory == MINKQ_MEMORY_HOST || device->kind == MINKQ_BACKEND_CUDA, Status::kInvalidArgument,
           "out_pairs is in device memory but the device is " + device->name);
@@ -214,7 +228,7 @@ uint32_t minkq_abi_version(void) { return MINKQ_ABI_VERSION; }
 const char* minkq_last_error_message(void) { return last_error.c_str(); }
 
 const char* minkq_status_name(minkq_status status) {
-  switch (status) {
+  switch (enum_value(status)) {
     case MINKQ_SUCCESS: return "MINKQ_SUCCESS";
     case MINKQ_ERROR_INVALID_ARGUMENT: return "MINKQ_ERROR_INVALID_ARGUMENT";
     case MINKQ_ERROR_NON_FINITE: return "MINKQ_ERROR_NON_FINITE";
@@ -336,9 +350,10 @@ minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query
   return guarded([&] {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
     require(query != nullptr, Status::kInvalidArgument, "query is NULL");
-    require(query->kind == MINKQ_QUERY_VT || query->kind == MINKQ_QUERY_EE, Status::kInvalidArgument,
+    const int64_t kind = enum_value(query->kind), mode = enum_value(query->mode);
+    require(kind == MINKQ_QUERY_VT || kind == MINKQ_QUERY_EE, Status::kInvalidArgument,
             "query->kind is not a minkq_query_kind value");
-    require(query->mode >= MINKQ_MODE_BOX && query->mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
+    require(mode >= MINKQ_MODE_BOX && mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
             "query->mode is not a minkq_mode value");
     require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, "query->flags has unknown bits");
     const bool vt = query->kind == MINKQ_QUERY_VT;
@@ -421,9 +436,10 @@ minkq_status minkq_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, 
   return guarded([&] {
     require(bvh != nullptr, Status::kInvalidArgument, "bvh is NULL");
     require(query != nullptr, Status::kInvalidArgument, "query is NULL");
-    require(query->shape >= MINKQ_SHAPE_SPHERE && query->shape <= MINKQ_SHAPE_BOX, Status::kInvalidArgument,
+    const int64_t shape = enum_value(query->shape), mode = enum_value(query->mode);
+    require(shape >= MINKQ_SHAPE_SPHERE && shape <= MINKQ_SHAPE_BOX, Status::kInvalidArgument,
             "query->shape is not a minkq_shape value");
-    require(query->mode >= MINKQ_MODE_BOX && query->mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
+    require(mode >= MINKQ_MODE_BOX && mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
             "query->mode is not a minkq_mode value");
     require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, "query->flags has unknown bits");
     require(!(query->flags & MINKQ_QUERY_LEAF_EXACT), Status::kInvalidArgument,
@@ -433,6 +449,8 @@ minkq_status minkq_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, 
     require(query->shape != MINKQ_SHAPE_BOX || query->mode == MINKQ_MODE_BOX, Status::kInvalidArgument,
             "box queries support only MINKQ_MODE_BOX");
     require_radius(query->radius);
+    require(query->shape != MINKQ_SHAPE_BOX || query->radius == 0.0f, Status::kInvalidArgument,
+            "box queries take radius 0 (radius " + format_float(query->radius) + "): grow the query boxes instead");
     minkq_device* device = bvh->device;
     const minkq::Strided first = checked_buffer(device, query->first, 12, "first");
     const minkq::Strided second = checked_buffer(device, query->second, 12, "second");

@@ -192,7 +192,7 @@ minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes);
 typedef enum minkq_shape {
   MINKQ_SHAPE_SPHERE = 0,  /* first: centres (3 floats); modes box, sphere */
   MINKQ_SHAPE_CAPSULE = 1, /* first, second: segment ends; modes box, capsule_ray, capsule_exact */
-  MINKQ_SHAPE_BOX = 2      /* first, second: box lo, hi; mode box; radius must be 0 */
+  MINKQ_SHAPE_BOX = 2      /* first, second: two opposite corners (any order); mode box; radius 0 */
 } minkq_shape;
 
 typedef struct minkq_bvh_query_desc {

@@ -85,11 +85,18 @@ MINKQ_HD float segment_box_slope(float s, Vec3 d, Vec3 rel_lo, Vec3 rel_hi) {
 // g is convex and piecewise quadratic with breakpoints where a coordinate crosses a face; the
 // slope's sign at the breakpoints brackets one quadratic piece, whose minimiser is closed-form.
 // The value returned is g evaluated at an actual parameter, within 2^-18 * (D + |d|_1) of the
-// true distance D (each excess is off by at most a few u of (D + |d_k|)). A NaN from overflow
-// at coordinates near FLT_MAX returns 0: unknown means "may overlap".
+// true distance D (each excess is off by at most a few u of (D + |d_k|)). Where a component
+// of d, b.lo - p0 or b.hi - p0 reaches 2^62, the slopes, squares and the minimiser's sums can
+// overflow (inf / inf would pick a wrong piece): that returns 0, unknown meaning "may overlap".
+// Below 2^62 no product, square or sum here can reach FLT_MAX.
 MINKQ_HD float segment_box_distance2(Vec3 p0, Vec3 p1, const Box& b) {
   const Vec3 d = p1 - p0;
   const Vec3 rl = b.lo - p0, rh = b.hi - p0;
+  const float limit = 4611686018427387904.0f;  // 2^62
+  if (!(fabsf(d.x) < limit && fabsf(d.y) < limit && fabsf(d.z) < limit && fabsf(rl.x) < limit &&
+        fabsf(rl.y) < limit && fabsf(rl.z) < limit && fabsf(rh.x) < limit && fabsf(rh.y) < limit &&
+        fabsf(rh.z) < limit))
+    return 0.0f;
   if (segment_box_slope(0.0f, d, rl, rh) > 0.0f) return segment_box_g(0.0f, d, rl, rh);
   if (segment_box_slope(1.0f, d, rl, rh) <= 0.0f) {
     const float g1 = segment_box_g(1.0f, d, rl, rh);

@@ -1,0 +1,97 @@
+// Shared pieces of the bench programs: C API handles, pair sets, the comparison with the
+// reference oracle, and the machine description written at the top of every result file.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <tbb/parallel_sort.h>
+
+#include "harness.h"
+#include "minkq.h"
+#include "minkq_reference.h"
+
+namespace minkq::bench {
+
+inline void check(minkq_status status, const char* call) {
+  if (status != MINKQ_SUCCESS)
+    throw std::runtime_error(std::string(call) + " failed: " + minkq_status_name(status) + ": " +
+                             minkq_last_error_message());
+}
+
+struct Release {
+  void operator()(minkq_device* d) const { minkq_device_release(d); }
+  void operator()(minkq_scene* s) const { minkq_scene_release(s); }
+  void operator()(minkq_result* r) const { minkq_result_release(r); }
+  void operator()(minkq_bvh* b) const { minkq_bvh_release(b); }
+};
+using Device = std::unique_ptr<minkq_device, Release>;
+using Scene = std::unique_ptr<minkq_scene, Release>;
+using Result = std::unique_ptr<minkq_result, Release>;
+using Bvh = std::unique_ptr<minkq_bvh, Release>;
+
+inline Device open_device(const std::string& spec) {
+  minkq_device* d = nullptr;
+  check(minkq_device_create(spec.c_str(), &d), ("minkq_device_create(\"" + spec + "\")").c_str());
+  return Device(d);
+}
+inline Result new_result() {
+  minkq_result* r = nullptr;
+  check(minkq_result_create(&r), "minkq_result_create");
+  return Result(r);
+}
+
+// A VT + EE scene with incident pairs dropped, edges derived by the library (the numbering of
+// reference::derive_edges).
+inline Scene create_scene(minkq_device* device, const std::vector<float>& xyz, const std::vector<int32_t>& tris,
+                        uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT) {
+  minkq_scene_desc desc{};
+  desc.flags = flags;
+  desc.vertices = {xyz.data(), 3 * sizeof(float), xyz.size() / 3, MINKQ_MEMORY_HOST};
+  desc.triangles = {tris.data(), 3 * sizeof(int32_t), tris.size() / 3, MINKQ_MEMORY_HOST};
+  desc.edges = {nullptr, 0, 0, MINKQ_MEMORY_HOST};
+  minkq_scene* s = nullptr;
+  check(minkq_scene_create(device, &desc, &s), "minkq_scene_create");
+  return Scene(s);
+}
+
+// Pairs packed as (a << 32 | b), sorted: set operations by merge.
+using PairSet = std::vector<uint64_t>;
+inline uint64_t pack(int32_t a, int32_t b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
+
+inline PairSet to_set(const int32_t* pairs, uint64_t count) {
+  PairSet s(count);
+  for (uint64_t i = 0; i < count; ++i) s[i] = pack(pairs[2 * i], pairs[2 * i + 1]);
+  tbb::parallel_sort(s.begin(), s.end());
+  return s;
+}
+inline PairSet to_set(const reference::Pairs& p) {
+  PairSet s(p.size());
+  for (size_t i = 0; i < p.size(); ++i) s[i] = pack(p[i].first, p[i].second);
+  std::sort(s.begin(), s.end());
+  return s;
+}
+// Elements of `need` absent from `have` (both sorted).
+inline uint64_t missing(const PairSet& need, const PairSet& have) {
+  uint64_t m = 0;
+  size_t j = 0;
+  for (uint64_t x : need) {
+    while (j < have.size() && have[j] < x) ++j;
+    if (j == have.size() || have[j] != x) ++m;
+  }
+  return m;
+}
+
+inline std::string machine_line(const std::string& device_names) {
+  char b[512];
+  std::snprintf(b, sizeof b, "%s, %d online CPUs; minkq devices: %s; minkq %u (ABI %u)", cpu_model().c_str(),
+                online_cpus(), device_names.c_str(), minkq_version(), minkq_abi_version());
+  return b;
+}
+
+}  // namespace minkq::bench

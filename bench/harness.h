@@ -1,0 +1,117 @@
+// A small timing harness (warm-up, repeats, median and spread) and the facts that name the
+// machine in every result file. Google Benchmark is not used: each measurement here also has to
+// hand back what it produced (candidate sets, counts) for the accuracy columns, and the tables
+// need medians of a handful of repeats of multi-millisecond calls, which this does directly.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace minkq::bench {
+
+inline double now_ms() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct Timing {
+  double median = 0, min = 0, max = 0;
+  int repeats = 0;
+  // "12.3 (11.9-13.0)": median and the range of the repeats.
+  std::string text(int digits = 3) const {
+    char b[96];
+    if (repeats <= 1)
+      std::snprintf(b, sizeof b, "%.*g", digits, median);
+    else
+      std::snprintf(b, sizeof b, "%.*g (%.*g–%.*g)", digits, median, digits, min, digits, max);
+    return b;
+  }
+};
+
+// Runs fn warmup times untimed, then repeats times timed; each run may do untimed set-up in
+// before() (e.g. restoring state). Returns median and range in milliseconds.
+template <class Fn, class Before>
+Timing measure(int warmup, int repeats, Fn&& fn, Before&& before) {
+  for (int i = 0; i < warmup; ++i) {
+    before();
+    fn();
+  }
+  std::vector<double> t;
+  for (int i = 0; i < std::max(1, repeats); ++i) {
+    before();
+    const double start = now_ms();
+    fn();
+    t.push_back(now_ms() - start);
+  }
+  std::sort(t.begin(), t.end());
+  Timing out;
+  out.repeats = int(t.size());
+  out.min = t.front();
+  out.max = t.back();
+  out.median = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+  return out;
+}
+template <class Fn>
+Timing measure(int warmup, int repeats, Fn&& fn) {
+  return measure(warmup, repeats, fn, [] {});
+}
+
+// 1-minute load average (the machine is shared: every result records it).
+inline double load_average() {
+  std::ifstream f("/proc/loadavg");
+  double l = -1;
+  f >> l;
+  return l;
+}
+
+inline std::string cpu_model() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("model name", 0) == 0) {
+      const size_t colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(colon + 2);
+    }
+  return "unknown CPU";
+}
+
+inline int online_cpus() {
+  int n = 0;
+  std::ifstream f("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("processor", 0) == 0) ++n;
+  return n;
+}
+
+// Resident set size in bytes (from /proc/self/statm).
+inline double resident_bytes() {
+  std::ifstream f("/proc/self/statm");
+  double size = 0, resident = 0;
+  f >> size >> resident;
+  return resident * 4096.0;
+}
+
+inline std::string fmt(double v, int digits = 3) {
+  if (!std::isfinite(v)) return "–";
+  char b[48];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
+  return b;
+}
+inline std::string fmt_count(double v) {
+  char b[48];
+  if (v >= 999500)
+    std::snprintf(b, sizeof b, "%.3gM", v / 1e6);
+  else if (v >= 1e4)
+    std::snprintf(b, sizeof b, "%.3gk", v / 1e3);
+  else
+    std::snprintf(b, sizeof b, "%.0f", v);
+  return b;
+}
+
+}  // namespace minkq::bench

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Regenerates every benchmark table and plot of bench/results with one command.
+#
+#   bench/run.sh            full run (about 45-60 min on 2 cores): scenes, real meshes, radius
+#                           sweep, 1M/2M twisted sheets, stability report, h/r study, plots,
+#                           Warp/Newton CPU baselines; writes bench/results/
+#   bench/run.sh --quick    smoke run (seconds): reference scenes (2 frames, 1 repeat), quick
+#                           stability and h/r runs; writes build-bench/quick-results/ and exits
+#                           non-zero on any false negative or bound violation
+#   options: --out DIR (results folder), --no-warp (skip the Python/Warp stage),
+#            --no-install (do not apt-get/pip anything)
+# Environment: MINKQ_BENCH_BUILD (build folder, default build-bench), MINKQ_WITH_CUDA (AUTO|ON|OFF).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${MINKQ_BENCH_BUILD:-$root/build-bench}
+quick=0 warp=1 install=1 out=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) quick=1 ;;
+    --no-warp) warp=0 ;;
+    --no-install) install=0 ;;
+    --out) out=$2; shift ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    *) echo "run.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+  shift
+done
+[ -z "$out" ] && { [ $quick = 1 ] && out=$build/quick-results || out=$root/bench/results; }
+
+packages=(cmake g++ make libtbb-dev libxxhash-dev libtinyobjloader-dev libembree-dev python3-venv)
+if [ $install = 1 ]; then
+  missing=()
+  for p in "${packages[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+  if [ ${#missing[@]} -gt 0 ]; then
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
+    echo "installing: ${missing[*]}"
+    $sudo apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "${missing[@]}"
+  fi
+fi
+
+cmake -S "$root/bench" -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA="${MINKQ_WITH_CUDA:-AUTO}" >/dev/null
+cmake --build "$build" -j "$(nproc)" --target minkq_bench minkq_stability minkq_hr_study >/dev/null
+bin=$build/bin
+mkdir -p "$out"
+echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-), $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg)"
+
+status=0
+if [ $quick = 1 ]; then
+  "$bin/minkq_bench" --quick --out "$out" || status=$?
+  "$bin/minkq_stability" --quick --out "$out" || status=$?
+  "$bin/minkq_hr_study" --quick --out "$out" || status=$?
+  [ $status = 0 ] && echo "bench quick run: 1 passed, 0 failed (no false negatives; results in $out)" \
+                  || echo "bench quick run: 0 passed, 1 failed (status $status; see $out)"
+  exit $status
+fi
+
+# Full run. Each program exits 1 on a false negative (or, for stability, a bound violation);
+# the tables are written either way, so keep going and report at the end.
+"$bin/minkq_bench" --out "$out" || status=$?
+"$bin/minkq_stability" --out "$out" || status=$?
+"$bin/minkq_hr_study" --out "$out" || status=$?
+
+venv=$build/venv
+if [ $install = 1 ] && [ ! -x "$venv/bin/python" ]; then python3 -m venv "$venv"; fi
+if [ -x "$venv/bin/python" ]; then
+  if [ $install = 1 ]; then
+    "$venv/bin/pip" install -q matplotlib numpy || echo "pip: matplotlib failed; plots skipped"
+  fi
+  "$venv/bin/python" "$root/bench/plot.py" "$out" || echo "plot.py failed"
+fi
+
+if [ $warp = 1 ] && [ -x "$venv/bin/python" ]; then
+  if [ $install = 1 ]; then
+    "$venv/bin/pip" install -q "warp-lang==1.19.0" "newton==1.8.0" || echo "pip: warp-lang/newton failed"
+  fi
+  # Warp's CPU kernels are single-threaded: minkq beside them on one thread, same scenes, same
+  # float coordinates (exported), last frame each.
+  rm -rf "$build/export" "$build/threads1"
+  "$bin/minkq_bench" --suites scenes --frames 2 --repeats 3 --threads 1 --export "$build/export" --out "$build/threads1" || status=$?
+  "$venv/bin/python" "$root/bench/warp_baseline.py" "$build/export" "$build/threads1/rows.csv" "$out/warp.md" ||
+    echo "warp_baseline.py failed (see $out/warp.md)"
+  cp "$build/threads1/summary.md" "$out/summary_threads1.md"
+fi
+echo "results in $out (status $status)"
+exit $status

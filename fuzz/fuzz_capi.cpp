@@ -1,0 +1,822 @@
+// C API fuzzer: random call sequences with random, often wrong, arguments (null pointers, NaN
+// and infinite coordinates and radii, wrong counts and strides, overflowing sizes, out-of-range
+// indices and enum values, tiny output buffers, refits with another vertex count, BVH calls),
+// under ASan, UBSan and LSan. Every buffer the harness passes is allocated to exactly the bytes
+// it declares, so a read or write past it is an ASan report; buffers that declare more than
+// they hold are passed only where the declaration itself must be rejected.
+//
+// A model of the documented contract (capi/minkq.h) lists, for each call, the misuses in its
+// arguments; the call must return one of their codes (any one: the order of checks is not part
+// of the contract), or MINKQ_SUCCESS (MINKQ_ERROR_CAPACITY where the output is too small) when
+// there is none. Failed calls must leave a message, successful ones none; a failed refit must
+// leave the previous positions; successful queries must return valid, canonical, duplicate-free
+// pairs whose count and digest match the library-owned result path.
+#include <fuzzer/FuzzedDataProvider.h>
+#include <tbb/global_control.h>
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "minkq.h"
+
+extern "C" {
+minkq_buffer shim_buffer(const void* data, size_t byte_stride, size_t count, int memory);
+void shim_query_desc(minkq_query_desc* d, int kind, int mode, uint32_t flags, float radius);
+void shim_bvh_query_desc(minkq_bvh_query_desc* d, int shape, int mode, uint32_t flags, float radius, minkq_buffer first,
+                         minkq_buffer second);
+minkq_status shim_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs, size_t capacity,
+                              int out_memory, minkq_query_info* info);
+minkq_status shim_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, int32_t* out_pairs, size_t capacity,
+                            int out_memory, minkq_query_info* info);
+const char* shim_status_name(int status);
+}
+
+namespace {
+
+constexpr size_t kMaxElements = size_t(INT32_MAX) - 1;  // 2^31 - 2, minkq.h's SIZE_OVERFLOW limit
+uint64_t g_calls = 0, g_inputs = 0, g_errors = 0;
+bool g_verbose = false;  // MINKQ_FUZZ_VERBOSE=1: print every input's calls
+
+std::string log_text;
+void note(const std::string& line) {
+  if (log_text.size() < 20000) log_text += line + "\n";
+}
+
+[[noreturn]] void failure(const std::string& what) {
+  std::fprintf(stderr, "\n==== minkq C API fuzzer: FAILURE ====\n%s\n---- calls of this input ----\n%s\n", what.c_str(),
+               log_text.c_str());
+  std::fflush(stderr);
+  std::abort();
+}
+
+std::string name(minkq_status s) { return minkq_status_name(s); }
+
+// The misuses found in one call's arguments, each with the status the contract gives it.
+struct Misuse {
+  std::vector<minkq_status> codes;
+  std::string why;
+  void add(bool present, minkq_status code, const std::string& what) {
+    if (!present) return;
+    codes.push_back(code);
+    why += (why.empty() ? "" : "; ") + what;
+  }
+  void merge(const Misuse& other) {
+    codes.insert(codes.end(), other.codes.begin(), other.codes.end());
+    if (!other.why.empty()) why += (why.empty() ? "" : "; ") + other.why;
+  }
+  bool none() const { return codes.empty(); }
+};
+
+// Checks a status against the model; `clean` is the status expected without misuse.
+void expect(const char* call, minkq_status got, const Misuse& misuse, minkq_status clean = MINKQ_SUCCESS) {
+  ++g_calls;
+  const std::string message = minkq_last_error_message();
+  note(std::string(call) + " -> " + name(got) + (misuse.none() ? "" : "   [misuse: " + misuse.why + "]") +
+       (message.empty() ? "" : "   \"" + message + "\""));
+  if (misuse.none()) {
+    if (got != clean) failure(std::string(call) + ": expected " + name(clean) + ", got " + name(got) + " (" + message + ")");
+  } else {
+    ++g_errors;
+    if (std::find(misuse.codes.begin(), misuse.codes.end(), got) == misuse.codes.end())
+      failure(std::string(call) + ": misuse (" + misuse.why + ") answered " + name(got));
+  }
+  if (got == MINKQ_SUCCESS && !message.empty()) failure(std::string(call) + ": success left an error message: " + message);
+  if (got != MINKQ_SUCCESS && message.empty()) failure(std::string(call) + ": " + name(got) + " without a message");
+}
+
+// ---- Buffers --------------------------------------------------------------------------------
+
+enum class Fill { kCoordinates, kBoxes, kIndices };
+
+struct Buffer {
+  std::vector<char> storage;  // exactly the declared bytes (fewer only when the declaration is invalid)
+  minkq_buffer desc{};
+  Misuse misuse;
+  size_t count = 0, stride = 0;
+  bool non_finite = false, unordered_box = false;
+  int32_t max_index = 0, min_index = 0;
+  bool honest = true;
+  const float* floats(size_t i) const { return reinterpret_cast<const float*>(storage.data() + i * stride); }
+};
+
+class Generator {
+ public:
+  explicit Generator(FuzzedDataProvider& in) : in_(in) {}
+
+  int choice(int n) { return in_.ConsumeIntegralInRange<int>(0, n - 1); }
+  bool rarely() { return choice(8) == 0; }
+
+  float coordinate() {
+    switch (choice(16)) {
+      case 0: return std::numeric_limits<float>::quiet_NaN();
+      case 1: return choice(2) ? INFINITY : -INFINITY;
+      case 2: return choice(2) ? FLT_MAX : -FLT_MAX;
+      case 3: return choice(2) ? 1.4e-45f : -0.0f;
+      case 4: {
+        const uint32_t bits = in_.ConsumeIntegral<uint32_t>();
+        float f;
+        std::memcpy(&f, &bits, 4);
+        return f;
+      }
+      case 5: return float(in_.ConsumeIntegralInRange<int>(-8, 8)) * 1e7f;
+      default: return float(in_.ConsumeIntegralInRange<int>(-16, 16)) / 8.0f;  // exact, often equal
+    }
+  }
+
+  float radius() {
+    switch (choice(12)) {
+      case 0: return std::numeric_limits<float>::quiet_NaN();
+      case 1: return choice(2) ? INFINITY : -INFINITY;
+      case 2: return -float(choice(3) + 1) * 0.5f;
+      case 3: return -0.0f;
+      case 4: return 0.0f;
+      case 5: return choice(2) ? FLT_MAX : 1.4e-45f;
+      case 6: return 1e30f;
+      default: return float(choice(20)) / 8.0f;
+    }
+  }
+
+  int memory() {
+    const int c = choice(24);
+    return c == 0 ? MINKQ_MEMORY_DEVICE : c == 1 ? 7 + choice(3) : c == 2 ? -1 : MINKQ_MEMORY_HOST;
+  }
+
+  // A buffer of `element` bytes per record. `preferred`: the count the call wants (a refit).
+  Buffer buffer(size_t element, Fill fill, const char* what, size_t preferred = SIZE_MAX, int32_t vertex_count = 0,
+                size_t max_count = 24) {
+    Buffer b;
+    b.count = (preferred != SIZE_MAX && choice(4) != 0) ? preferred : size_t(in_.ConsumeIntegralInRange<size_t>(0, max_count));
+    size_t declared_stride = 0;
+    switch (choice(12)) {
+      case 0: declared_stride = element; break;
+      case 1: declared_stride = element + 4; break;
+      case 2: declared_stride = element + 1; break;  // unaligned records: allowed
+      case 3: declared_stride = element >= 8 ? element - 4 : 1; break;
+      case 4: declared_stride = choice(2) ? 1 : element - 1; break;
+      case 5: declared_stride = choice(2) ? SIZE_MAX : SIZE_MAX / 2 + 1; break;
+      default: declared_stride = 0; break;  // packed
+    }
+    const int memory = choice(6) == 0 ? this->memory() : MINKQ_MEMORY_HOST;
+    if (rarely() && choice(4) == 0) b.count = choice(2) ? kMaxElements + 1 : SIZE_MAX / 2;
+    const bool null_data = rarely() && choice(2) == 0;
+    b.stride = declared_stride == 0 ? element : declared_stride;
+    const std::string name(what);
+    b.misuse.add(memory != MINKQ_MEMORY_HOST && memory != MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT,
+                 name + ".memory invalid");
+    b.misuse.add(memory == MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT, name + " in device memory on a CPU device");
+    b.misuse.add(b.count > 0 && null_data, MINKQ_ERROR_INVALID_ARGUMENT, name + ".data NULL");
+    b.misuse.add(b.stride < element, MINKQ_ERROR_INVALID_ARGUMENT, name + " stride too small");
+    b.misuse.add(b.count > kMaxElements, MINKQ_ERROR_SIZE_OVERFLOW, name + ".count over 2^31 - 2");
+    b.misuse.add(b.count > 0 && b.stride > SIZE_MAX / b.count, MINKQ_ERROR_SIZE_OVERFLOW, name + " size overflows");
+    b.honest = b.count <= 64 && !(b.count > 0 && b.stride > SIZE_MAX / b.count);
+    size_t span = element;  // dishonest declarations get one record: they must be rejected unread
+    if (b.honest) span = b.count == 0 ? 0 : (b.count - 1) * b.stride + element;
+    if (span > (size_t(1) << 20)) {  // a declaration this large must be rejected unread too
+      b.honest = false;
+      span = element;
+    }
+    b.storage.assign(span, char(0));
+    // Bytes between records are NaN patterns: a reader that strays into them sees non-finite
+    // coordinates or wild indices, and the model's expectation breaks.
+    if (!b.storage.empty()) std::memset(b.storage.data(), 0xff, b.storage.size());
+    const size_t records = b.honest ? b.count : std::min<size_t>(1, span / element);
+    b.min_index = INT32_MAX;
+    b.max_index = INT32_MIN;
+    for (size_t i = 0; i < records; ++i) {
+      char* at = b.storage.data() + i * (b.honest ? b.stride : element);
+      if (fill == Fill::kIndices) {
+        const size_t n = element / 4;
+        for (size_t k = 0; k < n; ++k) {
+          int32_t v;
+          switch (choice(20)) {
+            case 0: v = -1; break;
+            case 1: v = vertex_count; break;
+            case 2: v = choice(2) ? INT32_MAX : INT32_MIN; break;
+            default: v = vertex_count > 0 ? in_.ConsumeIntegralInRange<int32_t>(0, vertex_count - 1) : 0;
+          }
+          std::memcpy(at + 4 * k, &v, 4);
+          b.min_index = std::min(b.min_index, v);
+          b.max_index = std::max(b.max_index, v);
+        }
+      } else {
+        const size_t n = element / 4;
+        float f[6];
+        const bool wild = choice(6) == 0;
+        for (size_t k = 0; k < n; ++k) {
+          f[k] = wild ? coordinate() : float(in_.ConsumeIntegralInRange<int>(-16, 16)) / 8.0f;
+          if (!std::isfinite(f[k])) b.non_finite = true;
+        }
+        if (fill == Fill::kBoxes) {
+          for (int k = 0; k < 3; ++k)
+            if (!wild || choice(4) != 0) {  // mostly ordered
+              if (f[k] > f[k + 3]) std::swap(f[k], f[k + 3]);
+              if (!(f[k] <= f[k + 3])) b.unordered_box = true;  // NaN
+            } else if (!(f[k] <= f[k + 3])) {
+              b.unordered_box = true;
+            }
+        }
+        std::memcpy(at, f, 4 * n);
+      }
+    }
+    const void* data = null_data ? nullptr : (b.storage.empty() ? (choice(2) ? nullptr : reinterpret_cast<void*>(&b)) : b.storage.data());
+    b.desc = shim_buffer(data, declared_stride, b.count, memory);
+    return b;
+  }
+
+ private:
+  FuzzedDataProvider& in_;
+};
+
+// ---- Objects held across calls ----------------------------------------------------------------
+
+struct SceneSlot {
+  minkq_scene* handle = nullptr;
+  int device = -1;
+  uint32_t flags = 0;
+  size_t vertices = 0, triangles = 0, edges = 0;
+};
+struct BvhSlot {
+  minkq_bvh* handle = nullptr;
+  int device = -1;
+  size_t boxes = 0;
+};
+
+struct State {
+  minkq_device* devices[2] = {nullptr, nullptr};
+  SceneSlot scenes[3];
+  BvhSlot bvhs[2];
+  minkq_result* results[2] = {nullptr, nullptr};
+  ~State() {
+    for (auto& s : scenes) minkq_scene_release(s.handle);
+    for (auto& b : bvhs) minkq_bvh_release(b.handle);
+    for (auto* r : results) minkq_result_release(r);
+    for (auto* d : devices) minkq_device_release(d);
+  }
+  bool device_in_use(int d) const {
+    for (const auto& s : scenes)
+      if (s.handle && s.device == d) return true;
+    for (const auto& b : bvhs)
+      if (b.handle && b.device == d) return true;
+    return false;
+  }
+};
+
+// Checks the pairs of a successful query: in range, ordered for EE, canonical when asked,
+// no duplicates, digest as documented.
+void check_pairs(const char* call, const int32_t* pairs, uint64_t count, size_t queries, size_t prims, bool ee,
+                 uint32_t flags, uint64_t digest) {
+  std::vector<std::pair<int32_t, int32_t>> list(count);
+  for (uint64_t i = 0; i < count; ++i) {
+    const int32_t q = pairs[2 * i], p = pairs[2 * i + 1];
+    if (q < 0 || size_t(q) >= queries || p < 0 || size_t(p) >= prims || (ee && !(q < p)))
+      failure(std::string(call) + ": invalid pair (" + std::to_string(q) + ", " + std::to_string(p) + ")");
+    list[i] = {q, p};
+  }
+  const bool canonical = flags & (MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST);
+  if (canonical && !std::is_sorted(list.begin(), list.end())) failure(std::string(call) + ": canonical pairs not sorted");
+  if ((flags & MINKQ_QUERY_DIGEST) && digest != XXH64(pairs, size_t(count) * 8, 0))
+    failure(std::string(call) + ": digest is not XXH64 of the pairs");
+  std::sort(list.begin(), list.end());
+  if (std::adjacent_find(list.begin(), list.end()) != list.end()) failure(std::string(call) + ": duplicate pairs");
+}
+
+// The digest of a fixed query: a scene's state, compared before and after a failed refit.
+uint64_t scene_state(const SceneSlot& s) {
+  minkq_result* r = nullptr;
+  if (minkq_result_create(&r) != MINKQ_SUCCESS) failure("minkq_result_create");
+  minkq_query_desc d;
+  shim_query_desc(&d, (s.flags & MINKQ_SCENE_VT) ? MINKQ_QUERY_VT : MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_DIGEST,
+                  0.5f);
+  const minkq_status st = minkq_scene_query_result(s.handle, &d, r);
+  const uint64_t digest = minkq_result_digest(r) ^ minkq_result_count(r);
+  minkq_result_release(r);
+  if (st != MINKQ_SUCCESS) failure("state query failed: " + name(st));
+  return digest;
+}
+uint64_t bvh_state(const BvhSlot& b) {
+  const float points[6] = {0, 0, 0, 1, 1, 1};
+  minkq_bvh_query_desc d;
+  shim_bvh_query_desc(&d, MINKQ_SHAPE_SPHERE, MINKQ_MODE_BOX, MINKQ_QUERY_DIGEST, 1.0f,
+                      shim_buffer(points, 0, 2, MINKQ_MEMORY_HOST), shim_buffer(nullptr, 0, 0, MINKQ_MEMORY_HOST));
+  minkq_query_info info{};
+  std::vector<int32_t> out(2 * 2 * (b.boxes + 1));
+  const minkq_status st = shim_bvh_query(b.handle, &d, out.data(), out.size() / 2, MINKQ_MEMORY_HOST, &info);
+  if (st != MINKQ_SUCCESS) failure("bvh state query failed: " + name(st));
+  return info.digest ^ info.count;
+}
+
+class Session {
+ public:
+  Session(FuzzedDataProvider& in) : in_(in), gen_(in) {}
+
+  void run() {
+    const int ops = in_.ConsumeIntegralInRange<int>(1, 40);
+    for (int i = 0; i < ops && in_.remaining_bytes() > 0; ++i) {
+      switch (gen_.choice(14)) {
+        case 0: device_create(); break;
+        case 1: device_release(); break;
+        case 2: case 3: scene_create(); break;
+        case 4: scene_release(); break;
+        case 5: scene_refit(); break;
+        case 6: case 7: scene_query(); break;
+        case 8: scene_query_result(); break;
+        case 9: scene_edges(); break;
+        case 10: bvh_create(); break;
+        case 11: bvh_refit(); break;
+        case 12: bvh_query(); break;
+        default: misc(); break;
+      }
+    }
+  }
+
+ private:
+  minkq_device* device(int* index) {
+    const int d = gen_.choice(3);
+    *index = d < 2 ? d : -1;
+    return d < 2 ? st_.devices[d] : nullptr;
+  }
+
+  void device_create() {
+    static const char* specs[] = {"cpu", "auto", "cuda", "cuda:0", "cuda:7", "cuda:99999", "cuda:123456", "cuda:",
+                                  "cuda:-1", "cuda:1x", "CPU", "", "gpu", nullptr};
+    const int which = gen_.choice(14);
+    const char* spec = specs[which];
+    const int slot = gen_.choice(2);
+    const bool null_out = gen_.rarely();
+    if (st_.devices[slot] && !null_out) {  // replace it only when nothing uses it
+      if (st_.device_in_use(slot)) return;
+      minkq_device_release(st_.devices[slot]);
+      st_.devices[slot] = nullptr;
+    }
+    Misuse m;
+    m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_device NULL");
+    m.add(spec == nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "spec NULL");
+    const bool cuda = which >= 2 && which <= 5;  // well-formed CUDA specs: no CUDA in this build
+    const bool malformed = spec && !cuda && which > 1;
+    m.add(malformed, MINKQ_ERROR_INVALID_ARGUMENT, "unknown spec");
+    m.add(cuda && minkq_cuda_device_count() <= (which == 4 ? 7 : which == 5 ? 99999 : 0), MINKQ_ERROR_UNSUPPORTED,
+          "no such CUDA device");
+    minkq_device* out = reinterpret_cast<minkq_device*>(0x1);
+    const minkq_status s = minkq_device_create(spec, null_out ? nullptr : &out);
+    expect("minkq_device_create", s, m);
+    if (null_out) return;
+    if (s == MINKQ_SUCCESS) {
+      st_.devices[slot] = out;
+      if (minkq_device_backend(out) != MINKQ_BACKEND_CPU && minkq_cuda_device_count() == 0)
+        failure("a non-CPU device without CUDA");
+      if (std::strlen(minkq_device_name(out)) == 0) failure("empty device name");
+    } else if (out != nullptr) {
+      failure("minkq_device_create failed but did not set *out_device to NULL");
+    }
+  }
+
+  void device_release() {
+    const int d = gen_.choice(2);
+    if (st_.device_in_use(d)) return;  // the contract: scenes and bvhs first
+    minkq_device_release(st_.devices[d]);  // NULL is fine too
+    st_.devices[d] = nullptr;
+    note("minkq_device_release");
+  }
+
+  void scene_create() {
+    int d;
+    minkq_device* dev = device(&d);
+    const int slot = gen_.choice(3);
+    if (st_.scenes[slot].handle) {
+      minkq_scene_release(st_.scenes[slot].handle);
+      st_.scenes[slot] = {};
+    }
+    uint32_t flags = uint32_t(gen_.choice(8));
+    if (gen_.rarely()) flags |= gen_.choice(2) ? 8u : 0x80000000u;
+    Buffer v = gen_.buffer(12, Fill::kCoordinates, "vertices", SIZE_MAX, 0, 32);
+    const int32_t nv = int32_t(std::min<size_t>(v.count, 64));
+    Buffer t = gen_.buffer(12, Fill::kIndices, "triangles", SIZE_MAX, nv, 32);
+    Buffer e = gen_.choice(3) == 0 ? gen_.buffer(8, Fill::kIndices, "edges", SIZE_MAX, nv, 32)
+                                   : gen_.buffer(8, Fill::kIndices, "edges", 0, nv, 0);
+    const bool null_desc = gen_.rarely() && gen_.choice(2);
+    const bool null_out = gen_.rarely() && gen_.choice(2);
+    Misuse m;
+    m.add(dev == nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "device NULL");
+    m.add(null_desc, MINKQ_ERROR_INVALID_ARGUMENT, "desc NULL");
+    m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_scene NULL");
+    if (!null_desc) {
+      m.add(flags & ~7u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flag bits");
+      m.add(!(flags & 3u), MINKQ_ERROR_INVALID_ARGUMENT, "no query kind");
+      m.merge(v.misuse);
+      m.merge(t.misuse);
+      m.merge(e.misuse);
+      if (v.honest) m.add(v.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite vertex");
+      if (t.honest && t.count > 0)
+        m.add(t.min_index < 0 || t.max_index >= int32_t(v.count), MINKQ_ERROR_INDEX_OUT_OF_RANGE, "triangle index");
+      if (e.honest && e.count > 0)
+        m.add(e.min_index < 0 || e.max_index >= int32_t(v.count), MINKQ_ERROR_INDEX_OUT_OF_RANGE, "edge index");
+    }
+    minkq_scene_desc desc{};
+    desc.flags = flags;
+    desc.vertices = v.desc;
+    desc.triangles = t.desc;
+    desc.edges = e.desc;
+    minkq_scene* out = reinterpret_cast<minkq_scene*>(0x1);
+    const minkq_status s = minkq_scene_create(dev, null_desc ? nullptr : &desc, null_out ? nullptr : &out);
+    expect("minkq_scene_create", s, m);
+    if (null_out) return;
+    if (s != MINKQ_SUCCESS) {
+      if (out != nullptr && dev != nullptr && !null_desc) failure("minkq_scene_create failed but *out_scene is not NULL");
+      return;
+    }
+    SceneSlot& slot_ref = st_.scenes[slot];
+    slot_ref = {out, d, flags, minkq_scene_vertex_count(out), minkq_scene_triangle_count(out),
+                minkq_scene_edge_count(out)};
+    if (slot_ref.vertices != v.count || slot_ref.triangles != t.count) failure("scene counts differ from the desc");
+    if (e.count > 0 && slot_ref.edges != e.count) failure("scene edge count differs from the given edges");
+    if (e.count == 0 && !(flags & MINKQ_SCENE_EE) && slot_ref.edges != 0) failure("edges derived for a VT-only scene");
+  }
+
+  void scene_release() {
+    const int slot = gen_.choice(3);
+    minkq_scene_release(st_.scenes[slot].handle);
+    st_.scenes[slot] = {};
+    note("minkq_scene_release");
+  }
+
+  SceneSlot* scene(bool* null_scene) {
+    SceneSlot& s = st_.scenes[gen_.choice(3)];
+    *null_scene = s.handle == nullptr;
+    return &s;
+  }
+
+  void scene_refit() {
+    bool null_scene;
+    SceneSlot* s = scene(&null_scene);
+    Buffer v = gen_.buffer(12, Fill::kCoordinates, "vertices", null_scene ? SIZE_MAX : s->vertices, 0, 32);
+    Misuse m;
+    m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+    m.merge(v.misuse);
+    if (!null_scene) m.add(v.count != s->vertices, MINKQ_ERROR_INVALID_ARGUMENT, "vertex count differs");
+    if (v.honest) m.add(v.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite vertex");
+    const uint64_t before = null_scene ? 0 : scene_state(*s);
+    const minkq_status st = minkq_scene_refit(null_scene ? nullptr : s->handle, v.desc);
+    expect("minkq_scene_refit", st, m);
+    if (st != MINKQ_SUCCESS && !null_scene && scene_state(*s) != before)
+      failure("a failed refit changed the scene's positions");
+  }
+
+  // The arguments of a scene query, with the misuses they contain.
+  struct QueryArgs {
+    minkq_query_desc desc{};
+    bool null_desc = false;
+    int kind = 0, mode = 0;
+    uint32_t flags = 0;
+    float r = 0;
+    Misuse misuse;
+  };
+  QueryArgs query_args(const SceneSlot* s, bool null_scene) {
+    QueryArgs a;
+    const int k = gen_.choice(12);
+    a.kind = k < 5 ? MINKQ_QUERY_VT : k < 10 ? MINKQ_QUERY_EE : (k == 10 ? 2 : -1);
+    const int md = gen_.choice(14);
+    a.mode = md < 12 ? md % 4 : (md == 12 ? 4 : 99);
+    a.flags = uint32_t(gen_.choice(8)) | (gen_.rarely() ? 8u << gen_.choice(20) : 0u);
+    a.r = gen_.radius();
+    a.null_desc = gen_.rarely() && gen_.choice(2);
+    shim_query_desc(&a.desc, a.kind, a.mode, a.flags, a.r);
+    Misuse& m = a.misuse;
+    m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+    m.add(a.null_desc, MINKQ_ERROR_INVALID_ARGUMENT, "query NULL");
+    if (!a.null_desc) {
+      const bool kind_ok = a.kind == MINKQ_QUERY_VT || a.kind == MINKQ_QUERY_EE;
+      m.add(!kind_ok, MINKQ_ERROR_INVALID_ARGUMENT, "kind invalid");
+      m.add(a.mode < 0 || a.mode > 3, MINKQ_ERROR_INVALID_ARGUMENT, "mode invalid");
+      m.add(a.flags & ~7u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown query flags");
+      if (!null_scene && kind_ok)
+        m.add(!(s->flags & (a.kind == MINKQ_QUERY_VT ? MINKQ_SCENE_VT : MINKQ_SCENE_EE)), MINKQ_ERROR_INVALID_ARGUMENT,
+              "kind not built");
+      m.add(a.kind == MINKQ_QUERY_EE && a.mode == MINKQ_MODE_SPHERE, MINKQ_ERROR_INVALID_ARGUMENT, "EE sphere mode");
+      m.add(!std::isfinite(a.r), MINKQ_ERROR_NON_FINITE, "radius not finite");
+      m.add(a.r < 0, MINKQ_ERROR_INVALID_ARGUMENT, "radius negative");
+    }
+    return a;
+  }
+  size_t queries_of(const SceneSlot& s, int kind) const { return kind == MINKQ_QUERY_VT ? s.vertices : s.edges; }
+  size_t prims_of(const SceneSlot& s, int kind) const { return kind == MINKQ_QUERY_VT ? s.triangles : s.edges; }
+
+  // Output arguments: a buffer of exactly `capacity` pairs, or a declared size that must be rejected.
+  struct Output {
+    std::vector<int32_t> pairs;
+    int32_t* data = nullptr;
+    size_t capacity = 0;
+    int memory = MINKQ_MEMORY_HOST;
+    bool null_info = false;
+    Misuse misuse;
+  };
+  Output output(uint64_t needed) {
+    Output o;
+    switch (gen_.choice(8)) {
+      case 0: o.capacity = 0; break;
+      case 1: o.capacity = needed > 0 ? size_t(needed - 1) : 0; break;  // one short
+      case 2: o.capacity = size_t(needed) + size_t(gen_.choice(4)); break;
+      case 3: o.capacity = size_t(gen_.choice(4)); break;
+      default: o.capacity = size_t(needed); break;
+    }
+    o.pairs.assign(2 * o.capacity, -5);
+    o.data = o.capacity ? o.pairs.data() : (gen_.choice(2) ? nullptr : reinterpret_cast<int32_t*>(&o));
+    if (gen_.rarely()) {
+      const int c = gen_.choice(3);
+      if (c == 0) {
+        o.data = nullptr;
+        o.capacity = 1 + size_t(gen_.choice(3));
+        o.misuse.add(true, MINKQ_ERROR_INVALID_ARGUMENT, "out_pairs NULL with capacity");
+      } else {
+        o.capacity = c == 1 ? SIZE_MAX : SIZE_MAX / 8 + 1;  // declared, not held: must be rejected
+        if (o.data == nullptr) o.data = reinterpret_cast<int32_t*>(&o);
+        o.misuse.add(true, MINKQ_ERROR_SIZE_OVERFLOW, "capacity overflows");
+      }
+    }
+    o.memory = gen_.choice(6) == 0 ? gen_.memory() : MINKQ_MEMORY_HOST;
+    o.misuse.add(o.memory != MINKQ_MEMORY_HOST && o.memory != MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT,
+                 "out_memory invalid");
+    o.misuse.add(o.memory == MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT, "out_memory device on CPU");
+    o.null_info = gen_.rarely() && gen_.choice(2);
+    o.misuse.add(o.null_info, MINKQ_ERROR_INVALID_ARGUMENT, "info NULL");
+    return o;
+  }
+
+  // The count and digest of a query through the library-owned result (trusted after checks).
+  bool reference_count(minkq_scene* scene, const minkq_query_desc& d, uint64_t* count, std::vector<int32_t>* pairs) {
+    minkq_result* r = nullptr;
+    if (minkq_result_create(&r) != MINKQ_SUCCESS) failure("minkq_result_create");
+    const minkq_status st = minkq_scene_query_result(scene, &d, r);
+    *count = minkq_result_count(r);
+    if (pairs) pairs->assign(minkq_result_pairs(r), minkq_result_pairs(r) + 2 * *count);
+    minkq_result_release(r);
+    return st == MINKQ_SUCCESS;
+  }
+
+  void scene_query() {
+    bool null_scene;
+    SceneSlot* s = scene(&null_scene);
+    QueryArgs a = query_args(s, null_scene);
+    uint64_t needed = 0;
+    std::vector<int32_t> expected;
+    if (a.misuse.none() && !reference_count(s->handle, a.desc, &needed, &expected))
+      failure("a valid query failed through minkq_scene_query_result: " + std::string(minkq_last_error_message()));
+    Output o = output(needed);
+    Misuse m = a.misuse;
+    m.merge(o.misuse);
+    minkq_query_info info{12345, 67890};
+    const minkq_status st = shim_scene_query(null_scene ? nullptr : s->handle, a.null_desc ? nullptr : &a.desc, o.data,
+                                             o.capacity, o.memory, o.null_info ? nullptr : &info);
+    expect("minkq_scene_query", st, m, needed > o.capacity ? MINKQ_ERROR_CAPACITY : MINKQ_SUCCESS);
+    if (st == MINKQ_ERROR_CAPACITY && info.count != needed) failure("CAPACITY: info.count is not the exact count needed");
+    if (st != MINKQ_SUCCESS) return;
+    if (info.count != needed) failure("minkq_scene_query and minkq_scene_query_result disagree on the count");
+    check_pairs("minkq_scene_query", o.pairs.data(), info.count, queries_of(*s, a.kind), prims_of(*s, a.kind),
+                a.kind == MINKQ_QUERY_EE, a.flags, info.digest);
+    for (size_t i = 2 * size_t(info.count); i < o.pairs.size(); ++i)
+      if (o.pairs[i] != -5) failure("minkq_scene_query wrote past the pairs it reported");
+    if (a.flags & (MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST)) {
+      o.pairs.resize(2 * size_t(info.count));
+      if (o.pairs != expected) failure("canonical pairs differ between minkq_scene_query and the result path");
+    }
+  }
+
+  void scene_query_result() {
+    bool null_scene;
+    SceneSlot* s = scene(&null_scene);
+    QueryArgs a = query_args(s, null_scene);
+    const int which = gen_.choice(3);
+    minkq_result* r = which < 2 ? st_.results[which] : nullptr;
+    if (which < 2 && r == nullptr) {
+      if (minkq_result_create(&st_.results[which]) != MINKQ_SUCCESS) failure("minkq_result_create");
+      r = st_.results[which];
+    }
+    Misuse m = a.misuse;
+    m.add(r == nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "result NULL");
+    const minkq_status st = minkq_scene_query_result(null_scene ? nullptr : s->handle, a.null_desc ? nullptr : &a.desc, r);
+    expect("minkq_scene_query_result", st, m);
+    if (st != MINKQ_SUCCESS) {
+      if (r && minkq_result_count(r) != 0) failure("a failed query left a count in the result");
+      return;
+    }
+    check_pairs("minkq_scene_query_result", minkq_result_pairs(r), minkq_result_count(r), queries_of(*s, a.kind),
+                prims_of(*s, a.kind), a.kind == MINKQ_QUERY_EE, a.flags, minkq_result_digest(r));
+  }
+
+  void scene_edges() {
+    bool null_scene;
+    SceneSlot* s = scene(&null_scene);
+    const size_t ne = null_scene ? 0 : s->edges;
+    size_t capacity = gen_.choice(3) == 0 ? size_t(gen_.choice(4)) : ne + size_t(gen_.choice(2));
+    std::vector<int32_t> out(2 * capacity, -3);
+    int32_t* data = capacity ? out.data() : nullptr;
+    Misuse m;
+    m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+    if (gen_.rarely()) {
+      data = nullptr;
+      capacity = 1 + capacity;
+      m.add(true, MINKQ_ERROR_INVALID_ARGUMENT, "out_edges NULL with capacity");
+    }
+    const minkq_status st = minkq_scene_edges(null_scene ? nullptr : s->handle, data, capacity);
+    expect("minkq_scene_edges", st, m, ne > capacity ? MINKQ_ERROR_CAPACITY : MINKQ_SUCCESS);
+    if (st == MINKQ_SUCCESS)
+      for (size_t i = 2 * ne; i < out.size(); ++i)
+        if (out[i] != -3) failure("minkq_scene_edges wrote past the edges");
+  }
+
+  void bvh_create() {
+    int d;
+    minkq_device* dev = device(&d);
+    const int slot = gen_.choice(2);
+    if (st_.bvhs[slot].handle) {
+      minkq_bvh_release(st_.bvhs[slot].handle);
+      st_.bvhs[slot] = {};
+    }
+    Buffer b = gen_.buffer(24, Fill::kBoxes, "boxes", SIZE_MAX, 0, 32);
+    const bool null_out = gen_.rarely() && gen_.choice(2);
+    Misuse m;
+    m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_bvh NULL");
+    m.add(dev == nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "device NULL");
+    m.merge(b.misuse);
+    if (b.honest) {
+      m.add(b.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite box");
+      m.add(b.unordered_box, MINKQ_ERROR_INVALID_ARGUMENT, "box lo > hi");
+    }
+    minkq_bvh* out = reinterpret_cast<minkq_bvh*>(0x1);
+    const minkq_status st = minkq_bvh_create(dev, b.desc, null_out ? nullptr : &out);
+    expect("minkq_bvh_create", st, m);
+    if (null_out) return;
+    if (st != MINKQ_SUCCESS) {
+      if (out != nullptr && dev != nullptr) failure("minkq_bvh_create failed but *out_bvh is not NULL");
+      return;
+    }
+    st_.bvhs[slot] = {out, d, b.count};
+  }
+
+  void bvh_refit() {
+    BvhSlot& b = st_.bvhs[gen_.choice(2)];
+    const bool null_bvh = b.handle == nullptr;
+    Buffer v = gen_.buffer(24, Fill::kBoxes, "boxes", null_bvh ? SIZE_MAX : b.boxes, 0, 32);
+    Misuse m;
+    m.add(null_bvh, MINKQ_ERROR_INVALID_ARGUMENT, "bvh NULL");
+    m.merge(v.misuse);
+    if (!null_bvh) m.add(v.count != b.boxes, MINKQ_ERROR_INVALID_ARGUMENT, "box count differs");
+    if (v.honest) {
+      m.add(v.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite box");
+      m.add(v.unordered_box, MINKQ_ERROR_INVALID_ARGUMENT, "box lo > hi");
+    }
+    const uint64_t before = null_bvh ? 0 : bvh_state(b);
+    const minkq_status st = minkq_bvh_refit(null_bvh ? nullptr : b.handle, v.desc);
+    expect("minkq_bvh_refit", st, m);
+    if (st != MINKQ_SUCCESS && !null_bvh && bvh_state(b) != before) failure("a failed bvh refit changed its boxes");
+  }
+
+  void bvh_query() {
+    BvhSlot& b = st_.bvhs[gen_.choice(2)];
+    const bool null_bvh = b.handle == nullptr;
+    const int sh = gen_.choice(13);
+    const int shape = sh < 12 ? sh % 3 : (sh == 12 ? 3 : -2);
+    const int md = gen_.choice(14);
+    const int mode = md < 12 ? md % 4 : (md == 12 ? -1 : 17);
+    const uint32_t flags = uint32_t(gen_.choice(8)) | (gen_.rarely() ? 16u : 0u);
+    const float r = gen_.choice(3) == 0 ? 0.0f : gen_.radius();
+    Buffer first = gen_.buffer(12, Fill::kCoordinates, "first", SIZE_MAX, 0, 16);
+    Buffer second = shape == MINKQ_SHAPE_SPHERE && gen_.choice(4) != 0
+                        ? gen_.buffer(12, Fill::kCoordinates, "second", 0, 0, 0)
+                        : gen_.buffer(12, Fill::kCoordinates, "second", first.count, 0, 16);
+    const bool null_desc = gen_.rarely() && gen_.choice(2);
+    minkq_bvh_query_desc d;
+    shim_bvh_query_desc(&d, shape, mode, flags, r, first.desc, second.desc);
+    Misuse m;
+    m.add(null_bvh, MINKQ_ERROR_INVALID_ARGUMENT, "bvh NULL");
+    m.add(null_desc, MINKQ_ERROR_INVALID_ARGUMENT, "query NULL");
+    if (!null_desc) {
+      m.add(shape < 0 || shape > 2, MINKQ_ERROR_INVALID_ARGUMENT, "shape invalid");
+      m.add(mode < 0 || mode > 3, MINKQ_ERROR_INVALID_ARGUMENT, "mode invalid");
+      m.add(flags & ~7u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flags");
+      m.add(flags & MINKQ_QUERY_LEAF_EXACT, MINKQ_ERROR_INVALID_ARGUMENT, "LEAF_EXACT on a bvh");
+      m.add(shape == MINKQ_SHAPE_CAPSULE && mode == MINKQ_MODE_SPHERE, MINKQ_ERROR_INVALID_ARGUMENT, "capsule sphere mode");
+      m.add(shape == MINKQ_SHAPE_BOX && mode != MINKQ_MODE_BOX, MINKQ_ERROR_INVALID_ARGUMENT, "box query non-box mode");
+      m.add(!std::isfinite(r), MINKQ_ERROR_NON_FINITE, "radius not finite");
+      m.add(r < 0, MINKQ_ERROR_INVALID_ARGUMENT, "radius negative");
+      // minkq.h: "MINKQ_SHAPE_BOX ... radius must be 0".
+      m.add(shape == MINKQ_SHAPE_BOX && std::isfinite(r) && r != 0, MINKQ_ERROR_INVALID_ARGUMENT, "box query radius not 0");
+      m.merge(first.misuse);
+      m.merge(second.misuse);
+      if (shape == MINKQ_SHAPE_SPHERE) m.add(second.count != 0, MINKQ_ERROR_INVALID_ARGUMENT, "second not empty");
+      else m.add(second.count != first.count, MINKQ_ERROR_INVALID_ARGUMENT, "second.count differs");
+      if (first.honest) m.add(first.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite query point");
+      if (second.honest) m.add(second.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite query point");
+    }
+    // The count a valid query needs, from a capacity-0 call of the same arguments.
+    uint64_t needed = 0;
+    if (m.none()) {
+      minkq_query_info probe{};
+      const minkq_status ps = shim_bvh_query(b.handle, &d, nullptr, 0, MINKQ_MEMORY_HOST, &probe);
+      if (ps != MINKQ_SUCCESS && ps != MINKQ_ERROR_CAPACITY) failure("a valid bvh query failed: " + name(ps));
+      needed = probe.count;
+    }
+    Output o = output(needed);
+    m.merge(o.misuse);
+    minkq_query_info info{};
+    const minkq_status st = shim_bvh_query(null_bvh ? nullptr : b.handle, null_desc ? nullptr : &d, o.data, o.capacity,
+                                           o.memory, o.null_info ? nullptr : &info);
+    expect("minkq_bvh_query", st, m, needed > o.capacity ? MINKQ_ERROR_CAPACITY : MINKQ_SUCCESS);
+    if (st == MINKQ_ERROR_CAPACITY && info.count != needed) failure("bvh CAPACITY: info.count is not the count needed");
+    if (st != MINKQ_SUCCESS) return;
+    check_pairs("minkq_bvh_query", o.pairs.data(), info.count, first.count, b.boxes, false, flags, info.digest);
+  }
+
+  void misc() {
+    switch (gen_.choice(6)) {
+      case 0: {
+        const int status = gen_.choice(3) == 0 ? in_.ConsumeIntegral<int>() : gen_.choice(12);
+        const char* text = shim_status_name(status);
+        if (text == nullptr || *text == 0) failure("minkq_status_name returned nothing");
+        note(std::string("minkq_status_name(") + std::to_string(status) + ") = " + text);
+        break;
+      }
+      case 1:
+        if (minkq_scene_vertex_count(nullptr) || minkq_scene_triangle_count(nullptr) || minkq_scene_edge_count(nullptr) ||
+            minkq_result_count(nullptr) || minkq_result_pairs(nullptr) || minkq_result_digest(nullptr))
+          failure("accessors of NULL handles must return 0");
+        if (minkq_device_name(nullptr) == nullptr) failure("minkq_device_name(NULL) returned NULL");
+        minkq_scene_release(nullptr);
+        minkq_bvh_release(nullptr);
+        minkq_result_release(nullptr);
+        minkq_device_release(nullptr);
+        note("NULL accessors and releases");
+        break;
+      case 2: {
+        const int which = gen_.choice(2);
+        minkq_result_release(st_.results[which]);
+        st_.results[which] = nullptr;
+        const bool null_out = gen_.choice(4) == 0;
+        Misuse m;
+        m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_result NULL");
+        expect("minkq_result_create", minkq_result_create(null_out ? nullptr : &st_.results[which]), m);
+        break;
+      }
+      case 3:
+        if (minkq_version() != MINKQ_VERSION_MAJOR * 10000 + MINKQ_VERSION_MINOR * 100 + MINKQ_VERSION_PATCH ||
+            minkq_abi_version() != MINKQ_ABI_VERSION)
+          failure("version mismatch");
+        break;
+      case 4: {
+        const int b = gen_.choice(2);
+        minkq_bvh_release(st_.bvhs[b].handle);
+        st_.bvhs[b] = {};
+        note("minkq_bvh_release");
+        break;
+      }
+      default: {
+        const int d = gen_.choice(2);
+        if (st_.devices[d]) note(std::string("device ") + minkq_device_name(st_.devices[d]));
+        break;
+      }
+    }
+  }
+
+  FuzzedDataProvider& in_;
+  Generator gen_;
+  State st_;
+};
+
+void at_exit() {
+  std::fprintf(stderr, "minkq_fuzz_capi at exit: inputs %llu, calls checked %llu (of which misuses answered with an "
+                       "error %llu), failures 0\n",
+               (unsigned long long)g_inputs, (unsigned long long)g_calls, (unsigned long long)g_errors);
+}
+
+std::unique_ptr<tbb::global_control> g_threads;
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  const char* threads = std::getenv("MINKQ_FUZZ_THREADS");
+  const int n = threads ? std::atoi(threads) : 1;
+  if (n > 0) g_threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, n);
+  g_verbose = std::getenv("MINKQ_FUZZ_VERBOSE") != nullptr;
+  std::atexit(at_exit);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  FuzzedDataProvider in(data, size);
+  log_text.clear();
+  ++g_inputs;
+  {
+    Session session(in);
+    session.run();
+  }
+  if (g_verbose) std::fprintf(stderr, "---- input %llu\n%s", (unsigned long long)g_inputs, log_text.c_str());
+  return 0;
+}

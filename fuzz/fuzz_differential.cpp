@@ -1,0 +1,104 @@
+// Differential fuzzer: decodes the input into a structured scene (scene_decoder.h), runs every
+// mode through the C API on the CPU backend (and every CUDA device, where one exists), and
+// checks it against the brute-force definition, the Embree reference and the long-double
+// oracle (scene_checks.h). A mismatch prints the scene as C++ and aborts, so libFuzzer keeps
+// (and with -minimize_crash=1 shrinks) the input.
+//
+// Environment: MINKQ_FUZZ_THREADS (TBB threads, default 1: the campaign machine is shared),
+// MINKQ_FUZZ_VERBOSE=1 (print every scene), MINKQ_FUZZ_STATS_EVERY=N (progress line every N),
+// MINKQ_FUZZ_INJECT=1 (self-test: drop one pair from minkq's answer; the fuzzer must fail).
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "embree_reference.h"
+#include "scene_checks.h"
+#include "scene_decoder.h"
+
+namespace {
+
+using namespace minkq::fuzz;
+
+struct Harness {
+  std::unique_ptr<tbb::global_control> threads;
+  std::vector<minkq_device*> devices;
+  std::unique_ptr<EmbreeReference> embree;
+  Stats stats;
+  uint64_t inputs = 0;
+  uint64_t every = 0;
+  bool verbose = false;
+};
+Harness* harness = nullptr;
+
+void print_stats(const char* when) {
+  const Stats& s = harness->stats;
+  std::fprintf(stderr,
+               "minkq_fuzz_differential %s: inputs %llu, scenes checked %llu (mesh %llu, of which refit %llu; "
+               "user-box %llu), queries %llu, Embree sets compared %llu, pairs compared %llu, oracle contacts %llu, "
+               "mismatches 0\n",
+               when, (unsigned long long)harness->inputs, (unsigned long long)(s.mesh_scenes + s.box_scenes),
+               (unsigned long long)s.mesh_scenes, (unsigned long long)s.refit_scenes, (unsigned long long)s.box_scenes,
+               (unsigned long long)s.queries, (unsigned long long)s.independent, (unsigned long long)s.pairs,
+               (unsigned long long)s.true_contacts);
+}
+
+void at_exit() { print_stats("at exit"); }
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  harness = new Harness();
+  const char* threads = std::getenv("MINKQ_FUZZ_THREADS");
+  const int n = threads ? std::atoi(threads) : 1;
+  if (n > 0) harness->threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, n);
+  harness->devices = open_devices();
+  if (harness->devices.empty()) {
+    std::fprintf(stderr, "minkq_device_create(\"cpu\") failed: %s\n", minkq_last_error_message());
+    std::abort();
+  }
+  harness->embree = std::make_unique<EmbreeReference>();
+  harness->verbose = std::getenv("MINKQ_FUZZ_VERBOSE") != nullptr;
+  inject_fault() = std::getenv("MINKQ_FUZZ_INJECT") != nullptr;
+  if (const char* every = std::getenv("MINKQ_FUZZ_STATS_EVERY")) harness->every = std::strtoull(every, nullptr, 10);
+  std::fprintf(stderr, "minkq_fuzz_differential: devices:");
+  for (minkq_device* d : harness->devices) std::fprintf(stderr, " [%s]", minkq_device_name(d));
+  std::fprintf(stderr, "; reference: Embree %d.%d.%d (isa=sse2)\n", RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
+               RTC_VERSION_PATCH);
+  std::atexit(at_exit);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  // The last bytes are the scene's parameters, the rest its geometry (see scene_decoder.h).
+  const size_t header = std::min<size_t>(size, 32);
+  FuzzedDataProvider params(data + size - header, header);
+  FuzzedDataProvider in(data, size - header);
+  SceneDecoder decoder(in, params);
+  Report report;
+  std::string description;
+  harness->inputs++;
+  // Three in four inputs are mesh scenes (VT and EE); the rest are user-box BVH scenes.
+  if (params.ConsumeIntegralInRange<int>(0, 3) != 0) {
+    const MeshScene scene = decoder.mesh();
+    if (harness->verbose) std::fprintf(stderr, "%s\n", describe(scene).c_str());
+    check_mesh_scene(harness->devices, scene, harness->embree.get(), report, harness->stats);
+    if (!report.ok()) description = describe(scene);
+  } else {
+    const BoxScene scene = decoder.boxes();
+    if (harness->verbose) std::fprintf(stderr, "%s\n", describe(scene).c_str());
+    check_box_scene(harness->devices, scene, harness->embree.get(), report, harness->stats);
+    if (!report.ok()) description = describe(scene);
+  }
+  harness->embree->reset();
+  if (!report.ok()) {
+    std::fprintf(stderr, "\n==== minkq differential fuzzer: MISMATCH ====\n%s\n---- scene (paste into "
+                         "tests/test_fuzz_regressions.cpp) ----\n%s\n",
+                 report.text().c_str(), description.c_str());
+    std::fflush(stderr);
+    std::abort();
+  }
+  if (harness->every && harness->inputs % harness->every == 0) print_stats("progress");
+  return 0;
+}

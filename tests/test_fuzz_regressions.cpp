@@ -1,0 +1,200 @@
+// Every failure the fuzzers (fuzz/) found, as a regression test, plus a replay of scenes in the
+// format the differential fuzzer prints ("paste into tests/test_fuzz_regressions.cpp"). The
+// scene checks are the fuzzer's own (fuzz/scene_checks.h: definition, chain, oracle, refit,
+// buffers, and every CUDA device against the CPU where one exists), without the Embree part.
+// fuzz/RESULTS.md lists each bug with the test that covers it.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "../fuzz/scene_checks.h"
+
+namespace minkq {
+namespace {
+
+// Runs the differential fuzzer's checks on a scene; fails the test with its report.
+void replay(const fuzz::MeshScene& s) {
+  std::vector<minkq_device*> devices = fuzz::open_devices();
+  ASSERT_FALSE(devices.empty()) << minkq_last_error_message();
+  fuzz::Report report;
+  fuzz::Stats stats;
+  fuzz::check_mesh_scene(devices, s, nullptr, report, stats);
+  fuzz::release_devices(devices);
+  EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
+  EXPECT_EQ(stats.mesh_scenes, 1u);
+}
+
+void replay(const fuzz::BoxScene& s) {
+  std::vector<minkq_device*> devices = fuzz::open_devices();
+  ASSERT_FALSE(devices.empty()) << minkq_last_error_message();
+  fuzz::Report report;
+  fuzz::Stats stats;
+  fuzz::check_box_scene(devices, s, nullptr, report, stats);
+  fuzz::release_devices(devices);
+  EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
+  EXPECT_EQ(stats.box_scenes, 1u);
+}
+
+struct Device {
+  minkq_device* handle = nullptr;
+  Device() { EXPECT_EQ(minkq_device_create("cpu", &handle), MINKQ_SUCCESS); }
+  ~Device() { minkq_device_release(handle); }
+};
+
+// Stores an out-of-range value in an enum-typed field the way a C caller can (C enums are
+// integers); the test itself never loads the field as the C++ enum type.
+template <class E>
+void store_raw(E& field, uint32_t value) {
+  static_assert(sizeof(E) == sizeof(value), "C enums are 32-bit here");
+  std::memcpy(&field, &value, sizeof value);
+}
+
+// ---- C API fuzzer findings -------------------------------------------------------------------
+
+// fuzz_capi, bug 1 (fuzz/RESULTS.md): enum fields and arguments outside their enumerators (as
+// C callers may pass) were loaded as the C++ enum type before validation: undefined behaviour
+// (UBSan: "load of value 4294967295, which is not a valid value for type 'minkq_memory'").
+// They are now validated through their object representation and answer INVALID_ARGUMENT.
+// (By-value enum arguments, minkq_status_name's and out_memory, cannot be passed out of range
+// from C++ without undefined behaviour in the test itself; fuzz/corpus/fuzz_capi holds the
+// reproducers, replayed by fuzz/run.sh through capi_shim.c.)
+TEST(FuzzRegressions, enum_fields_out_of_range_are_rejected) {
+  Device device;
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const int32_t tri[3] = {0, 1, 2};
+  minkq_scene_desc desc{};
+  desc.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
+  desc.vertices = {xyz, 0, 3, MINKQ_MEMORY_HOST};
+  desc.triangles = {tri, 0, 1, MINKQ_MEMORY_HOST};
+  minkq_scene* scene = nullptr;
+  ASSERT_EQ(minkq_scene_create(device.handle, &desc, &scene), MINKQ_SUCCESS);
+  minkq_query_info info{};
+  for (uint32_t bad : {4u, 99u, 0x80000000u, 0xffffffffu}) {
+    minkq_query_desc q{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f};
+    store_raw(q.mode, bad);
+    EXPECT_EQ(minkq_scene_query(scene, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT) << bad;
+    q = {MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f};
+    store_raw(q.kind, bad);
+    EXPECT_EQ(minkq_scene_query(scene, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT) << bad;
+    minkq_buffer vertices{xyz, 0, 3, MINKQ_MEMORY_HOST};
+    store_raw(vertices.memory, bad);
+    EXPECT_EQ(minkq_scene_refit(scene, vertices), MINKQ_ERROR_INVALID_ARGUMENT) << bad;
+    EXPECT_NE(std::string(minkq_last_error_message()).find("vertices.memory"), std::string::npos);
+  }
+  minkq_scene_release(scene);
+
+  const float box[6] = {0, 0, 0, 1, 1, 1};
+  minkq_bvh* bvh = nullptr;
+  ASSERT_EQ(minkq_bvh_create(device.handle, {box, 0, 1, MINKQ_MEMORY_HOST}, &bvh), MINKQ_SUCCESS);
+  const float point[3] = {0.5f, 0.5f, 2.0f};
+  for (uint32_t bad : {3u, 17u, 0xfffffffeu}) {
+    minkq_bvh_query_desc q{MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0, 1.0f, {point, 0, 1, MINKQ_MEMORY_HOST}, {}};
+    store_raw(q.shape, bad);
+    EXPECT_EQ(minkq_bvh_query(bvh, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT) << bad;
+    q.shape = MINKQ_SHAPE_SPHERE;
+    store_raw(q.mode, bad + 1);
+    EXPECT_EQ(minkq_bvh_query(bvh, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT) << bad;
+  }
+  EXPECT_STREQ(minkq_status_name(MINKQ_ERROR_INTERNAL), "MINKQ_ERROR_INTERNAL");
+  minkq_bvh_release(bvh);
+}
+
+// fuzz_capi, bug 2 (fuzz/RESULTS.md): minkq.h says box queries take radius 0, but a non-zero
+// radius was accepted (and silently grew the query boxes). It is now INVALID_ARGUMENT.
+TEST(FuzzRegressions, box_queries_with_a_nonzero_radius_are_rejected) {
+  Device device;
+  const float box[6] = {0, 0, 0, 1, 1, 1};
+  minkq_bvh* bvh = nullptr;
+  ASSERT_EQ(minkq_bvh_create(device.handle, {box, 0, 1, MINKQ_MEMORY_HOST}, &bvh), MINKQ_SUCCESS);
+  const float lo[3] = {1.5f, 0, 0}, hi[3] = {2, 1, 1};
+  minkq_query_info info{};
+  minkq_bvh_query_desc q{MINKQ_SHAPE_BOX, MINKQ_MODE_BOX, 0, 0.75f, {lo, 0, 1, MINKQ_MEMORY_HOST},
+                         {hi, 0, 1, MINKQ_MEMORY_HOST}};
+  EXPECT_EQ(minkq_bvh_query(bvh, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(minkq_last_error_message()).find("radius 0"), std::string::npos) << minkq_last_error_message();
+  for (float zero : {0.0f, -0.0f}) {
+    q.radius = zero;
+    EXPECT_EQ(minkq_bvh_query(bvh, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS) << minkq_last_error_message();
+    EXPECT_EQ(info.count, 0u);  // 0.5 apart: no overlap without a radius
+  }
+  minkq_bvh_release(bvh);
+}
+
+// ---- Differential fuzzer findings -------------------------------------------------------------
+
+// fuzz_differential, bug 3 (fuzz/RESULTS.md): capsule_exact lost a true contact (distance 0)
+// when the segment was longer than about 2^64: in segment_box_distance2 the closed-form
+// minimiser's sums (face * d, d * d) overflowed to inf / inf = NaN, the NaN was clamped to the
+// bracket's low end, and g there (the distance at the segment's start, ~2^63) rejected the
+// box. Components of 2^62 and more now answer "may overlap". Found as EE pair (46,51) of a
+// stacked sheet scaled by 2^70 and offset by 2^126; the first case below is that pair.
+TEST(FuzzRegressions, capsule_exact_keeps_contacts_of_segments_longer_than_2_to_62) {
+  for (float offset : {0x1p+126f, 0.0f, -0x1p+100f}) {
+    const Vec3 p0{offset, 0x1.7e14e4p+70f, -offset}, p1{offset, 0x1.b13242p+70f, -offset};
+    const Vec3 q{offset, 0x1.8p+70f, -offset};  // on the segment
+    const float r = 0x1.12e0bep+41f;
+    EXPECT_TRUE(CapsuleExactShape::from({p0, p1, r}).overlaps(Box::of_point(q))) << offset;
+    EXPECT_TRUE(CapsuleExactShape::from({p0, p1, 0.0f}).overlaps(Box::of_point(q))) << offset;
+    // The same pair as a scene: every mode, every check of the fuzzer.
+    fuzz::MeshScene s;
+    s.xyz = {p0.x, p0.y, p0.z, p1.x, p1.y, p1.z, q.x, q.y, q.z};
+    s.tris = {0, 1, 2};
+    s.edges = {0, 1, 2, 2};
+    s.r = r;
+    s.variant = 3145984;
+    replay(s);
+  }
+  // Below 2^62 the distance is still computed (not answered "may overlap").
+  const float d2 = segment_box_distance2({0, 0, 0}, {0x1p+61f, 0, 0}, Box::of_point({0x1p+60f, 0x1p+40f, 0}));
+  EXPECT_NEAR(d2, 0x1p+80f, 0x1p+62f);
+}
+
+// ---- Scenes in the differential fuzzer's format --------------------------------------------
+
+// Two layers at a gap equal to r in float (the fuzzer's "stacked" kind at its boundary case),
+// moved for a refit: every check of the fuzzer, through the format it prints.
+TEST(FuzzRegressions, replay_stacked_layers_at_gap_r_with_refit) {
+  fuzz::MeshScene s;
+  s.xyz = {0x0p+0f, 0x0p+0f, 0x0p+0f,  0x1p+0f, 0x0p+0f, 0x0p+0f,  0x0p+0f, 0x1p+0f, 0x0p+0f,
+           0x1p+0f, 0x1p+0f, 0x0p+0f,  0x0p+0f, 0x0p+0f, 0x1.99999ap-4f, 0x1p+0f, 0x0p+0f, 0x1.99999ap-4f,
+           0x0p+0f, 0x1p+0f, 0x1.99999ap-4f, 0x1p+0f, 0x1p+0f, 0x1.99999ap-4f};
+  s.tris = {0, 1, 3, 0, 3, 2, 4, 5, 7, 4, 7, 6};
+  s.r = 0x1.99999ap-4f;  // the gap
+  s.drop_incident = true;
+  s.moved = s.xyz;
+  for (size_t i = 2; i < s.moved.size(); i += 3) s.moved[i] += 0x1p-30f;
+  for (uint32_t variant : {0u, 0x5555u, 0xaaaaaaaau, 0xffffffffu}) {
+    s.variant = variant;
+    replay(s);
+  }
+}
+
+// Coincident vertices, a point triangle and an explicit zero-length edge at radius 0.
+TEST(FuzzRegressions, replay_cluster_of_coincident_vertices_at_radius_zero) {
+  fuzz::MeshScene s;
+  s.xyz = {0x1p-1f, 0x1p-1f, 0x1p-1f, 0x1p-1f, 0x1p-1f, 0x1p-1f, 0x1.000002p-1f, 0x1p-1f, 0x1p-1f, 0x0p+0f, 0x0p+0f, 0x0p+0f};
+  s.tris = {0, 1, 2, 1, 1, 1, 0, 2, 3};
+  s.edges = {0, 1, 2, 2, 0, 3, 1, 3, 0, 1};
+  s.r = 0.0f;
+  s.variant = 7;
+  replay(s);
+  s.drop_incident = true;
+  replay(s);
+}
+
+// A capsule scene over user boxes, with a refit.
+TEST(FuzzRegressions, replay_user_box_capsules_with_refit) {
+  fuzz::BoxScene s;
+  s.boxes = {0, 0, 0, 1, 1, 1, 2, 0, 0, 2, 1, 1, 0.5f, 0.5f, 3, 0.5f, 0.5f, 3};
+  s.shape = MINKQ_SHAPE_CAPSULE;
+  s.first = {-1, 0.5f, 0.5f, 1.5f, -1, 0.5f};
+  s.second = {3, 0.5f, 0.5f, 1.5f, 2, 0.5f};
+  s.r = 0.25f;
+  s.moved = s.boxes;
+  for (float& x : s.moved) x += 0.125f;
+  s.variant = 0x1234567u;
+  replay(s);
+}
+
+}  // namespace
+}  // namespace minkq
