@@ -3,7 +3,9 @@
 // slightly farther than r (by the bound stated beside it), never reject one within r. The
 // bounds are relative to the operands' own size; there is no absolute epsilon anywhere.
 // tests/test_predicates.cpp checks each stated bound in both directions against a long-double
-// oracle.
+// oracle. The "accepts only within ..." (tightness) bounds hold while the squares stay finite
+// and normal (distances and r between about 1e-19 and 1e19); beyond, a squared distance
+// overflows or underflows and the tests accept more (never less): see bench/results/stability.md.
 #pragma once
 
 #include "minkq/hd.h"
