@@ -81,6 +81,12 @@ if [ $warp = 1 ] && [ -x "$venv/bin/python" ]; then
   "$venv/bin/python" "$root/bench/warp_baseline.py" "$build/export" "$build/threads1/rows.csv" "$out/warp.md" ||
     echo "warp_baseline.py failed (see $out/warp.md)"
   cp "$build/threads1/summary.md" "$out/summary_threads1.md"
+  # The 1M twisted sheet, where Newton's absolute epsilon loses EE contacts; minkq's columns from the
+  # main (all-threads) run.
+  rm -rf "$build/export1M"
+  "$bin/minkq_bench" --suites scale --scale-scenes twist_target --scale-triangles 1e6 --export-only "$build/export1M"
+  "$venv/bin/python" "$root/bench/warp_baseline.py" "$build/export1M" "$out/rows.csv" "$out/warp_1M.md" --minkq-threads all ||
+    echo "warp_baseline.py (1M) failed"
 fi
 echo "results in $out (status $status)"
 exit $status

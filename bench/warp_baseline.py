@@ -354,7 +354,7 @@ def main():
         errs = "; ".join(row[k] for k in ("warp_error", "newton_error") if k in row) or "–"
         o.append(f"| {row['scene']} | {g(row, 'warp_build_ms')} | {g(row, 'warp_refit_ms')} | {g(row, 'newton_refit_ms')} | "
                  f"{g(row, 'newton_T')} / {g(row, 'newton_E')} ({row['T']} / {row['E']}) | {g(row, 'newton_resize')} | {errs} |\n")
-    o.append("\n\"x\" ratios are Warp or Newton time over minkq time (> 1: minkq faster), both single-threaded. "
+    o.append(f"\n\"x\" ratios are Warp or Newton time over minkq time (> 1: minkq faster); Warp/Newton on one thread, minkq on {minkq_threads}. "
              "\"Newton VT/EE lost\" = 1 - Newton's contacts / the oracle's (its counts are the per-element counters summed; "
              "the resize flag says whether a per-element buffer overflowed its allocation).\n")
     with open(out_md, "w") as f:
