@@ -113,6 +113,7 @@ struct QueryRow {
   Timing t;
   uint64_t candidates = 0, truth = 0, fn = 0;
   int64_t diff_vs_leaf = -1;  // Embree rows: size of the symmetric difference with minkq's leaf_exact set
+  minkq_query_stats work{};   // minkq rows: the traversal's work (MINKQ_QUERY_STATS, one untimed run)
   double load = 0;
   double fp() const { return truth ? (double(candidates) - double(truth)) / double(truth) : NAN; }
 };
@@ -147,12 +148,13 @@ struct Report {
 };
 
 // Bytes of trees and scene data of a CPU VT+EE scene from the library's layouts: vertices
-// (12 B), triangles (12 B) and edges (8 B) in the store; per tree of n primitives n - 1 nodes of
-// 64 B, a 4 B leaf-parent link per leaf and a 4 B refit counter per node; the C API's scene
-// keeps a second copy of triangles and edges (capi/minkq.cpp, struct minkq_scene).
+// (12 B), triangles (12 B) and edges (8 B) in the store, and the vertices' query order (4 B);
+// per tree of n primitives n - 1 nodes of 64 B, a 4 B leaf-parent link and a 4 B sorted-leaf
+// entry per leaf, and a 4 B refit counter per node; the C API's scene keeps a second copy of
+// triangles and edges (capi/minkq.cpp, struct minkq_scene).
 double layout_bytes(int64_t v, int64_t t, int64_t e) {
-  auto tree = [](int64_t n) { return n > 1 ? 64.0 * (n - 1) + 4.0 * n + 4.0 * (n - 1) : 64.0 + 4.0 * n; };
-  return 12.0 * v + 12.0 * t + 8.0 * e + tree(t) + tree(e) + 12.0 * t + 8.0 * e;
+  auto tree = [](int64_t n) { return n > 1 ? 64.0 * (n - 1) + 8.0 * n + 4.0 * (n - 1) : 64.0 + 8.0 * n; };
+  return 16.0 * v + 12.0 * t + 8.0 * e + tree(t) + tree(e) + 12.0 * t + 8.0 * e;
 }
 
 // The narrow phase a simulator runs on every candidate, at its cheapest: the double-precision
@@ -276,6 +278,7 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
     std::function<void()> run;
     std::function<PairSet()> pairs;
     std::vector<double> times;
+    std::function<minkq_query_stats()> work;  // minkq only: an untimed run with MINKQ_QUERY_STATS
   };
   std::vector<int32_t> box_vt, box_ee;  // box candidates of the last frame (cpu)
   std::vector<Device> devices;
@@ -335,11 +338,16 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
                         const minkq_query_desc q{mode->kind, mode->mode, mode->flags, r};
                         check(minkq_scene_query_result(scene, &q, res), "minkq_scene_query_result");
                       },
-                      [res] { return to_set(minkq_result_pairs(res), minkq_result_count(res)); }, {}});
+                      [res] { return to_set(minkq_result_pairs(res), minkq_result_count(res)); }, {},
+                      [scene, res, mode, r] {
+                        const minkq_query_desc q{mode->kind, mode->mode, mode->flags | MINKQ_QUERY_STATS, r};
+                        check(minkq_scene_query_result(scene, &q, res), "minkq_scene_query_result");
+                        return minkq_result_stats(res);
+                      }});
       }
     if (with_embree)
       cs.push_back({"embree", nullptr, [&] { em->query(r, embree_pairs); },
-                    [&] { return to_set(embree_pairs.data(), embree_pairs.size() / 2); }, {}});
+                    [&] { return to_set(embree_pairs.data(), embree_pairs.size() / 2); }, {}, {}});
     for (int w = 0; w < cfg.warmup; ++w)
       for (auto& c : cs) c.run();
     for (int round = 0; round < cfg.repeats; ++round)
@@ -366,6 +374,7 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
       row.vertices = info.vertices, row.triangles = info.triangles, row.edges = info.edges;
       row.frame = int(k), row.factor = factor, row.r = r, row.t = t;
       row.candidates = got.size(), row.truth = truth.size(), row.fn = missing(truth, got), row.load = load_average();
+      if (c.work) row.work = c.work();
       if (c.backend == "cpu" && c.mode && vt && (c.mode->flags & MINKQ_QUERY_LEAF_EXACT)) leaf_vt = got;
       if (!c.mode && (!leaf_vt.empty() || got.empty())) row.diff_vs_leaf = int64_t(missing(leaf_vt, got) + missing(got, leaf_vt));
       if (c.backend == "cpu" && c.mode && k + 1 == sc.frames.size() && c.mode->mode == MINKQ_MODE_BOX) {
@@ -395,6 +404,7 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
 struct Sum {  // a (scene, backend, kind, mode) summed over frames
   double ms = 0, ms_min = 0, ms_max = 0;
   uint64_t candidates = 0, truth = 0, fn = 0;
+  uint64_t nodes = 0, node_tests = 0, prim_tests = 0, queries = 0;  // work (minkq rows)
   int frames = 0;
   int64_t diff = 0;
   double fp() const { return truth ? (double(candidates) - double(truth)) / double(truth) : NAN; }
@@ -408,6 +418,8 @@ std::map<SumKey, Sum> sums(const Report& rep, const std::string& suite) {
     Sum& s = out[{q.scene, q.backend, q.kind, q.mode}];
     s.ms += q.t.median, s.ms_min += q.t.min, s.ms_max += q.t.max;
     s.candidates += q.candidates, s.truth += q.truth, s.fn += q.fn, ++s.frames;
+    s.nodes += q.work.nodes_visited, s.node_tests += q.work.node_tests, s.prim_tests += q.work.primitive_tests;
+    s.queries += uint64_t(q.kind == "VT" ? q.vertices : q.edges);
     if (q.diff_vs_leaf > 0) s.diff += q.diff_vs_leaf;
   }
   return out;
@@ -710,14 +722,36 @@ std::string sweep_table(const Report& rep) {
   return o.str();
 }
 
+// Work per query (MINKQ_QUERY_STATS) per scene and mode, summed over frames: what each mode's
+// traversal does, the same on every backend for the same tree; the cpu rows are shown.
+std::string work_table(const Report& rep, const std::string& suite) {
+  const auto all = sums(rep, suite);
+  std::ostringstream o;
+  o << "| scene | kind | mode | nodes / query | node tests / query | primitive tests / query | candidates / query | "
+       "nodes / true contact | nodes vs box | query ms |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& [key, x] : all) {
+    const auto& [scene, backend, kind, mode] = key;
+    if (backend != "cpu" || x.queries == 0) continue;
+    const auto box = all.find({scene, backend, kind, "box"});
+    const double q = double(x.queries);
+    o << "| " << scene << " | " << kind << " | " << mode << " | " << fmt(double(x.nodes) / q, 3) << " | "
+      << fmt(double(x.node_tests) / q, 3) << " | " << fmt(double(x.prim_tests) / q, 3) << " | "
+      << fmt(double(x.candidates) / q, 3) << " | " << (x.truth ? fmt(double(x.nodes) / double(x.truth), 3) : std::string("–"))
+      << " | " << (box != all.end() && box->second.nodes ? fmt(double(x.nodes) / double(box->second.nodes), 3) : std::string("–"))
+      << " | " << fmt(x.ms, 3) << " |\n";
+  }
+  return o.str();
+}
+
 std::string rows_csv(const Report& rep) {
   std::ostringstream o;
-  o << "suite,scene,backend,kind,mode,vertices,triangles,edges,frame,radius_factor,r,ms_median,ms_min,ms_max,repeats,candidates,true_contacts,fp_ratio,false_negatives,diff_vs_leaf,load1\n";
+  o << "suite,scene,backend,kind,mode,vertices,triangles,edges,frame,radius_factor,r,ms_median,ms_min,ms_max,repeats,candidates,true_contacts,fp_ratio,false_negatives,diff_vs_leaf,load1,nodes_visited,node_tests,primitive_tests\n";
   for (const QueryRow& q : rep.queries) {
     char b[640];
-    std::snprintf(b, sizeof b, "%s,%s,%s,%s,%s,%" PRId64 ",%" PRId64 ",%" PRId64 ",%d,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%" PRIu64 ",%" PRIu64 ",%.6g,%" PRIu64 ",%" PRId64 ",%.3g\n",
+    std::snprintf(b, sizeof b, "%s,%s,%s,%s,%s,%" PRId64 ",%" PRId64 ",%" PRId64 ",%d,%.6g,%.9g,%.6g,%.6g,%.6g,%d,%" PRIu64 ",%" PRIu64 ",%.6g,%" PRIu64 ",%" PRId64 ",%.3g,%" PRIu64 ",%" PRIu64 ",%" PRIu64 "\n",
                   q.suite.c_str(), q.scene.c_str(), q.backend.c_str(), q.kind.c_str(), q.mode.c_str(), q.vertices, q.triangles, q.edges,
-                  q.frame, q.factor, q.r, q.t.median, q.t.min, q.t.max, q.t.repeats, q.candidates, q.truth, q.fp(), q.fn, q.diff_vs_leaf, q.load);
+                  q.frame, q.factor, q.r, q.t.median, q.t.min, q.t.max, q.t.repeats, q.candidates, q.truth, q.fp(), q.fn, q.diff_vs_leaf, q.load,
+                  q.work.nodes_visited, q.work.node_tests, q.work.primitive_tests);
     o << b;
   }
   return o.str();
@@ -876,6 +910,20 @@ int run(int argc, char** argv) {
     for (const auto& s : rep.scenes) any |= s.suite == suite;
     if (any) evt += "## " + suite + "\n\n" + error_vs_time(rep, suite, evt_csv);
   }
+  std::string work;
+  for (const std::string suite : {"scenes", "real", "sweep", "scale"}) {
+    const std::string table = work_table(rep, suite);
+    if (table.find("\n|", table.find("|---")) != std::string::npos) work += "## " + suite + "\n\n" + table + "\n";
+  }
+  if (!work.empty())
+    write_file(out + "/work.md",
+               header("Traversal work per query (MINKQ_QUERY_STATS)", machine, opt, load_start) +
+                   "Counts from one untimed run of each query with MINKQ_QUERY_STATS, summed over frames; they depend "
+                   "only on the tree and the queries, so they are the same on every backend. Nodes are internal node "
+                   "records read; node tests are child boxes tested against the query shape; primitive tests are "
+                   "leaves reached (handed to the leaf filter). EE queries meet each pair once (a query reaches only "
+                   "the leaves after its own in the tree's order). Query ms: the median of the timed runs, summed "
+                   "over frames.\n\n" + work);
   if (!evt.empty()) {
     write_file(out + "/error_vs_time.md", header("Error against run time, and end to end with the narrow phase", machine, opt, load_start) +
                                               "Plots: error_vs_time_<scene>.png (bench/plot.py).\n\n" + evt);

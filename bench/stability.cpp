@@ -108,7 +108,8 @@ PairSet ee_pairs_with(const ref::Mesh& m, MakeShape make) {
         if (a.v[0] == c.v[0] || a.v[0] == c.v[1] || a.v[1] == c.v[0] || a.v[1] == c.v[1]) return;
         parts[size_t(b)].push_back(pack(q, f));
       };
-      minkq::traverse(tree.view(), shape, on_leaf);
+      minkq::NoWork work;
+      minkq::traverse(tree.view(), shape, -1, on_leaf, work);
     }
   });
   PairSet out;

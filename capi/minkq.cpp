@@ -47,6 +47,7 @@ struct minkq_result {
   std::vector<int32_t> pairs;
   uint64_t count = 0;
   uint64_t digest = 0;
+  minkq_query_stats stats{};
 };
 
 namespace {
@@ -183,7 +184,8 @@ void require_radius(float r) {
   require(r >= 0.0f, Status::kInvalidArgument, "radius " + format_float(r) + " is negative");
 }
 
-constexpr uint32_t kKnownQueryFlags = MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
+constexpr uint32_t kKnownQueryFlags =
+    MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS;
 
 // Runs a request against a store with the common output checks, CAPACITY and digest.
 void run_and_report(minkq_device* device, minkq::Store& store, const minkq::QueryRequest& request, uint32_t flags,
@@ -201,10 +203,11 @@ void run_and_report(minkq_device* device, minkq::Store& store, const minkq::Quer
   const bool digest = flags & MINKQ_QUERY_DIGEST;
   const minkq::PairOutput out{out_pairs, capacity, static_cast<minkq::Memory>(out_memory),
                               digest || (flags & MINKQ_QUERY_CANONICAL)};
-  info->count = 0;
-  info->digest = 0;
-  const uint64_t count = store.query(request, out);
+  *info = minkq_query_info{};
+  minkq::WorkCounts work;
+  const uint64_t count = store.query(request, out, (flags & MINKQ_QUERY_STATS) ? &work : nullptr);
   info->count = count;
+  info->stats = {work.nodes_visited, work.node_tests, work.primitive_tests, work.candidates};
   if (count > capacity)
     fail(Status::kCapacity, std::to_string(count) + " pairs found but the buffer holds " + std::to_string(capacity));
   if (digest) {
@@ -381,6 +384,7 @@ void minkq_result_release(minkq_result* result) { delete result; }
 uint64_t minkq_result_count(const minkq_result* result) { return result ? result->count : 0; }
 const int32_t* minkq_result_pairs(const minkq_result* result) { return result ? result->pairs.data() : nullptr; }
 uint64_t minkq_result_digest(const minkq_result* result) { return result ? result->digest : 0; }
+minkq_query_stats minkq_result_stats(const minkq_result* result) { return result ? result->stats : minkq_query_stats{}; }
 
 minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query, minkq_result* result) {
   if (result == nullptr) {
@@ -398,6 +402,7 @@ minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc
   }
   result->count = status == MINKQ_SUCCESS ? info.count : 0;
   result->digest = status == MINKQ_SUCCESS ? info.digest : 0;
+  result->stats = status == MINKQ_SUCCESS ? info.stats : minkq_query_stats{};
   return status;
 }
 

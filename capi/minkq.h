@@ -30,7 +30,7 @@ extern "C" {
 #define MINKQ_VERSION_MINOR 1
 #define MINKQ_VERSION_PATCH 0
 /* Bumped whenever a struct layout, enum value or function signature changes. */
-#define MINKQ_ABI_VERSION 1
+#define MINKQ_ABI_VERSION 2
 
 /* The library's run-time version as MAJOR * 10000 + MINOR * 100 + PATCH. */
 uint32_t minkq_version(void);
@@ -144,7 +144,9 @@ typedef enum minkq_mode {
 typedef enum minkq_query_flags {
   MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
-  MINKQ_QUERY_DIGEST = 4      /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
+  MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
+  MINKQ_QUERY_STATS = 8       /* count the traversal's work into info->stats (a separately compiled
+                                 traversal; the uncounted one carries no counters) */
 } minkq_query_flags;
 
 typedef struct minkq_query_desc {
@@ -154,9 +156,19 @@ typedef struct minkq_query_desc {
   float radius;   /* r >= 0, finite */
 } minkq_query_desc;
 
+/* The work of one query call, with MINKQ_QUERY_STATS. The counts depend only on the tree and
+ * the queries, so CPU and CUDA report the same numbers for the same scene. */
+typedef struct minkq_query_stats {
+  uint64_t nodes_visited;   /* internal node records read */
+  uint64_t node_tests;      /* child boxes tested against a query shape */
+  uint64_t primitive_tests; /* primitives whose box passed, handed to the leaf filter */
+  uint64_t candidates;      /* pairs emitted: equal to count */
+} minkq_query_stats;
+
 typedef struct minkq_query_info {
-  uint64_t count;  /* exact number of pairs (also when the buffer was too small) */
-  uint64_t digest; /* with MINKQ_QUERY_DIGEST: XXH64 of the little-endian int32 pairs */
+  uint64_t count;          /* exact number of pairs (also when the buffer was too small) */
+  uint64_t digest;         /* with MINKQ_QUERY_DIGEST: XXH64 of the little-endian int32 pairs */
+  minkq_query_stats stats; /* with MINKQ_QUERY_STATS (also when the buffer was too small); else 0 */
 } minkq_query_info;
 
 /* Runs a query and writes pairs (2 int32 each) into out_pairs, which holds 2 * capacity int32
@@ -178,6 +190,8 @@ uint64_t minkq_result_count(const minkq_result* result);
 /* 2 * count int32, valid until the result is reused or released. */
 const int32_t* minkq_result_pairs(const minkq_result* result);
 uint64_t minkq_result_digest(const minkq_result* result);
+/* The work counts of the last query, with MINKQ_QUERY_STATS (else all 0). */
+minkq_query_stats minkq_result_stats(const minkq_result* result);
 
 /* ---- BVH over user boxes ------------------------------------------------------------------- */
 typedef struct minkq_bvh minkq_bvh;
@@ -198,7 +212,7 @@ typedef enum minkq_shape {
 typedef struct minkq_bvh_query_desc {
   minkq_shape shape;
   minkq_mode mode;
-  uint32_t flags;     /* CANONICAL, DIGEST (LEAF_EXACT does not apply to boxes) */
+  uint32_t flags;     /* CANONICAL, DIGEST, STATS (LEAF_EXACT does not apply to boxes) */
   float radius;       /* the same r for every query */
   minkq_buffer first;
   minkq_buffer second; /* count 0 for spheres */

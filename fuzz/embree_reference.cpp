@@ -218,8 +218,8 @@ MeshSets EmbreeReference::mesh_sets(const MeshGeometry& g, float r, uint32_t fil
   vt_boxes.decide = [&](int32_t v, int32_t t) {
     if (!BoxShape::from(vt.geometry(v)).overlaps(triangle_boxes(t))) return;
     for (int mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY}) {
-      if (vt.accept(v, t)) sets.vt[mode][0].push_back({v, t});
-      if (vt_leaf.accept(v, t)) sets.vt[mode][1].push_back({v, t});
+      if (vt.accept<BoxShape>(v, t)) sets.vt[mode][0].push_back({v, t});
+      if (vt_leaf.accept<BoxShape>(v, t)) sets.vt[mode][1].push_back({v, t});
     }
   };
   collide(device_, vertex_queries_.get(), triangles_.get(), vt_boxes);
@@ -229,26 +229,28 @@ MeshSets EmbreeReference::mesh_sets(const MeshGeometry& g, float r, uint32_t fil
   vt_spheres.decide = [&](int32_t v, int32_t t) {
     if (!SphereShape::from(vt.geometry(v)).overlaps(triangle_boxes(t))) return;
     for (int mode : {MINKQ_MODE_SPHERE, MINKQ_MODE_CAPSULE_EXACT}) {
-      if (vt.accept(v, t)) sets.vt[mode][0].push_back({v, t});
-      if (vt_leaf.accept(v, t)) sets.vt[mode][1].push_back({v, t});
+      if (vt.accept<SphereShape>(v, t)) sets.vt[mode][0].push_back({v, t});
+      if (vt_leaf.accept<SphereShape>(v, t)) sets.vt[mode][1].push_back({v, t});
     }
   };
   point_queries(device_, triangles_.get(), g.vertices, r, vt_spheres);
 
   // EE box, capsule_ray, capsule_exact: rtcCollide of padded edge boxes with edge boxes; the
-  // callback applies each mode's shape to the edge box.
+  // callback applies each mode's shape to the edge box, and the leaf filter (with the same
+  // test the other way round) to pairs e < f.
   Collector ee_all;
   ee_all.decide = [&](int32_t e, int32_t f) {
+    if (f <= e) return;
     const Box fb = edge_boxes(f);
     const QueryGeometry q = ee.geometry(e);
-    const bool in[4] = {BoxShape::from(q).overlaps(fb), false, CapsuleRayShape::from(q).overlaps(fb),
-                        CapsuleExactShape::from(q).overlaps(fb)};
-    const bool plain = ee.accept(e, f), leaf = ee_leaf.accept(e, f);
-    for (int mode : {0, 2, 3}) {
-      if (!in[mode]) continue;
-      if (plain) sets.ee[mode][0].push_back({e, f});
-      if (leaf) sets.ee[mode][1].push_back({e, f});
-    }
+    auto add = [&](int mode, auto shape) {
+      if (!decltype(shape)::from(q).overlaps(fb)) return;
+      if (ee.accept<decltype(shape)>(e, f)) sets.ee[mode][0].push_back({e, f});
+      if (ee_leaf.accept<decltype(shape)>(e, f)) sets.ee[mode][1].push_back({e, f});
+    };
+    add(MINKQ_MODE_BOX, BoxShape{});
+    add(MINKQ_MODE_CAPSULE_RAY, CapsuleRayShape{});
+    add(MINKQ_MODE_CAPSULE_EXACT, CapsuleExactShape{});
   };
   collide(device_, edge_queries_.get(), edges_.get(), ee_all);
 

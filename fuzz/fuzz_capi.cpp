@@ -485,7 +485,7 @@ class Session {
     a.kind = k < 5 ? MINKQ_QUERY_VT : k < 10 ? MINKQ_QUERY_EE : (k == 10 ? 2 : -1);
     const int md = gen_.choice(14);
     a.mode = md < 12 ? md % 4 : (md == 12 ? 4 : 99);
-    a.flags = uint32_t(gen_.choice(8)) | (gen_.rarely() ? 8u << gen_.choice(20) : 0u);
+    a.flags = uint32_t(gen_.choice(16)) | (gen_.rarely() ? 16u << gen_.choice(20) : 0u);
     a.r = gen_.radius();
     a.null_desc = gen_.rarely() && gen_.choice(2);
     shim_query_desc(&a.desc, a.kind, a.mode, a.flags, a.r);
@@ -496,7 +496,7 @@ class Session {
       const bool kind_ok = a.kind == MINKQ_QUERY_VT || a.kind == MINKQ_QUERY_EE;
       m.add(!kind_ok, MINKQ_ERROR_INVALID_ARGUMENT, "kind invalid");
       m.add(a.mode < 0 || a.mode > 3, MINKQ_ERROR_INVALID_ARGUMENT, "mode invalid");
-      m.add(a.flags & ~7u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown query flags");
+      m.add(a.flags & ~15u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown query flags");
       if (!null_scene && kind_ok)
         m.add(!(s->flags & (a.kind == MINKQ_QUERY_VT ? MINKQ_SCENE_VT : MINKQ_SCENE_EE)), MINKQ_ERROR_INVALID_ARGUMENT,
               "kind not built");
@@ -572,11 +572,14 @@ class Session {
     Output o = output(needed);
     Misuse m = a.misuse;
     m.merge(o.misuse);
-    minkq_query_info info{12345, 67890};
+    minkq_query_info info{12345, 67890, {1, 2, 3, 4}};
     const minkq_status st = shim_scene_query(null_scene ? nullptr : s->handle, a.null_desc ? nullptr : &a.desc, o.data,
                                              o.capacity, o.memory, o.null_info ? nullptr : &info);
     expect("minkq_scene_query", st, m, needed > o.capacity ? MINKQ_ERROR_CAPACITY : MINKQ_SUCCESS);
     if (st == MINKQ_ERROR_CAPACITY && info.count != needed) failure("CAPACITY: info.count is not the exact count needed");
+    if ((st == MINKQ_SUCCESS || st == MINKQ_ERROR_CAPACITY) &&
+        info.stats.candidates != ((a.flags & MINKQ_QUERY_STATS) ? info.count : 0u))
+      failure("info.stats.candidates is not the count with MINKQ_QUERY_STATS, or not 0 without");
     if (st != MINKQ_SUCCESS) return;
     if (info.count != needed) failure("minkq_scene_query and minkq_scene_query_result disagree on the count");
     check_pairs("minkq_scene_query", o.pairs.data(), info.count, queries_of(*s, a.kind), prims_of(*s, a.kind),
@@ -686,7 +689,7 @@ class Session {
     const int shape = sh < 12 ? sh % 3 : (sh == 12 ? 3 : -2);
     const int md = gen_.choice(14);
     const int mode = md < 12 ? md % 4 : (md == 12 ? -1 : 17);
-    const uint32_t flags = uint32_t(gen_.choice(8)) | (gen_.rarely() ? 16u : 0u);
+    const uint32_t flags = uint32_t(gen_.choice(16)) | (gen_.rarely() ? 32u : 0u);
     const float r = gen_.choice(3) == 0 ? 0.0f : gen_.radius();
     Buffer first = gen_.buffer(12, Fill::kCoordinates, "first", SIZE_MAX, 0, 16);
     Buffer second = shape == MINKQ_SHAPE_SPHERE && gen_.choice(4) != 0
@@ -701,7 +704,7 @@ class Session {
     if (!null_desc) {
       m.add(shape < 0 || shape > 2, MINKQ_ERROR_INVALID_ARGUMENT, "shape invalid");
       m.add(mode < 0 || mode > 3, MINKQ_ERROR_INVALID_ARGUMENT, "mode invalid");
-      m.add(flags & ~7u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flags");
+      m.add(flags & ~15u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flags");
       m.add(flags & MINKQ_QUERY_LEAF_EXACT, MINKQ_ERROR_INVALID_ARGUMENT, "LEAF_EXACT on a bvh");
       m.add(shape == MINKQ_SHAPE_CAPSULE && mode == MINKQ_MODE_SPHERE, MINKQ_ERROR_INVALID_ARGUMENT, "capsule sphere mode");
       m.add(shape == MINKQ_SHAPE_BOX && mode != MINKQ_MODE_BOX, MINKQ_ERROR_INVALID_ARGUMENT, "box query non-box mode");

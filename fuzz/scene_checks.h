@@ -203,8 +203,8 @@ Pairs definition_set(const Queries& queries, int32_t num_queries, const Boxes& b
   Pairs out;
   for (int32_t q = 0; q < num_queries; ++q) {
     const Shape shape = Shape::from(queries.geometry(q));
-    for (int32_t p = 0; p < num_prims; ++p)
-      if (shape.overlaps(boxes(p)) && queries.accept(q, p)) out.push_back({q, p});
+    for (int32_t p = Queries::kOncePerPair ? q + 1 : 0; p < num_prims; ++p)
+      if (shape.overlaps(boxes(p)) && queries.template accept<Shape>(q, p)) out.push_back({q, p});
   }
   return out;
 }
@@ -223,8 +223,10 @@ struct MeshGeometry {
   int32_t nv() const { return int32_t(vertices.size()); }
   int32_t nt() const { return int32_t(triangles.size()); }
   int32_t ne() const { return int32_t(edges.size()); }
-  VertexTriangleQueries vt(float r, uint32_t filters) const { return {vertices.data(), triangles.data(), r, filters}; }
-  EdgeEdgeQueries ee(float r, uint32_t filters) const { return {vertices.data(), edges.data(), r, filters}; }
+  VertexTriangleQueries vt(float r, uint32_t filters) const {
+    return {vertices.data(), triangles.data(), nullptr, r, filters};
+  }
+  EdgeEdgeQueries ee(float r, uint32_t filters) const { return {vertices.data(), edges.data(), nullptr, r, filters}; }
   TriangleBoxes triangle_boxes() const { return {vertices.data(), triangles.data()}; }
   EdgeBoxes edge_boxes() const { return {vertices.data(), edges.data()}; }
 };

@@ -68,6 +68,19 @@ struct Scene {
   }
 };
 
+// Runs a query with MINKQ_QUERY_STATS into a result; returns its work counts.
+inline minkq_query_stats work_of(minkq_scene* scene, minkq_query_kind kind, minkq_mode mode, float r,
+                                 uint32_t flags = 0) {
+  minkq_result* result = nullptr;
+  EXPECT_EQ(minkq_result_create(&result), MINKQ_SUCCESS);
+  const minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_STATS, r};
+  EXPECT_EQ(minkq_scene_query_result(scene, &desc, result), MINKQ_SUCCESS) << minkq_last_error_message();
+  const minkq_query_stats stats = minkq_result_stats(result);
+  EXPECT_EQ(stats.candidates, minkq_result_count(result));
+  minkq_result_release(result);
+  return stats;
+}
+
 inline bool is_subset(const Pairs& small, const Pairs& large) {
   return std::includes(large.begin(), large.end(), small.begin(), small.end());
 }

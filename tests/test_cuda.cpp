@@ -63,6 +63,7 @@ ScenePtr make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags) {
 struct Outcome {
   uint64_t count = 0;
   uint64_t digest = 0;
+  minkq_query_stats stats{};
   std::vector<int32_t> pairs;
 };
 
@@ -79,6 +80,7 @@ Outcome run_exact(Query query) {
   EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
   out.count = info.count;
   out.digest = info.digest;
+  out.stats = info.stats;
   out.pairs.resize(2 * info.count);
   return out;
 }
@@ -118,6 +120,11 @@ void expect_same_pairs(const std::vector<int32_t>& cpu, const std::vector<int32_
 void expect_same(const Outcome& cpu, const Outcome& cuda, const std::string& what) {
   EXPECT_EQ(cpu.count, cuda.count) << what;
   EXPECT_EQ(cpu.digest, cuda.digest) << what;
+  // Work counts depend only on the tree and the queries (zero where not asked for).
+  EXPECT_EQ(cpu.stats.nodes_visited, cuda.stats.nodes_visited) << what;
+  EXPECT_EQ(cpu.stats.node_tests, cuda.stats.node_tests) << what;
+  EXPECT_EQ(cpu.stats.primitive_tests, cuda.stats.primitive_tests) << what;
+  EXPECT_EQ(cpu.stats.candidates, cuda.stats.candidates) << what;
   expect_same_pairs(cpu.pairs, cuda.pairs, what);
 }
 
@@ -137,13 +144,13 @@ const ModeCase kModes[] = {
     {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, "EE capsule_exact"},
 };
 
-// Every mode, with and without the leaf test: identical canonical pairs and digests; the
-// non-canonical CUDA output is the same set in some order.
+// Every mode, with and without the leaf test: identical canonical pairs, digests and work
+// counts; the non-canonical CUDA output is the same set in some order.
 void compare_all_modes(minkq_scene* cpu, minkq_scene* cuda, float r, const std::string& label) {
   for (const ModeCase& m : kModes)
     for (uint32_t leaf : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)}) {
       const std::string what = label + " " + m.name + (leaf ? " leaf_exact" : "") + " r=" + std::to_string(r);
-      const uint32_t flags = leaf | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
+      const uint32_t flags = leaf | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS;
       const Outcome expected = scene_query(cpu, m.kind, m.mode, r, flags);
       expect_same(expected, scene_query(cuda, m.kind, m.mode, r, flags), what);
       const Outcome unordered = scene_query(cuda, m.kind, m.mode, r, leaf);

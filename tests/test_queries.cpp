@@ -42,8 +42,8 @@ Pairs brute_force_definition(const Queries& queries, int32_t num_queries, const 
   Pairs out;
   for (int32_t q = 0; q < num_queries; ++q) {
     const Shape shape = Shape::from(queries.geometry(q));
-    for (int32_t p = 0; p < num_prims; ++p)
-      if (shape.overlaps(boxes(p)) && queries.accept(q, p)) out.push_back({q, p});
+    for (int32_t p = Queries::kOncePerPair ? q + 1 : 0; p < num_prims; ++p)
+      if (shape.overlaps(boxes(p)) && queries.template accept<Shape>(q, p)) out.push_back({q, p});
   }
   return out;
 }
@@ -101,15 +101,15 @@ void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* labe
   if (!check_definition) return;
   const Views views(mesh, edges);
   const uint32_t filters = drop_incident ? kDropIncident : 0u;
-  const VertexTriangleQueries vt{views.vertices.data(), views.triangles.data(), r, filters};
-  const VertexTriangleQueries vt_exact{views.vertices.data(), views.triangles.data(), r, filters | kLeafExact};
+  const VertexTriangleQueries vt{views.vertices.data(), views.triangles.data(), nullptr, r, filters};
+  const VertexTriangleQueries vt_exact{views.vertices.data(), views.triangles.data(), nullptr, r, filters | kLeafExact};
   const TriangleBoxes tri_boxes{views.vertices.data(), views.triangles.data()};
   const int32_t nv = int32_t(views.vertices.size()), nt = int32_t(views.triangles.size());
   EXPECT_EQ(vt_box, brute_force_definition<BoxShape>(vt, nv, tri_boxes, nt));
   EXPECT_EQ(vt_sphere, brute_force_definition<SphereShape>(vt, nv, tri_boxes, nt));
   EXPECT_EQ(vt_leaf, brute_force_definition<SphereShape>(vt_exact, nv, tri_boxes, nt));
-  const EdgeEdgeQueries ee{views.vertices.data(), views.edges.data(), r, filters};
-  const EdgeEdgeQueries ee_exact_q{views.vertices.data(), views.edges.data(), r, filters | kLeafExact};
+  const EdgeEdgeQueries ee{views.vertices.data(), views.edges.data(), nullptr, r, filters};
+  const EdgeEdgeQueries ee_exact_q{views.vertices.data(), views.edges.data(), nullptr, r, filters | kLeafExact};
   const EdgeBoxes edge_boxes{views.vertices.data(), views.edges.data()};
   const int32_t ne = int32_t(views.edges.size());
   EXPECT_EQ(ee_box, brute_force_definition<BoxShape>(ee, ne, edge_boxes, ne));

@@ -68,7 +68,9 @@ class Store {
   // New positions for the same vertices (mesh stores) or boxes (box stores); refits the trees.
   virtual void refit(const Strided& values) = 0;
   // Runs a query; returns the exact pair count and writes the pairs only if they all fit.
-  virtual uint64_t query(const QueryRequest& request, const PairOutput& out) = 0;
+  // With `work`, also counts the traversal's work into it (a separately compiled traversal:
+  // the uncounted one carries no counters).
+  virtual uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) = 0;
 };
 
 class Backend {

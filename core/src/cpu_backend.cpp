@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 
 #include "backend.h"
@@ -32,20 +33,26 @@ namespace {
 
 // Runs every query in fixed blocks, each into its own buffer, then concatenates in block
 // order: the output order is deterministic whatever the thread count.
-template <class Shape, class Queries>
-uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out) {
+template <class Shape, class Queries, class Work>
+uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out,
+                     Work* work) {
   constexpr int32_t kBlock = 256;
   const int32_t blocks = (num_queries + kBlock - 1) / kBlock;
   std::vector<std::vector<int32_t>> parts(static_cast<size_t>(blocks));
+  std::vector<Work> block_work(static_cast<size_t>(blocks));
   tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
     std::vector<int32_t>& part = parts[b];
-    auto emit = [&part](int32_t q, int32_t prim) {
-      part.push_back(q);
-      part.push_back(prim);
+    auto emit = [&part](int32_t first, int32_t second) {
+      part.push_back(first);
+      part.push_back(second);
     };
+    Work local;
     const int32_t end = std::min(num_queries, (b + 1) * kBlock);
-    for (int32_t q = b * kBlock; q < end; ++q) run_query<Shape>(bvh, queries, q, emit);
+    for (int32_t i = b * kBlock; i < end; ++i) run_query<Shape>(bvh, queries, i, emit, local);
+    block_work[b] = local;
   });
+  if constexpr (std::is_same<Work, WorkCounts>::value)
+    for (const WorkCounts& w : block_work) work->add(w);
   uint64_t total = 0;
   for (const auto& part : parts) total += part.size() / 2;
   if (total > out.capacity) return total;
@@ -70,10 +77,16 @@ uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_que
 
 template <class Queries>
 uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView& bvh, const Queries& queries,
-                  int32_t num_queries, const PairOutput& out) {
+                  int32_t num_queries, const PairOutput& out, WorkCounts* work) {
   uint64_t total = 0;
   with_shape(request.mode, point_queries, [&](auto shape) {
-    total = run_queries<decltype(shape)>(bvh, queries, num_queries, out);
+    using Shape = decltype(shape);
+    if (work) {
+      total = run_queries<Shape>(bvh, queries, num_queries, out, work);
+    } else {
+      NoWork* none = nullptr;
+      total = run_queries<Shape>(bvh, queries, num_queries, out, none);
+    }
   });
   return total;
 }
@@ -84,7 +97,11 @@ class CpuMeshStore final : public Store {
                bool edge_tree)
       : vertices_(gather_vec3(vertices)), triangles_(std::move(triangles)), edges_(std::move(edges)),
         has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
-    if (has_triangle_tree_) triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles_.data()}, int32_t(triangles_.size()));
+    if (has_triangle_tree_) {
+      triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles_.data()}, int32_t(triangles_.size()));
+      std::vector<uint64_t> keys;
+      sort_by_morton(PointBoxes{vertices_.data()}, int32_t(vertices_.size()), keys, vertex_order_);
+    }
     if (has_edge_tree_) edge_tree_.build(EdgeBoxes{vertices_.data(), edges_.data()}, int32_t(edges_.size()));
   }
 
@@ -94,19 +111,22 @@ class CpuMeshStore final : public Store {
     if (has_edge_tree_) edge_tree_.refit(EdgeBoxes{vertices_.data(), edges_.data()});
   }
 
-  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+  uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     if (request.kind == QueryKind::kVertexTriangle) {
-      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), request.r, request.filters};
-      return dispatch(request, true, triangle_tree_.view(), queries, int32_t(vertices_.size()), out);
+      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
+                                          request.filters};
+      return dispatch(request, true, triangle_tree_.view(), queries, int32_t(vertices_.size()), out, work);
     }
-    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), request.r, request.filters};
-    return dispatch(request, false, edge_tree_.view(), queries, int32_t(edges_.size()), out);
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree_.sorted_prims().data(), request.r,
+                                  request.filters};
+    return dispatch(request, false, edge_tree_.view(), queries, int32_t(edges_.size()), out, work);
   }
 
  private:
   std::vector<Vec3> vertices_;
   std::vector<Triangle> triangles_;
   std::vector<Edge> edges_;
+  std::vector<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   bool has_triangle_tree_, has_edge_tree_;
   CpuTree triangle_tree_, edge_tree_;
 };
@@ -120,12 +140,12 @@ class CpuBoxStore final : public Store {
     boxes_ = gather_boxes(boxes);
     tree_.refit(GivenBoxes{boxes_.data()});
   }
-  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+  uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     const std::vector<Vec3> first = gather_vec3(request.first);
     const std::vector<Vec3> second = gather_vec3(request.second);
     const UserQueries queries{first.data(), second.empty() ? nullptr : second.data(), request.r};
     return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
-                    int32_t(first.size()), out);
+                    int32_t(first.size()), out, work);
   }
 
  private:

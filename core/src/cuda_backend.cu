@@ -190,6 +190,38 @@ __global__ void refit_kernel(Boxes boxes, int32_t n, const int32_t* leaf_parent,
   if (p < n) refit_from_leaf(int32_t(p), boxes(int32_t(p)), leaf_parent, nodes, arrivals);
 }
 
+// Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id: cpu_tree.h's
+// sort_by_morton on the device.
+template <class Boxes>
+void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<uint64_t>& sorted_keys, DeviceBuffer<int32_t>& sorted_ids) {
+  sorted_keys.ensure(size_t(n));
+  sorted_ids.ensure(size_t(n));
+  if (n == 0) return;
+  // Bounds of the centres: min/max are exact, so the reduction order does not matter.
+  DeviceBuffer<Box> centre_bounds(1);
+  DeviceBuffer<char> temp;
+  size_t bytes = 0;
+  const thrust::counting_iterator<int32_t> ids(0);
+  for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
+    check(cub::DeviceReduce::TransformReduce(pass ? temp.data() : nullptr, bytes, ids, centre_bounds.data(), n,
+                                             BoxUnion{}, CentreBox<Boxes>{boxes}, Box::empty(), kStream),
+          "cub::DeviceReduce::TransformReduce");
+    temp.ensure(bytes);
+  }
+  DeviceBuffer<uint64_t> keys(n);
+  DeviceBuffer<int32_t> order(n);
+  launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, centre_bounds.data(), keys.data(),
+         order.data());
+  // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in
+  // the CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
+  for (int pass = 0; pass < 2; ++pass) {
+    check(cub::DeviceRadixSort::SortPairs(pass ? temp.data() : nullptr, bytes, keys.data(), sorted_keys.data(),
+                                          order.data(), sorted_ids.data(), n, 0, 63, kStream),
+          "cub::DeviceRadixSort::SortPairs");
+    temp.ensure(bytes);
+  }
+}
+
 // CpuTree::build step by step; the arrays start zeroed as the CPU's value-initialised vectors.
 class CudaTree {
  public:
@@ -200,43 +232,25 @@ class CudaTree {
     nodes_.ensure(num_nodes);
     leaf_parent_.ensure(size_t(n));
     arrivals_.ensure(num_nodes);
+    sorted_prims_.ensure(size_t(n));
     zero(nodes_, num_nodes);
     zero(leaf_parent_, size_t(n));
+    zero(sorted_prims_, size_t(n));
     if (n == 0) return;
     if (n == 1) {
       BvhNode root{};
       root.left = ~0;
       root.right = kNoChild;
       root.parent = -1;
+      root.split = 0;
       copy(nodes_.data(), &root, sizeof(root), cudaMemcpyHostToDevice);
       refit(boxes);
       return;
     }
-    // Bounds of the centres: min/max are exact, so the reduction order does not matter.
-    DeviceBuffer<Box> centre_bounds(1);
-    DeviceBuffer<char> temp;
-    size_t bytes = 0;
-    const thrust::counting_iterator<int32_t> ids(0);
-    for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
-      check(cub::DeviceReduce::TransformReduce(pass ? temp.data() : nullptr, bytes, ids, centre_bounds.data(), n,
-                                               BoxUnion{}, CentreBox<Boxes>{boxes}, Box::empty(), kStream),
-            "cub::DeviceReduce::TransformReduce");
-      temp.ensure(bytes);
-    }
-    DeviceBuffer<uint64_t> keys(n), sorted_keys(n);
-    DeviceBuffer<int32_t> order(n), sorted_prims(n);
-    launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, centre_bounds.data(), keys.data(),
-           order.data());
-    // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in
-    // the CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
-    for (int pass = 0; pass < 2; ++pass) {
-      check(cub::DeviceRadixSort::SortPairs(pass ? temp.data() : nullptr, bytes, keys.data(), sorted_keys.data(),
-                                            order.data(), sorted_prims.data(), n, 0, 63, kStream),
-            "cub::DeviceRadixSort::SortPairs");
-      temp.ensure(bytes);
-    }
+    DeviceBuffer<uint64_t> sorted_keys;
+    sort_by_morton(boxes, n, sorted_keys, sorted_prims_);
     launch("internal_node_kernel launch", internal_node_kernel, n - 1, kThreads, sorted_keys.data(),
-           sorted_prims.data(), n, nodes_.data(), leaf_parent_.data());
+           sorted_prims_.data(), n, nodes_.data(), leaf_parent_.data());
     refit(boxes);
   }
 
@@ -248,12 +262,14 @@ class CudaTree {
   }
 
   BvhView view() const { return {nodes_.data(), n_}; }
+  const int32_t* sorted_prims() const { return sorted_prims_.data(); }
 
  private:
   int32_t n_ = 0;
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> leaf_parent_;
   DeviceBuffer<int32_t> arrivals_;
+  DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
 };
 
 // ---- Queries --------------------------------------------------------------------------------
@@ -265,15 +281,14 @@ struct PairSlots {
   unsigned long long* count;
 };
 
-// emit() of one query's thread: buffers up to kFlush primitives and reserves their slots with
-// one atomicAdd, far fewer atomics than one per pair on dense scenes.
+// emit() of one query's thread: buffers up to kFlush pairs and reserves their slots with one
+// atomicAdd, far fewer atomics than one per pair on dense scenes.
 class PairBuffer {
  public:
   static constexpr int kFlush = 16;
   __device__ explicit PairBuffer(const PairSlots& slots) : slots_(slots) {}
-  __device__ void operator()(int32_t q, int32_t prim) {
-    q_ = q;  // the same for every pair of a thread
-    prims_[n_++] = prim;
+  __device__ void operator()(int32_t first, int32_t second) {
+    pairs_[n_++] = make_int2(first, second);
     if (n_ == kFlush) flush();
   }
   __device__ void flush() {
@@ -282,27 +297,45 @@ class PairBuffer {
     for (int k = 0; k < n_; ++k) {
       const unsigned long long slot = first + k;
       if (slot >= slots_.capacity) break;
-      slots_.pairs[2 * slot] = q_;
-      slots_.pairs[2 * slot + 1] = prims_[k];
+      slots_.pairs[2 * slot] = pairs_[k].x;
+      slots_.pairs[2 * slot + 1] = pairs_[k].y;
     }
     n_ = 0;
   }
 
  private:
   PairSlots slots_;
-  int32_t q_ = 0;
   int n_ = 0;
-  int32_t prims_[kFlush];
+  int2 pairs_[kFlush];
 };
 
-template <class Shape, class Queries>
+__device__ unsigned long long warp_sum(unsigned long long x) {
+  for (int offset = 16; offset > 0; offset /= 2) x += __shfl_down_sync(0xffffffffu, x, offset);
+  return x;
+}
+
+// Adds each thread's counts into work[0..3] (one atomic per warp and counter).
+__device__ void add_work(const WorkCounts& w, unsigned long long* work) {
+  const unsigned long long counts[4] = {w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates};
+  for (int k = 0; k < 4; ++k) {
+    const unsigned long long sum = warp_sum(counts[k]);
+    if ((threadIdx.x & 31) == 0 && sum) atomicAdd(&work[k], sum);
+  }
+}
+
+// One thread per query. With WorkCounts, every thread of the block stays to the end so that
+// whole warps take part in the reduction of the counts.
+template <class Shape, class Queries, class Work>
 __global__ void __launch_bounds__(kQueryThreads) query_kernel(BvhView bvh, Queries queries, int32_t num_queries,
-                                                              PairSlots slots) {
-  const int64_t q = global_index();
-  if (q >= num_queries) return;
-  PairBuffer emit(slots);
-  run_query<Shape>(bvh, queries, int32_t(q), emit);
-  emit.flush();
+                                                              PairSlots slots, unsigned long long* work_out) {
+  const int64_t i = global_index();
+  Work work;
+  if (i < num_queries) {
+    PairBuffer emit(slots);
+    run_query<Shape>(bvh, queries, int32_t(i), emit, work);
+    emit.flush();
+  }
+  if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, work_out);
 }
 
 __global__ void pack_pairs_kernel(const int32_t* pairs, int64_t n, uint64_t* keys) {
@@ -320,6 +353,7 @@ __global__ void unpack_pairs_kernel(const uint64_t* keys, int64_t n, int32_t* pa
 // Device scratch a store keeps between queries, grown as needed.
 struct QueryWorkspace {
   DeviceBuffer<unsigned long long> count;
+  DeviceBuffer<unsigned long long> work;  // WorkCounts' four counters
   DeviceBuffer<int32_t> pairs;  // host output: pairs are collected here first
   DeviceBuffer<uint64_t> keys, sorted_keys;
   DeviceBuffer<char> temp;
@@ -344,9 +378,9 @@ void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWorkspace& 
   launch("unpack_pairs_kernel launch", unpack_pairs_kernel, n, kThreads, ws.sorted_keys.data(), n, pairs);
 }
 
-template <class Shape, class Queries>
+template <class Shape, class Queries, class Work>
 uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out,
-                     QueryWorkspace& ws) {
+                     QueryWorkspace& ws, WorkCounts* work) {
   const bool to_host = out.memory == Memory::kHost;
   // Host output goes through device scratch: first sized by a guess, then rerun at the exact
   // count if the guess was short but the caller's buffer is not.
@@ -354,20 +388,27 @@ uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_que
   if (to_host)
     capacity = std::min<uint64_t>(out.capacity, std::max<uint64_t>(ws.pairs.size() / 2, 8 * uint64_t(num_queries) + 65536));
   ws.count.ensure(1);
+  ws.work.ensure(4);
   uint64_t total = 0;
   for (int attempt = 0; attempt < 2; ++attempt) {
     if (to_host) ws.pairs.ensure(2 * size_t(capacity));
     int32_t* const pairs = to_host ? ws.pairs.data() : out.pairs;
     zero(ws.count, 1);
-    launch("query_kernel launch", query_kernel<Shape, Queries>, num_queries, kQueryThreads, bvh, queries,
-           num_queries, PairSlots{pairs, capacity, ws.count.data()});
+    zero(ws.work, 4);
+    launch("query_kernel launch", query_kernel<Shape, Queries, Work>, num_queries, kQueryThreads, bvh, queries,
+           num_queries, PairSlots{pairs, capacity, ws.count.data()}, ws.work.data());
     unsigned long long count = 0;
     copy(&count, ws.count.data(), sizeof(count), cudaMemcpyDeviceToHost);
     total = count;
-    if (total > out.capacity) return total;  // the caller learns the exact count; nothing copied
-    if (total <= capacity) break;
+    if (total > out.capacity || total <= capacity) break;  // too many for the caller, or done
     capacity = total;
   }
+  if (work) {  // the last run's counts: a rerun repeats the same work
+    unsigned long long counts[4];
+    copy(counts, ws.work.data(), sizeof(counts), cudaMemcpyDeviceToHost);
+    work->add(WorkCounts{counts[0], counts[1], counts[2], counts[3]});
+  }
+  if (total > out.capacity) return total;  // the caller learns the exact count; nothing copied
   if (total > capacity) fail(Status::kInternal, "pair count changed between two runs of the same query");
   int32_t* const pairs = to_host ? ws.pairs.data() : out.pairs;
   if (out.canonical) sort_pairs(pairs, int64_t(total), num_queries, ws);
@@ -378,10 +419,12 @@ uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_que
 
 template <class Queries>
 uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView& bvh, const Queries& queries,
-                  int32_t num_queries, const PairOutput& out, QueryWorkspace& ws) {
+                  int32_t num_queries, const PairOutput& out, QueryWorkspace& ws, WorkCounts* work) {
   uint64_t total = 0;
   with_shape(request.mode, point_queries, [&](auto shape) {
-    total = run_queries<decltype(shape)>(bvh, queries, num_queries, out, ws);
+    using Shape = decltype(shape);
+    if (work) total = run_queries<Shape, Queries, WorkCounts>(bvh, queries, num_queries, out, ws, work);
+    else total = run_queries<Shape, Queries, NoWork>(bvh, queries, num_queries, out, ws, nullptr);
   });
   return total;
 }
@@ -409,7 +452,11 @@ class CudaMeshStore final : public CudaStore {
     num_edges_ = int32_t(edges.size());
     upload(triangles_, triangles.data(), triangles.size());
     upload(edges_, edges.data(), edges.size());
-    if (has_triangle_tree_) triangle_tree_.build(triangle_boxes(), num_triangles_);
+    if (has_triangle_tree_) {
+      triangle_tree_.build(triangle_boxes(), num_triangles_);
+      DeviceBuffer<uint64_t> keys;
+      sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, keys, vertex_order_);
+    }
     if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
     finish();
   }
@@ -423,14 +470,16 @@ class CudaMeshStore final : public CudaStore {
     finish();
   }
 
-  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+  uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     use_device(ordinal_);
     if (request.kind == QueryKind::kVertexTriangle) {
-      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), request.r, request.filters};
-      return dispatch(request, true, triangle_tree_.view(), queries, num_vertices_, out, ws_);
+      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
+                                          request.filters};
+      return dispatch(request, true, triangle_tree_.view(), queries, num_vertices_, out, ws_, work);
     }
-    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), request.r, request.filters};
-    return dispatch(request, false, edge_tree_.view(), queries, num_edges_, out, ws_);
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree_.sorted_prims(), request.r,
+                                  request.filters};
+    return dispatch(request, false, edge_tree_.view(), queries, num_edges_, out, ws_, work);
   }
 
  private:
@@ -440,6 +489,7 @@ class CudaMeshStore final : public CudaStore {
   DeviceBuffer<Vec3> vertices_;
   DeviceBuffer<Triangle> triangles_;
   DeviceBuffer<Edge> edges_;
+  DeviceBuffer<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   int32_t num_vertices_ = 0, num_triangles_ = 0, num_edges_ = 0;
   bool has_triangle_tree_, has_edge_tree_;
   CudaTree triangle_tree_, edge_tree_;
@@ -462,14 +512,14 @@ class CudaBoxStore final : public CudaStore {
     finish();
   }
 
-  uint64_t query(const QueryRequest& request, const PairOutput& out) override {
+  uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     use_device(ordinal_);
     DeviceBuffer<Vec3> first, second;
     gather_to_device(request.first, first);
     gather_to_device(request.second, second);
     const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
     return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
-                    int32_t(request.first.count), out, ws_);
+                    int32_t(request.first.count), out, ws_, work);
   }
 
  private:

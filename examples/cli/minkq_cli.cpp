@@ -30,7 +30,7 @@ commands:
       F x mean edge length (default 0.25). Runs VT and EE queries in every mode, compares them
       with the double-precision reference oracle and prints candidates, true contacts,
       false-positive ratio, false negatives, query time (median of 3) and speedup over box.
-  query MESH --radius R [--mode M] [--backend B] [--out PREFIX]
+  query MESH --radius R [--mode M] [--backend B] [--out PREFIX] [--stats]
       Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) in mode M:
         box            r-padded boxes
         sphere         VT sphere, EE capsule_exact (the exact Minkowski node test of each)
@@ -39,7 +39,9 @@ commands:
         leaf_exact     capsule_exact plus the primitive distance at the leaves (default)
       Prints "vt candidates N digest HEX" and "ee candidates N digest HEX" (xxHash64 of the
       canonical pairs). --out writes PREFIX.vt.bin and PREFIX.ee.bin: little-endian int32
-      (a, b) pairs in canonical order.
+      (a, b) pairs in canonical order. --stats adds a line of work counts per kind: internal
+      nodes visited, node-shape tests, primitive tests and candidates (MINKQ_QUERY_STATS;
+      the same on every backend).
   version
       Library, ABI and header versions, and the number of CUDA devices.
 
@@ -69,16 +71,23 @@ using Device = std::unique_ptr<minkq_device, Release>;
 using Scene = std::unique_ptr<minkq_scene, Release>;
 using Result = std::unique_ptr<minkq_result, Release>;
 
-// "--name value" or "--name=value" options after the positional arguments.
+// "--name value" or "--name=value" options, and "--name" switches, after the positional
+// arguments.
 struct Args {
   std::vector<std::string> positional;
   std::vector<std::pair<std::string, std::string>> options;
+  std::vector<std::string> switches_set;
 
-  Args(int argc, char** argv, int first, const std::vector<std::string>& known) {
+  Args(int argc, char** argv, int first, const std::vector<std::string>& known,
+       const std::vector<std::string>& switches = {}) {
     for (int i = first; i < argc; ++i) {
       std::string a = argv[i];
       if (a.rfind("--", 0) != 0) {
         positional.push_back(a);
+        continue;
+      }
+      if (std::find(switches.begin(), switches.end(), a) != switches.end()) {
+        switches_set.push_back(a);
         continue;
       }
       std::string value;
@@ -92,6 +101,9 @@ struct Args {
       if (std::find(known.begin(), known.end(), a) == known.end()) throw UsageError("unknown option " + a);
       options.emplace_back(a, value);
     }
+  }
+  bool has(const std::string& name) const {
+    return std::find(switches_set.begin(), switches_set.end(), name) != switches_set.end();
   }
   const std::string* get(const std::string& name) const {
     const std::string* v = nullptr;
@@ -258,7 +270,7 @@ int query(const Args& args) {
 
   // (VT mode, EE mode, flags) for each name; see the usage text.
   minkq_mode vt_mode, ee_mode;
-  uint32_t flags = MINKQ_QUERY_DIGEST;
+  uint32_t flags = MINKQ_QUERY_DIGEST | (args.has("--stats") ? uint32_t(MINKQ_QUERY_STATS) : 0u);
   if (mode == "box") {
     vt_mode = ee_mode = MINKQ_MODE_BOX;
   } else if (mode == "sphere" || mode == "capsule_exact") {
@@ -283,6 +295,11 @@ int query(const Args& args) {
     check(minkq_scene_query_result(scene.get(), &q, result.get()), "minkq_scene_query_result");
     std::printf("%s candidates %" PRIu64 " digest %016" PRIx64 "\n", name, minkq_result_count(result.get()),
                 minkq_result_digest(result.get()));
+    if (flags & MINKQ_QUERY_STATS) {
+      const minkq_query_stats w = minkq_result_stats(result.get());
+      std::printf("%s work nodes_visited %" PRIu64 " node_tests %" PRIu64 " primitive_tests %" PRIu64
+                  " candidates %" PRIu64 "\n", name, w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates);
+    }
     if (out) write_pairs(*out + "." + name + ".bin", result.get());
   }
   return 0;
@@ -307,7 +324,8 @@ int main(int argc, char** argv) {
     }
     if (command == "version" || command == "--version") return version();
     if (command == "demo") return demo(Args(argc, argv, 2, {"--backend", "--size", "--radius-factor"}));
-    if (command == "query") return query(Args(argc, argv, 2, {"--radius", "--mode", "--backend", "--out"}));
+    if (command == "query")
+      return query(Args(argc, argv, 2, {"--radius", "--mode", "--backend", "--out"}, {"--stats"}));
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "minkq: %s\n(run 'minkq --help' for usage)\n", e.what());

@@ -8,13 +8,15 @@ namespace minkq {
 
 // One internal node in 64 bytes: both children's boxes travel together, so a visit reads one
 // record. Child >= 0: internal node index; child < 0: leaf holding primitive ~child.
+// A node covers the sorted leaf positions [first, last]; its left child covers [first, split]
+// and its right child [split + 1, last] (Karras), which lets a self-query skip the left child.
 struct BvhNode {
   Box left_box;
   Box right_box;
   int32_t left;
   int32_t right;   // kNoChild in the single root of a one-primitive tree
   int32_t parent;  // (parent index << 1) | side, -1 for the root
-  int32_t unused;
+  int32_t split;   // last sorted leaf position under the left child
 };
 static_assert(sizeof(BvhNode) == 64, "node record must stay one 64-byte line");
 
@@ -107,6 +109,7 @@ MINKQ_HD void build_internal_node(int32_t i, const uint64_t* keys, const int32_t
   const int32_t split = int32_t(i + s * dir + (dir < 0 ? -1 : 0));
   const int32_t first = i < j ? i : j, last = i < j ? j : i;
   BvhNode& node = nodes[i];
+  node.split = split;
   if (first == split) {
     node.left = ~sorted_prims[split];
     leaf_parent[sorted_prims[split]] = i << 1;
@@ -170,29 +173,64 @@ MINKQ_HD void refit_from_leaf(int32_t prim, const Box& box, const int32_t* leaf_
 
 // ---- Traversal ---------------------------------------------------------------------------------
 
+// Work of a traversal, counted when asked for (WorkCounts) and compiled out when not (NoWork).
+// The counts depend only on the tree and the queries, so they are equal on every backend.
+struct WorkCounts {
+  uint64_t nodes_visited = 0;    // internal node records read
+  uint64_t node_tests = 0;       // child boxes tested against the query shape
+  uint64_t primitive_tests = 0;  // primitives whose box passed, handed to the leaf filter
+  uint64_t candidates = 0;       // pairs emitted
+  MINKQ_HD void visit_node() { ++nodes_visited; }
+  MINKQ_HD void test_node() { ++node_tests; }
+  MINKQ_HD void test_primitive() { ++primitive_tests; }
+  MINKQ_HD void emit_candidate() { ++candidates; }
+  MINKQ_HD void add(const WorkCounts& o) {
+    nodes_visited += o.nodes_visited;
+    node_tests += o.node_tests;
+    primitive_tests += o.primitive_tests;
+    candidates += o.candidates;
+  }
+};
+struct NoWork {
+  MINKQ_HD void visit_node() {}
+  MINKQ_HD void test_node() {}
+  MINKQ_HD void test_primitive() {}
+  MINKQ_HD void emit_candidate() {}
+};
+
 // The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim) is called
 // for every primitive whose box the shape overlaps, provided the test also accepts every
 // ancestor box (monotone under box inclusion: true of each shape here; tests/test_queries.cpp
-// checks traversal against the test applied to every primitive).
-template <class Shape, class OnLeaf>
-MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, OnLeaf& on_leaf) {
-  if (bvh.num_prims <= 0) return;
+// checks traversal against the test applied to every primitive). Only leaves at sorted
+// positions after `after` are reached: a self-query from the leaf at position i passes i and
+// meets each pair once; other queries pass -1. A node is entered only when its last position
+// is past `after` (the root: n - 1 > after), so only the left child (last = split) can fail.
+template <class Shape, class OnLeaf, class Work>
+MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
+  if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
   int32_t stack[kTraversalStack];
   int sp = 0;
   int32_t node = 0;
   while (true) {
     const BvhNode& n = bvh.nodes[node];
+    work.visit_node();
     int32_t next = -1;
-    if (shape.overlaps(n.left_box)) {
-      if (n.left < 0) on_leaf(~n.left); else next = n.left;
+    if (n.split > after) {
+      work.test_node();
+      if (shape.overlaps(n.left_box)) {
+        if (n.left < 0) on_leaf(~n.left); else next = n.left;
+      }
     }
-    if (n.right != kNoChild && shape.overlaps(n.right_box)) {
-      if (n.right < 0) {
-        on_leaf(~n.right);
-      } else if (next < 0) {
-        next = n.right;
-      } else {
-        stack[sp++] = n.right;
+    if (n.right != kNoChild) {
+      work.test_node();
+      if (shape.overlaps(n.right_box)) {
+        if (n.right < 0) {
+          on_leaf(~n.right);
+        } else if (next < 0) {
+          next = n.right;
+        } else {
+          stack[sp++] = n.right;
+        }
       }
     }
     if (next >= 0) { node = next; continue; }

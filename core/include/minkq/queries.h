@@ -1,6 +1,6 @@
 // Query sources: where query q's geometry comes from, which primitive boxes a tree holds, and
 // which (query, primitive) pairs the leaf filter keeps. run_query ties a source to a shape
-// and to the one traversal; backends call it per query and supply only emit(q, prim).
+// and to the one traversal; backends call it per query and supply only emit(first, second).
 #pragma once
 
 #include "minkq/bvh.h"
@@ -36,19 +36,39 @@ struct EdgeBoxes {
     return box_expand(Box::of_point(vertices[edge.v[0]]), vertices[edge.v[1]]);
   }
 };
+struct PointBoxes {
+  const Vec3* points;
+  MINKQ_HD Box operator()(int32_t i) const { return Box::of_point(points[i]); }
+};
 struct GivenBoxes {
   const Box* boxes;
   MINKQ_HD Box operator()(int32_t i) const { return boxes[i]; }
 };
 
 // ---- Query sources ---------------------------------------------------------------------------
-// Vertex v against the triangle tree; pairs (v, t).
+// Query i of a batch: the element that asks, and the sorted leaf position its leaves must lie
+// after (-1: any leaf; see traverse()).
+struct QueryTarget {
+  int32_t q;
+  int32_t after;
+};
+struct Pair {
+  int32_t first, second;
+};
+
+// Vertex v against the triangle tree; pairs (v, t). Queries run in `order` when given (the
+// vertices' Morton order: neighbouring queries then walk the same nodes).
 struct VertexTriangleQueries {
   const Vec3* vertices;
   const Triangle* triangles;
+  const int32_t* order;  // or nullptr: vertex i is query i
   float r;
   uint32_t filters;
+  static constexpr bool kOncePerPair = false;
+  MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], r}; }
+  // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
+  template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
     const Triangle tri = triangles[t];
     if ((filters & kDropIncident) && (tri.v[0] == v || tri.v[1] == v || tri.v[2] == v)) return false;
@@ -56,27 +76,39 @@ struct VertexTriangleQueries {
       return point_triangle_within(vertices[v], vertices[tri.v[0]], vertices[tri.v[1]], vertices[tri.v[2]], r);
     return true;
   }
+  MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
 };
 
-// Edge e against the edge tree; each unordered pair once, as (e, f) with e < f.
+// The edge tree against itself, query i being the edge at sorted leaf position i: it reaches
+// only the leaves after it, so each unordered pair is met once and reported as (e, f), e < f.
+// The pair is met from whichever edge comes first in leaf order; the leaf filter also applies
+// the node test the other way round, so the candidate set does not depend on that order:
+// {e, f} is a candidate when Shape(e) overlaps box(f) and Shape(f) overlaps box(e).
 struct EdgeEdgeQueries {
   const Vec3* vertices;
   const Edge* edges;
+  const int32_t* sorted_edges;  // the edge tree's leaf order
   float r;
   uint32_t filters;
+  static constexpr bool kOncePerPair = true;  // a candidate set defined on pairs e < f
+  MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], r};
   }
+  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box.
+  template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
-    if (f <= e) return false;
     const Edge a = edges[e], b = edges[f];
     if ((filters & kDropIncident) &&
         (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
       return false;
-    if (filters & kLeafExact)
-      return segment_segment_within(vertices[a.v[0]], vertices[a.v[1]], vertices[b.v[0]], vertices[b.v[1]], r);
-    return true;
+    if (!Shape::from(geometry(f)).overlaps(EdgeBoxes{vertices, edges}(e))) return false;
+    if (!(filters & kLeafExact)) return true;
+    // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
+    const Edge lo = e < f ? a : b, hi = e < f ? b : a;
+    return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], r);
   }
+  MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
 };
 
 // User queries against a tree of user boxes: spheres (p1 == nullptr), capsules, or boxes
@@ -85,17 +117,27 @@ struct UserQueries {
   const Vec3* p0;
   const Vec3* p1;
   float r;
+  static constexpr bool kOncePerPair = false;
+  MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
+  template <class Shape>
   MINKQ_HD bool accept(int32_t, int32_t) const { return true; }
+  MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
 
-template <class Shape, class Queries, class Emit>
-MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t q, Emit& emit) {
-  const Shape shape = Shape::from(queries.geometry(q));
+// Query i of the batch: emit(first, second) for each pair it finds; work counts (or not).
+template <class Shape, class Queries, class Emit, class Work>
+MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
+  const QueryTarget target = queries.target(i);
+  const Shape shape = Shape::from(queries.geometry(target.q));
   auto on_leaf = [&](int32_t prim) {
-    if (queries.accept(q, prim)) emit(q, prim);
+    work.test_primitive();
+    if (!queries.template accept<Shape>(target.q, prim)) return;
+    work.emit_candidate();
+    const Pair pair = queries.pair(target.q, prim);
+    emit(pair.first, pair.second);
   };
-  traverse(bvh, shape, on_leaf);
+  traverse(bvh, shape, target.after, on_leaf, work);
 }
 
 }  // namespace minkq

@@ -3,7 +3,7 @@
 pub const MINKQ_VERSION_MAJOR: u32 = 0;
 pub const MINKQ_VERSION_MINOR: u32 = 1;
 pub const MINKQ_VERSION_PATCH: u32 = 0;
-pub const MINKQ_ABI_VERSION: u32 = 1;
+pub const MINKQ_ABI_VERSION: u32 = 2;
 pub type __int32_t = ::std::os::raw::c_int;
 pub type __uint32_t = ::std::os::raw::c_uint;
 pub type __uint64_t = ::std::os::raw::c_ulong;
@@ -228,6 +228,7 @@ pub type minkq_mode = ::std::os::raw::c_uint;
 pub const MINKQ_QUERY_LEAF_EXACT: minkq_query_flags = 1;
 pub const MINKQ_QUERY_CANONICAL: minkq_query_flags = 2;
 pub const MINKQ_QUERY_DIGEST: minkq_query_flags = 4;
+pub const MINKQ_QUERY_STATS: minkq_query_flags = 8;
 pub type minkq_query_flags = ::std::os::raw::c_uint;
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
@@ -296,13 +297,83 @@ fn bindgen_test_layout_minkq_query_desc() {
 }
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
+pub struct minkq_query_stats {
+    pub nodes_visited: u64,
+    pub node_tests: u64,
+    pub primitive_tests: u64,
+    pub candidates: u64,
+}
+#[test]
+fn bindgen_test_layout_minkq_query_stats() {
+    assert_eq!(
+        ::std::mem::size_of::<minkq_query_stats>(),
+        32usize,
+        concat!("Size of: ", stringify!(minkq_query_stats))
+    );
+    assert_eq!(
+        ::std::mem::align_of::<minkq_query_stats>(),
+        8usize,
+        concat!("Alignment of ", stringify!(minkq_query_stats))
+    );
+    fn test_field_nodes_visited() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_query_stats>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).nodes_visited) as usize - ptr as usize
+            },
+            0usize,
+            concat!("Offset of field: ", stringify!(minkq_query_stats), "::", stringify!(nodes_visited))
+        );
+    }
+    test_field_nodes_visited();
+    fn test_field_node_tests() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_query_stats>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).node_tests) as usize - ptr as usize
+            },
+            8usize,
+            concat!("Offset of field: ", stringify!(minkq_query_stats), "::", stringify!(node_tests))
+        );
+    }
+    test_field_node_tests();
+    fn test_field_primitive_tests() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_query_stats>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).primitive_tests) as usize - ptr as usize
+            },
+            16usize,
+            concat!("Offset of field: ", stringify!(minkq_query_stats), "::", stringify!(primitive_tests))
+        );
+    }
+    test_field_primitive_tests();
+    fn test_field_candidates() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_query_stats>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).candidates) as usize - ptr as usize
+            },
+            24usize,
+            concat!("Offset of field: ", stringify!(minkq_query_stats), "::", stringify!(candidates))
+        );
+    }
+    test_field_candidates();
+}
+#[repr(C)]
+#[derive(Debug, Copy, Clone)]
 pub struct minkq_query_info {
     pub count: u64,
     pub digest: u64,
+    pub stats: minkq_query_stats,
 }
 #[test]
 fn bindgen_test_layout_minkq_query_info() {
-    assert_eq!(::std::mem::size_of::<minkq_query_info>(), 16usize, concat!("Size of: ", stringify!(minkq_query_info)));
+    assert_eq!(::std::mem::size_of::<minkq_query_info>(), 48usize, concat!("Size of: ", stringify!(minkq_query_info)));
     assert_eq!(
         ::std::mem::align_of::<minkq_query_info>(),
         8usize,
@@ -332,6 +403,18 @@ fn bindgen_test_layout_minkq_query_info() {
         );
     }
     test_field_digest();
+    fn test_field_stats() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_query_info>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).stats) as usize - ptr as usize
+            },
+            16usize,
+            concat!("Offset of field: ", stringify!(minkq_query_info), "::", stringify!(stats))
+        );
+    }
+    test_field_stats();
 }
 extern "C" {
     pub fn minkq_scene_query(
@@ -369,6 +452,9 @@ extern "C" {
 }
 extern "C" {
     pub fn minkq_result_digest(result: *const minkq_result) -> u64;
+}
+extern "C" {
+    pub fn minkq_result_stats(result: *const minkq_result) -> minkq_query_stats;
 }
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]

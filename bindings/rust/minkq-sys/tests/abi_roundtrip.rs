@@ -299,6 +299,7 @@ fn rust_declarations_match_the_c_header() {
         "SAME_FIELD(minkq_scene_desc, edges)",
         "SAME_FIELD(minkq_query_desc, radius)",
         "SAME_FIELD(minkq_query_info, digest)",
+        "SAME_FIELD(minkq_query_stats, candidates)",
         "SAME_FIELD(minkq_bvh_query_desc, second)",
         "SAME_LAYOUT(minkq_status)",
         "SAME_VALUE(MINKQ_ERROR_INTERNAL)",

@@ -277,7 +277,7 @@ impl Bvh {
 
     fn query_raw(&self, query: &BvhQuery<'_>, pairs: *mut i32, capacity: usize) -> Result<QueryInfo> {
         let desc = query.raw();
-        let mut info = sys::minkq_query_info { count: 0, digest: 0 };
+        let mut info = QueryInfo::raw();
         // SAFETY: the description's buffers view live slices; `pairs` holds 2 * capacity int32.
         let status = unsafe {
             sys::minkq_bvh_query(self.raw.as_ptr(), &desc, pairs, capacity, sys::MINKQ_MEMORY_HOST, &mut info)

@@ -67,7 +67,7 @@ pub use bvh::{Aabb, Bvh, BvhQuery, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
 pub use pairs::PairBuffer;
-pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, SceneFlags};
+pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, SceneFlags, WorkStats};
 pub use scene::{Scene, SceneDesc};
 
 /// The ABI version this crate was generated against (`MINKQ_ABI_VERSION`).

@@ -228,6 +228,9 @@ flags! {
         CANONICAL = sys::MINKQ_QUERY_CANONICAL;
         /// xxHash64 (seed 0) of the canonical little-endian int32 pairs; implies `CANONICAL`.
         DIGEST = sys::MINKQ_QUERY_DIGEST;
+        /// Count the traversal's work into [`QueryInfo::stats`] (a separately compiled
+        /// traversal: without the flag the counters cost nothing).
+        STATS = sys::MINKQ_QUERY_STATS;
     }
 }
 
@@ -324,10 +327,55 @@ pub struct QueryInfo {
     pub count: u64,
     /// With [`QueryFlags::DIGEST`]: xxHash64 (seed 0) of the canonical little-endian pairs.
     pub digest: Option<u64>,
+    /// With [`QueryFlags::STATS`]: the work the query did.
+    pub stats: Option<WorkStats>,
+}
+
+/// The work of one query call (`minkq_query_stats`), asked for with [`QueryFlags::STATS`].
+/// The counts depend only on the tree and the queries: CPU and CUDA report the same numbers.
+///
+/// ```
+/// use minkq::{Device, Mode, Query, QueryFlags, Scene, SceneDesc};
+/// let device = Device::cpu()?;
+/// let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.2, 0.2, 0.1]];
+/// let scene = Scene::new(&device, &SceneDesc::new(&vertices, &[[0, 1, 2]]))?;
+/// let mut pairs = Vec::new();
+/// let info = scene.query_vec(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::STATS), &mut pairs)?;
+/// let stats = info.stats.unwrap();
+/// assert_eq!(stats.candidates, info.count);
+/// assert!(stats.primitive_tests >= stats.candidates);
+/// # Ok::<(), minkq::Error>(())
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WorkStats {
+    /// Internal node records read.
+    pub nodes_visited: u64,
+    /// Child boxes tested against a query shape.
+    pub node_tests: u64,
+    /// Primitives whose box passed, handed to the leaf filter.
+    pub primitive_tests: u64,
+    /// Pairs emitted: equal to the pair count.
+    pub candidates: u64,
 }
 
 impl QueryInfo {
     pub(crate) fn from_raw(info: &sys::minkq_query_info, flags: QueryFlags) -> QueryInfo {
-        QueryInfo { count: info.count, digest: flags.contains(QueryFlags::DIGEST).then_some(info.digest) }
+        let s = &info.stats;
+        QueryInfo {
+            count: info.count,
+            digest: flags.contains(QueryFlags::DIGEST).then_some(info.digest),
+            stats: flags.contains(QueryFlags::STATS).then_some(WorkStats {
+                nodes_visited: s.nodes_visited,
+                node_tests: s.node_tests,
+                primitive_tests: s.primitive_tests,
+                candidates: s.candidates,
+            }),
+        }
+    }
+
+    /// A zeroed `minkq_query_info` for the C API to fill.
+    pub(crate) fn raw() -> sys::minkq_query_info {
+        let stats = sys::minkq_query_stats { nodes_visited: 0, node_tests: 0, primitive_tests: 0, candidates: 0 };
+        sys::minkq_query_info { count: 0, digest: 0, stats }
     }
 }

@@ -304,7 +304,7 @@ impl Scene {
 
     fn query_raw(&self, query: &Query, pairs: *mut i32, capacity: usize) -> Result<QueryInfo> {
         let desc = query.raw();
-        let mut info = sys::minkq_query_info { count: 0, digest: 0 };
+        let mut info = QueryInfo::raw();
         // SAFETY: `pairs` holds 2 * capacity int32 of host memory.
         let status = unsafe {
             sys::minkq_scene_query(self.raw.as_ptr(), &desc, pairs, capacity, sys::MINKQ_MEMORY_HOST, &mut info)
