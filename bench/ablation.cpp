@@ -1,0 +1,181 @@
+// minkq_ablation: what each traversal habit of issue 8 buys, measured in one run on the same
+// trees: the library's traversal (core/include/minkq) against the variant it replaced, with
+// the work counters (the same on every backend) and CPU time (median of repeats, all
+// threads). Variants:
+//   VT   queries in vertex id order         vs  in vertex Morton order (kept)
+//   EE   every edge queries the whole tree  vs  each pair met once: a query reaches only the
+//        and keeps f > e (each pair met        leaves after its own, and tests the pair the
+//        twice)                                other way round at the leaf (kept)
+// Both variants of a kind must return the same pairs (checked). Writes
+// bench/results/ablation.md; see bench/README.md.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cinttypes>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "common.h"
+#include "cpu_tree.h"
+#include "minkq/queries.h"
+#include "scenes.h"
+
+namespace ref = minkq::reference;
+using namespace minkq;
+using namespace minkq::bench;
+
+namespace {
+
+// The EE source before issue 8: query i is edge i over the whole tree; pairs with f <= e are
+// dropped at the leaf, so each unordered pair is reached twice and kept once.
+struct EdgeEdgeTwice {
+  EdgeEdgeQueries base;
+  static constexpr bool kOncePerPair = true;
+  QueryTarget target(int32_t i) const { return {i, -1}; }
+  QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
+  template <class Shape>
+  bool accept(int32_t e, int32_t f) const {
+    if (f <= e) return false;
+    const Edge a = base.edges[e], b = base.edges[f];
+    if ((base.filters & kDropIncident) &&
+        (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
+      return false;
+    if (base.filters & kLeafExact)
+      return segment_segment_within(base.vertices[a.v[0]], base.vertices[a.v[1]], base.vertices[b.v[0]],
+                                    base.vertices[b.v[1]], base.r);
+    return true;
+  }
+  Pair pair(int32_t e, int32_t f) const { return {e, f}; }
+};
+
+struct Outcome {
+  WorkCounts work;
+  double ms = 0;
+  std::vector<uint64_t> pairs;  // sorted (first << 32 | second)
+};
+
+// Runs every query in blocks of 256 on all threads, counting work; times `repeats` runs.
+template <class Shape, class Queries>
+Outcome run(const BvhView& bvh, const Queries& queries, int32_t n, int repeats) {
+  Outcome out;
+  const int32_t blocks = (n + 255) / 256;
+  std::vector<std::vector<uint64_t>> parts(static_cast<size_t>(blocks));
+  std::vector<WorkCounts> work(static_cast<size_t>(blocks));
+  auto once = [&] {
+    tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
+      parts[size_t(b)].clear();
+      work[size_t(b)] = WorkCounts{};
+      auto emit = [&](int32_t x, int32_t y) { parts[size_t(b)].push_back(uint64_t(uint32_t(x)) << 32 | uint32_t(y)); };
+      for (int32_t i = b * 256; i < std::min(n, (b + 1) * 256); ++i) run_query<Shape>(bvh, queries, i, emit, work[size_t(b)]);
+    });
+  };
+  std::vector<double> times;
+  once();  // warm-up
+  for (int k = 0; k < repeats; ++k) {
+    const double start = now_ms();
+    once();
+    times.push_back(now_ms() - start);
+  }
+  std::sort(times.begin(), times.end());
+  out.ms = times[times.size() / 2];
+  for (const auto& w : work) out.work.add(w);
+  for (const auto& p : parts) out.pairs.insert(out.pairs.end(), p.begin(), p.end());
+  std::sort(out.pairs.begin(), out.pairs.end());
+  return out;
+}
+
+std::string row(const std::string& scene, const char* kind, const char* mode, const char* variant, const Outcome& o,
+                int32_t queries, const Outcome& base) {
+  std::ostringstream s;
+  const double q = double(queries);
+  s << "| " << scene << " | " << kind << " | " << mode << " | " << variant << " | " << fmt(double(o.work.nodes_visited) / q, 4)
+    << " | " << fmt(double(o.work.node_tests) / q, 4) << " | " << fmt(double(o.work.primitive_tests) / q, 4) << " | "
+    << o.pairs.size() << " | " << fmt(o.ms, 4) << " | " << fmt(base.ms / o.ms, 3) << "x |\n";
+  return s.str();
+}
+
+template <class Shape>
+std::string compare_ee(const SceneFrames& sc, const Vec3* v, const Edge* e, float r, const char* mode, int repeats,
+                       bool& ok) {
+  const int32_t ne = int32_t(sc.mesh.edge_count());
+  CpuTree tree;
+  tree.build(EdgeBoxes{v, e}, ne);
+  const EdgeEdgeQueries once{v, e, tree.sorted_prims().data(), r, kDropIncident};
+  const EdgeEdgeTwice twice{once};
+  const Outcome a = run<Shape>(tree.view(), twice, ne, repeats);
+  const Outcome b = run<Shape>(tree.view(), once, ne, repeats);
+  // The once-variant's set is the twice-variant's minus pairs failing the reverse node test.
+  ok &= std::includes(a.pairs.begin(), a.pairs.end(), b.pairs.begin(), b.pairs.end());
+  return row(sc.name, "EE", mode, "each pair twice (before)", a, ne, a) + row(sc.name, "EE", mode, "each pair once", b, ne, a);
+}
+
+std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
+  const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
+  const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
+  const auto* e = reinterpret_cast<const Edge*>(sc.mesh.edges.data());
+  const float r = float(sc.radius_factor * sc.mean_edge);
+  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
+  std::fprintf(stderr, "%s: %d V, %d T, r = %.4g\n", sc.name.c_str(), nv, nt, double(r));
+  CpuTree triangles;
+  triangles.build(TriangleBoxes{v, t}, nt);
+  std::vector<uint64_t> keys;
+  std::vector<int32_t> order;
+  sort_by_morton(PointBoxes{v}, nv, keys, order);
+  const VertexTriangleQueries by_id{v, t, nullptr, r, kDropIncident}, by_morton{v, t, order.data(), r, kDropIncident};
+  const Outcome a = run<SphereShape>(triangles.view(), by_id, nv, repeats);
+  const Outcome b = run<SphereShape>(triangles.view(), by_morton, nv, repeats);
+  ok &= a.pairs == b.pairs;
+  std::string out = row(sc.name, "VT", "sphere", "vertex id order (before)", a, nv, a) +
+                    row(sc.name, "VT", "sphere", "vertex Morton order", b, nv, a);
+  out += compare_ee<BoxShape>(sc, v, e, r, "box", repeats, ok);
+  out += compare_ee<CapsuleExactShape>(sc, v, e, r, "capsule_exact", repeats, ok);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string data = MINKQ_BENCH_DATA_DIR, out = MINKQ_BENCH_RESULTS_DIR;
+    int repeats = 5;
+    double scale = 0;  // reference sizes
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--quick") repeats = 1;
+      else if (a == "--out" && i + 1 < argc) out = argv[++i];
+      else if (a == "--data" && i + 1 < argc) data = argv[++i];
+      else if (a == "--triangles" && i + 1 < argc) scale = std::stod(argv[++i]);
+      else {
+        std::fprintf(stderr, "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N]\n");
+        return 2;
+      }
+    }
+    const double load_start = load_average();
+    std::ostringstream o;
+    o << "# Traversal ablation (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)") << ". Load average (1 min) at start "
+      << fmt(load_start, 3) << ". Last frame of each scene, r = the scene's radius, incident pairs dropped, CPU backend "
+      << "traversal on all threads; counts per query; ms = median of " << repeats << " runs after a warm-up; speed = "
+      << "'before' ms / this ms, measured in this run. Written by `minkq_ablation`" << (repeats == 1 ? " --quick" : "")
+      << ".\n\n| scene | kind | mode | variant | nodes / query | node tests / query | primitive tests / query | pairs | ms | speed |\n"
+      << "|---|---|---|---|---|---|---|---|---|---|\n";
+    bool ok = true;
+    for (const std::string& name : {std::string("twist_target"), std::string("cloth_twist"), std::string("cloth_hanging"),
+                                    std::string("softbody_gift")})
+      o << compare_scene(make_scene(name, scale, 2, data), repeats, ok);
+    for (const RealMesh& m : real_meshes())
+      if (m.name == "unisex_shirt" || m.name == "multilayer_drape") o << compare_scene(load_real_scene(m, data), repeats, ok);
+    o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+    std::ofstream f(out + "/ablation.md");
+    f << o.str();
+    std::fprintf(stderr, "wrote %s/ablation.md\n", out.c_str());
+    if (!ok) {
+      std::fprintf(stderr, "FAIL: a variant returned different pairs\n");
+      return 1;
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "minkq_ablation: %s\n", e.what());
+    return 3;
+  }
+}
