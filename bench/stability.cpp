@@ -102,7 +102,7 @@ PairSet ee_pairs_with(const ref::Mesh& m, MakeShape make) {
   tbb::parallel_for(int32_t(0), int32_t(parts.size()), [&](int32_t b) {
     for (int32_t q = b * 256; q < std::min(n, (b + 1) * 256); ++q) {
       const auto shape = make(v[e[q].v[0]], v[e[q].v[1]]);
-      auto on_leaf = [&](int32_t f) {
+      auto on_leaf = [&](int32_t f, const minkq::Box&) {
         if (f <= q) return;
         const minkq::Edge a = e[q], c = e[f];
         if (a.v[0] == c.v[0] || a.v[0] == c.v[1] || a.v[1] == c.v[0] || a.v[1] == c.v[1]) return;

@@ -198,8 +198,8 @@ struct NoWork {
   MINKQ_HD void emit_candidate() {}
 };
 
-// The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim) is called
-// for every primitive whose box the shape overlaps, provided the test also accepts every
+// The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim, box) is
+// called for every primitive whose box the shape overlaps, provided the test also accepts every
 // ancestor box (monotone under box inclusion: true of each shape here; tests/test_queries.cpp
 // checks traversal against the test applied to every primitive). Only leaves at sorted
 // positions after `after` are reached: a self-query from the leaf at position i passes i and
@@ -218,14 +218,14 @@ MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
     if (n.split > after) {
       work.test_node();
       if (shape.overlaps(n.left_box)) {
-        if (n.left < 0) on_leaf(~n.left); else next = n.left;
+        if (n.left < 0) on_leaf(~n.left, n.left_box); else next = n.left;
       }
     }
     if (n.right != kNoChild) {
       work.test_node();
       if (shape.overlaps(n.right_box)) {
         if (n.right < 0) {
-          on_leaf(~n.right);
+          on_leaf(~n.right, n.right_box);
         } else if (next < 0) {
           next = n.right;
         } else {

@@ -6,6 +6,8 @@
 #include "minkq/bvh.h"
 #include "minkq/shapes.h"
 
+#include <type_traits>
+
 namespace minkq {
 
 struct Triangle {
@@ -69,6 +71,10 @@ struct VertexTriangleQueries {
   MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], r}; }
   // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
   template <class Shape>
+  MINKQ_HD bool accept(int32_t v, int32_t t, const Box& /*t_box*/) const {
+    return accept<Shape>(v, t);
+  }
+  template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
     const Triangle tri = triangles[t];
     if ((filters & kDropIncident) && (tri.v[0] == v || tri.v[1] == v || tri.v[2] == v)) return false;
@@ -95,20 +101,31 @@ struct EdgeEdgeQueries {
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], r};
   }
-  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box.
+  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f_box, f's box.
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
+    return accept<Shape>(e, f, EdgeBoxes{vertices, edges}(f));
+  }
+  template <class Shape>
+  MINKQ_HD bool accept(int32_t e, int32_t f, const Box& f_box) const {
     const Edge a = edges[e], b = edges[f];
     if ((filters & kDropIncident) &&
         (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
       return false;
-    if (!Shape::from(geometry(f)).overlaps(EdgeBoxes{vertices, edges}(e))) return false;
+    if (!reverse_shape<Shape>(f, f_box).overlaps(EdgeBoxes{vertices, edges}(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], r);
   }
   MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
+  // Shape(f). The box mode's shape is f's box padded by r, so it comes from the box the node
+  // record already holds (the same floats: an edge box is the exact min/max of its ends).
+  template <class Shape>
+  MINKQ_HD Shape reverse_shape(int32_t f, const Box& f_box) const {
+    if constexpr (std::is_same<Shape, BoxShape>::value) return {padded_segment_box(f_box.lo, f_box.hi, r)};
+    else return Shape::from(geometry(f));
+  }
 };
 
 // User queries against a tree of user boxes: spheres (p1 == nullptr), capsules, or boxes
@@ -121,7 +138,7 @@ struct UserQueries {
   MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
   template <class Shape>
-  MINKQ_HD bool accept(int32_t, int32_t) const { return true; }
+  MINKQ_HD bool accept(int32_t, int32_t, const Box& = Box{}) const { return true; }
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
 
@@ -130,9 +147,9 @@ template <class Shape, class Queries, class Emit, class Work>
 MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target.q));
-  auto on_leaf = [&](int32_t prim) {
+  auto on_leaf = [&](int32_t prim, const Box& prim_box) {
     work.test_primitive();
-    if (!queries.template accept<Shape>(target.q, prim)) return;
+    if (!queries.template accept<Shape>(target.q, prim, prim_box)) return;
     work.emit_candidate();
     const Pair pair = queries.pair(target.q, prim);
     emit(pair.first, pair.second);
