@@ -4,14 +4,14 @@ array interface (minkq._interop), in and out; output arrays sized from the exact
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
 
 from . import _native
 from ._errors import CapacityError
-from ._interop import Foreign, allocate_pairs, checked, has_protocol, head, view
+from ._interop import Like, allocate_pairs, checked, has_protocol, head, like, view
 
 if TYPE_CHECKING:
     from typing import Literal
@@ -86,9 +86,10 @@ def _boxes(value: Any, name: str) -> np.ndarray:
     return _rows(value, name, np.float32, (2, 3))
 
 
-def _detached(array: Optional[Foreign]) -> Optional[Foreign]:
-    """``array`` without its DLPack capsule: enough to allocate results like it."""
-    return None if array is None else replace(array, keepalive=None)
+def _like(array: Any) -> Optional[Like]:
+    """What results need of ``array`` (a view or None) to be made like it; the array itself is
+    not kept alive."""
+    return None if array is None else like(array)
 
 
 class _Args:
@@ -122,14 +123,15 @@ class _Args:
         self.views.append(array)
         return array.descriptor()
 
-    def like(self, value: Any, name: str = "like") -> Optional[Foreign]:
-        """The view whose library and device results take (None: numpy)."""
+    def like(self, value: Any, name: str = "like") -> Optional[Like]:
+        """The library and device results take (None: numpy)."""
         if value is None or isinstance(value, np.ndarray) or not has_protocol(value):
             return None
-        return view(value, name, self.device)
+        return like(view(value, name, self.device))
 
     @property
-    def last(self) -> Optional[Foreign]:
+    def last(self) -> Any:
+        """The last array viewed (a minkq._interop.Foreign), or None."""
         return self.views[-1] if self.views else None
 
 
@@ -172,7 +174,7 @@ class _SizedQueries:
     def __init__(self) -> None:
         self._last_count: Dict[Tuple[Any, ...], int] = {}
 
-    def _run(self, key: Tuple[Any, ...], run: Callable[[Any], Tuple[int, Optional[int]]], like: Optional[Foreign] = None) -> Tuple[Any, Optional[int]]:
+    def _run(self, key: Tuple[Any, ...], run: Callable[[Any], Tuple[int, Optional[int]]], like: Optional[Like] = None) -> Tuple[Any, Optional[int]]:
         def attempt(capacity: int) -> Tuple[Any, int, Optional[int]]:
             out = allocate_pairs(like, capacity)
             args = _Args(self.device)
@@ -278,7 +280,7 @@ class Scene(_SizedQueries):
         self.device = device
         args = _Args(device)
         vertices = args.rows(vertices, "vertices", np.float32, (3,))
-        self._like = _detached(args.last)
+        self._like = _like(args.last)
         triangles = args.rows(triangles, "triangles", np.int32, (3,))
         if edges is not None:
             edges = args.rows(edges, "edges", np.int32, (2,))
@@ -313,7 +315,7 @@ class Scene(_SizedQueries):
         args = _Args(self.device)
         native = args.rows(vertices, "vertices", np.float32, (3,))
         self._native.refit(native)
-        self._like = _detached(args.last)
+        self._like = _like(args.last)
 
     def query(
         self,
@@ -469,7 +471,7 @@ class BVH(_SizedQueries):
     def _query(self, shape: Any, queries: Any, radius: Any, mode: Any, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
         args = _Args(self.device)
         native_args = self._args(args, shape, queries, radius, mode)
-        target = args.last if like is None else args.like(like)
+        target = _like(args.last) if like is None else args.like(like)
         count = native_args[1][2] if isinstance(native_args[1], tuple) else len(native_args[1])
         key = (native_args[0], native_args[2], count, bool(canonical), bool(digest))
         return self._run(key, lambda out: self._native.query_into(out, *native_args, bool(canonical), bool(digest)), target)

@@ -237,20 +237,37 @@ def checked(array: Foreign, name: str, dtype: Any, trailing: Tuple[int, ...], *,
 # ---- Results of the caller's kind ---------------------------------------------------------------
 
 
-def allocate_pairs(like: Optional[Foreign], count: int) -> Any:
+@dataclass(frozen=True)
+class Like:
+    """What results need of an array to be made like it (without keeping the array alive)."""
+
+    kind: str
+    """Its library: ``"warp"``, ``"torch"``, ``"cupy"``, ..."""
+    cuda: Optional[int]
+    """The CUDA ordinal of device memory; None for host memory."""
+    device: Any
+    """The library's own device object (``array.device``), if it has one."""
+    type_name: str
+
+
+def like(array: Foreign) -> Like:
+    return Like(array.kind, array.cuda, getattr(array.obj, "device", None), _type_name(array.obj))
+
+
+def allocate_pairs(like: Optional[Like], count: int) -> Any:
     """An empty (count, 2) int32 array of ``like``'s library on ``like``'s device (numpy for
-    None, numpy and foreign host arrays of other libraries)."""
+    None, and for host arrays of libraries other than Warp, PyTorch and CuPy)."""
     if like is None:
         return np.empty((count, 2), dtype=np.int32)
     kind = like.kind
     if kind == "warp":
         import warp as wp
 
-        return wp.empty(shape=(count, 2), dtype=wp.int32, device=like.obj.device)
+        return wp.empty(shape=(count, 2), dtype=wp.int32, device=like.device)
     if kind == "torch":
         import torch
 
-        return torch.empty((count, 2), dtype=torch.int32, device=like.obj.device)
+        return torch.empty((count, 2), dtype=torch.int32, device=like.device)
     if kind == "cupy":
         import cupy
 
@@ -259,7 +276,7 @@ def allocate_pairs(like: Optional[Foreign], count: int) -> Any:
     if like.cuda is None:
         return np.empty((count, 2), dtype=np.int32)
     raise TypeError(
-        f"cannot allocate result pairs like a {_type_name(like.obj)} (minkq allocates numpy, Warp, PyTorch and CuPy "
+        f"cannot allocate result pairs like a {like.type_name} (minkq allocates numpy, Warp, PyTorch and CuPy "
         "arrays): pass a (capacity, 2) int32 array of your own to query_into"
     )
 
