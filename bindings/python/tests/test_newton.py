@@ -389,3 +389,44 @@ def test_cuda_model_detects_on_the_gpu_in_place():
     gpu = read(detector)
     assert np.array_equal(gpu.vt, cpu.vt) and np.array_equal(gpu.ee, cpu.ee)
     assert np.abs(gpu.vt_min - cpu.vt_min).max() <= 1e-6
+
+
+def test_solver_vbd_steps_with_minkqs_detector_as_with_newtons():
+    """install() makes SolverVBD build minkq's detector; a few self-contact steps of a rolled
+    cloth end where Newton's own detector leads (this cloth's edges are long: Newton loses no
+    pair here), up to the order in which contacts are summed."""
+    xyz, tris = ns.grid(20, 20, 0.05, 0.05)
+    xyz = ns.roll(xyz, 1.5, 0.012)  # layers within the query radius 0.015
+
+    def simulate():
+        builder = __import__("newton").ModelBuilder(gravity=(0.0, 0.0, -9.8))
+        builder.add_cloth_mesh(
+            pos=wp.vec3(0.0, 0.0, 1.0), rot=wp.quat_identity(), scale=1.0, vel=wp.vec3(0.0, 0.0, 0.0),
+            vertices=xyz, indices=tris.reshape(-1), density=0.2, tri_ke=1e3, tri_ka=1e3, tri_kd=2e-4,
+            edge_ke=1e-3, edge_kd=1e-2,
+        )
+        builder.color()
+        model = builder.finalize(device="cpu")
+        solver = __import__("newton").solvers.SolverVBD(
+            model, iterations=5, particle_enable_self_contact=True, particle_self_contact_margin=0.01,
+            particle_self_contact_gap=0.005,
+        )
+        state, next_state, control = model.state(), model.state(), model.control()
+        for _ in range(5):
+            state.clear_forces()
+            solver.step(state, next_state, control, None, 1.0 / 600)
+            state, next_state = next_state, state
+        detector = solver.trimesh_collision_detector
+        contacts = int(detector.edge_colliding_edges_count.numpy().sum() + detector.vertex_colliding_triangles_count.numpy().sum())
+        return type(detector), contacts, state.particle_q.numpy()
+
+    newton_type, newton_contacts, newton_q = simulate()
+    mn.install()
+    try:
+        minkq_type, minkq_contacts, minkq_q = simulate()
+    finally:
+        mn.uninstall()
+    assert newton_type is NewtonDetector and minkq_type is mn.TriMeshCollisionDetector
+    assert minkq_contacts == newton_contacts > 0
+    assert np.isfinite(minkq_q).all()
+    assert np.allclose(minkq_q, newton_q, atol=1e-5)
