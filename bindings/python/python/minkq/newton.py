@@ -65,6 +65,11 @@ Deliberate differences (documented choices):
   some other Newton code (``soft_contacts_mesh``) queries directly; reading them raises an
   AttributeError saying so. ``triangle_triangle_intersection_detection`` works (it builds a
   Warp BVH of the triangles for the call). ``collision_detection_block_size`` is unused.
+- Graph capture. Detection reads the pair count on the host and calls minkq (which
+  synchronises its stream), so it cannot be recorded into a Warp graph (``wp.ScopedCapture``,
+  on CUDA or, with Warp's APIC, on the CPU); Newton's detection launches only kernels. Inside a
+  capture, ``refit``, ``rebuild`` and the detections raise RuntimeError instead of recording a
+  graph whose replays would reuse stale pairs: run them outside the captured region.
 - Device. The model's device: minkq's CPU backend for ``"cpu"``, its CUDA backend for
   ``"cuda:N"`` (positions read in place on the GPU, no host round trip; a libminkq built
   without CUDA raises :class:`~minkq.UnsupportedError`).
@@ -460,6 +465,14 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         self._scene: Optional[_api.Scene] = None
         self._build_scene()
 
+    def _not_capturing(self, what: str) -> None:
+        if getattr(self.device, "is_capturing", False):
+            raise RuntimeError(
+                f"minkq.newton.TriMeshCollisionDetector.{what} cannot run inside a Warp graph capture on {self.device}: "
+                "it reads the pair count on the host and calls minkq, which a graph replay would not repeat. Run "
+                "collision detection outside wp.ScopedCapture, or use Newton's detector in captured loops."
+            )
+
     # ---- Trees ---------------------------------------------------------------------------
 
     def _build_scene(self) -> None:
@@ -476,6 +489,7 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
 
     def rebuild(self, new_pos=None):
         """Rebuilds both trees from ``new_pos`` (or the current ``vertex_positions``)."""
+        self._not_capturing("rebuild")
         if new_pos is not None:
             self.vertex_positions = new_pos
         self._build_scene()
@@ -483,6 +497,7 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     def refit(self, new_pos=None):
         """Refits both trees to ``new_pos`` (or the current ``vertex_positions``), read in place
         on the model's device: the per-step call."""
+        self._not_capturing("refit")
         if new_pos is not None:
             self.vertex_positions = new_pos
         if self._scene is not None:
@@ -540,6 +555,7 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     def vertex_triangle_collision_detection(self, max_query_radius, min_query_radius=0.0, min_distance_filtering_ref_pos=None):
         """Fills each vertex's row with the triangles within ``max_query_radius`` (and, when
         recording, each triangle's row with the vertices); see the module documentation."""
+        self._not_capturing("vertex_triangle_collision_detection")
         self._require_collision_info()
         model = self.model
         r = float(max_query_radius)
@@ -600,6 +616,7 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     def edge_edge_collision_detection(self, max_query_radius, min_query_radius=0.0, min_distance_filtering_ref_pos=None):
         """Fills each edge's row with the edges within ``max_query_radius`` (each contact in
         both edges' rows); see the module documentation."""
+        self._not_capturing("edge_edge_collision_detection")
         self._require_collision_info()
         model = self.model
         r = float(max_query_radius)
