@@ -99,7 +99,9 @@ impl<T: Element> Array<T> {
     fn get(obj: &PyAny, name: &str, trailing: &[usize], writable: bool) -> PyResult<Array<T>> {
         if let Ok(tuple) = obj.downcast::<PyTuple>() {
             let (address, byte_stride, count, device): (usize, usize, usize, bool) = tuple.extract().map_err(|e| {
-                PyTypeError::new_err(format!("{name}: expected a raw descriptor (address, byte_stride, count, device): {e}"))
+                PyTypeError::new_err(format!(
+                    "{name}: expected a raw descriptor (address, byte_stride, count, device): {e}"
+                ))
             })?;
             let memory = if device { Memory::Device } else { Memory::Host };
             return Ok(Array::Raw { address, byte_stride, count, memory });
@@ -131,8 +133,12 @@ impl<T: Element> Array<T> {
     /// As `buffer`, writable, packed, and not otherwise used during the call.
     unsafe fn pairs_out(&mut self) -> PairsOut<'_> {
         match self {
-            Array::Host { rows, .. } => PairsOut::from_raw_parts(rows.buffer.buf_ptr() as *mut i32, rows.rows, Memory::Host),
-            Array::Raw { address, count, memory, .. } => PairsOut::from_raw_parts(*address as *mut i32, *count, *memory),
+            Array::Host { rows, .. } => {
+                PairsOut::from_raw_parts(rows.buffer.buf_ptr() as *mut i32, rows.rows, Memory::Host)
+            }
+            Array::Raw { address, count, memory, .. } => {
+                PairsOut::from_raw_parts(*address as *mut i32, *count, *memory)
+            }
         }
     }
 }
