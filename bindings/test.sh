@@ -9,9 +9,11 @@
 #     CPU-only one under the build folder;
 #   - runs `cargo test` for the workspace (unit, integration and doc tests: minkq-sys with its
 #     bindgen freshness and cbindgen ABI round trip, the safe crate, the Rust example);
-#   - runs pytest on the build tree, builds the wheel with maturin, installs it and runs the
-#     error and digest tests again on the installed package;
-#   - runs both demos on a small scene.
+#   - runs pytest on the build tree (with warp-lang 1.19.0 and newton 1.8.0 from PyPI for the
+#     minkq.newton tests and Warp's arrays, on Warp's "cpu" device; tests marked gpu skip with
+#     their reason where there is no GPU), builds the wheel with maturin, installs it and runs
+#     the error, digest and interop tests again on the installed package;
+#   - runs both demos and the Newton example on small scenes.
 # Environment: MINKQ_LIB_DIR (see above); MINKQ_BINDINGS_BUILD_DIR (default: build-bindings at
 # the repository root) for the library, the virtual environment and the wheel.
 set -euo pipefail
@@ -49,11 +51,14 @@ export MINKQ_LIB_DIR
 [ -e "$MINKQ_LIB_DIR/libminkq.so" ] || { echo "no libminkq.so in MINKQ_LIB_DIR=$MINKQ_LIB_DIR" >&2; exit 1; }
 
 # ---- Python tools ------------------------------------------------------------------------------
-if ! "$venv/bin/python" -c 'import numpy, pytest' 2>/dev/null || [ ! -x "$venv/bin/maturin" ]; then
-  step "installing maturin, numpy and pytest into $venv"
+# Warp and Newton pinned: minkq.newton mirrors Newton 1.8's TriMeshCollisionDetector.
+python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0)
+if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
+  [ ! -x "$venv/bin/maturin" ]; then
+  step "installing ${python_tools[*]} into $venv"
   mkdir -p "$build"
   python3 -m venv "$venv"
-  "$venv/bin/pip" install -q --disable-pip-version-check maturin numpy pytest
+  "$venv/bin/pip" install -q --disable-pip-version-check "${python_tools[@]}"
 fi
 
 # ---- Rust --------------------------------------------------------------------------------------
@@ -75,11 +80,13 @@ rm -f "$build"/wheels/minkq-*.whl
 (cd python && "$venv/bin/maturin" build --release -q -i "$venv/bin/python" -o "$build/wheels")
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$build"/wheels/minkq-*.whl
 (cd "$build" && "$venv/bin/python" -c 'import minkq, sys; assert "site-packages" in minkq.__file__, minkq.__file__; print("installed:", minkq.__file__)')
-"$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests/test_errors.py python/tests/test_digest.py
+"$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests/test_errors.py python/tests/test_digest.py \
+  python/tests/test_interop.py
 
 # ---- Examples ----------------------------------------------------------------------------------
 step "examples on a 64 x 64 sheet"
 "$target/debug/minkq-demo" --backend cpu --size 64
 PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" "$root/examples/python/demo.py" --backend cpu --size 64 --repeat 1
+PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" "$root/examples/python/newton_detector.py" --size 128
 
 step "done"

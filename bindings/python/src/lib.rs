@@ -1,7 +1,10 @@
 //! minkq._native: the pyo3 extension under the `minkq` Python package. It takes arrays through
-//! the buffer protocol (no copy; the package has already checked dtype, shape and contiguity
-//! and says which argument is wrong), releases the GIL around every build, refit and query, and
-//! raises the package's exceptions (minkq._errors) named after the C error codes.
+//! the buffer protocol (numpy; no copy) or as raw descriptors `(address, byte_stride, count,
+//! device)` that the package built from `__dlpack__` / `__cuda_array_interface__` (host or
+//! CUDA device memory, read in place). The package has already checked dtype, shape, strides,
+//! memory kind and device, says which argument is wrong, and keeps the arrays alive for the
+//! call. The extension releases the GIL around every build, refit and query, and raises the
+//! package's exceptions (minkq._errors) named after the C error codes.
 //!
 //! Every object holds its minkq handle in a Mutex: the C API lets one thread at a time use an
 //! object, so Python threads sharing one Scene wait for each other instead of racing.
@@ -9,10 +12,14 @@ use std::mem;
 use std::slice;
 use std::sync::{Mutex, MutexGuard};
 
-use minkq::{Aabb, Bvh, BvhQuery, Device, Mode, Query, QueryFlags, QueryKind, Scene, SceneDesc, SceneFlags};
+use minkq::{
+    Buffer, Bvh, BvhBufferQuery, Device, Memory, Mode, PairsOut, Query, QueryFlags, QueryKind, Scene, SceneBuffers,
+    SceneFlags,
+};
 use pyo3::buffer::{Element, PyBuffer};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 /// The package exception for a minkq error (minkq._errors._from_status builds it).
 fn to_py_err(py: Python<'_>, err: minkq::Error) -> PyErr {
@@ -66,27 +73,72 @@ impl<T: Element> Rows<T> {
         Ok(Rows { buffer, rows })
     }
 
-    /// The rows as a slice of `R`, which must be `trailing`'s product of `T`s.
+    /// The rows as a mutable slice of `R`, which must be `trailing`'s product of `T`s.
     ///
     /// # Safety
-    /// `R` is a plain array (or repr(C) struct) of that many `T`s.
-    unsafe fn as_slice<R>(&self) -> &[R] {
-        debug_assert_eq!(mem::size_of::<R>() * self.rows, self.buffer.item_count() * mem::size_of::<T>());
-        if self.rows == 0 {
-            &[]
-        } else {
-            slice::from_raw_parts(self.buffer.buf_ptr() as *const R, self.rows)
-        }
-    }
-
-    /// # Safety
-    /// As `as_slice`, and the buffer is writable (checked in `get`) and not otherwise
+    /// `R` is a plain array of that many `T`s, the buffer is writable (checked in `get`) and not otherwise
     /// borrowed while the slice lives.
     unsafe fn as_mut_slice<R>(&mut self) -> &mut [R] {
         if self.rows == 0 {
             &mut []
         } else {
             slice::from_raw_parts_mut(self.buffer.buf_ptr() as *mut R, self.rows)
+        }
+    }
+}
+
+/// An array argument: a buffer-protocol array (numpy), or a raw descriptor `(address,
+/// byte_stride, count, device)` built by the package (minkq._interop) for DLPack and CUDA
+/// array interface objects, which it keeps alive during the call.
+enum Array<T: Element> {
+    Host { rows: Rows<T>, row_bytes: usize },
+    Raw { address: usize, byte_stride: usize, count: usize, memory: Memory },
+}
+
+impl<T: Element> Array<T> {
+    fn get(obj: &PyAny, name: &str, trailing: &[usize], writable: bool) -> PyResult<Array<T>> {
+        if let Ok(tuple) = obj.downcast::<PyTuple>() {
+            let (address, byte_stride, count, device): (usize, usize, usize, bool) = tuple.extract().map_err(|e| {
+                PyTypeError::new_err(format!(
+                    "{name}: expected a raw descriptor (address, byte_stride, count, device): {e}"
+                ))
+            })?;
+            let memory = if device { Memory::Device } else { Memory::Host };
+            return Ok(Array::Raw { address, byte_stride, count, memory });
+        }
+        let rows = Rows::get(obj, name, trailing, writable)?;
+        let row_bytes = trailing.iter().product::<usize>() * mem::size_of::<T>();
+        Ok(Array::Host { rows, row_bytes })
+    }
+
+    /// The records as a minkq buffer.
+    ///
+    /// # Safety
+    /// A raw descriptor describes memory that stays readable while the buffer is used (the
+    /// package's promise).
+    unsafe fn buffer(&self) -> Buffer<'_> {
+        match self {
+            Array::Host { rows, row_bytes } => {
+                Buffer::from_raw_parts(rows.buffer.buf_ptr() as *const _, *row_bytes, rows.rows, Memory::Host)
+            }
+            Array::Raw { address, byte_stride, count, memory } => {
+                Buffer::from_raw_parts(*address as *const _, *byte_stride, *count, *memory)
+            }
+        }
+    }
+
+    /// The rows as a pair output (rows of 2 int32, packed).
+    ///
+    /// # Safety
+    /// As `buffer`, writable, packed, and not otherwise used during the call.
+    unsafe fn pairs_out(&mut self) -> PairsOut<'_> {
+        match self {
+            Array::Host { rows, .. } => {
+                PairsOut::from_raw_parts(rows.buffer.buf_ptr() as *mut i32, rows.rows, Memory::Host)
+            }
+            Array::Raw { address, count, memory, .. } => {
+                PairsOut::from_raw_parts(*address as *mut i32, *count, *memory)
+            }
         }
     }
 }
@@ -165,9 +217,9 @@ impl PyScene {
         ee: bool,
         drop_incident: bool,
     ) -> PyResult<Self> {
-        let vertices = Rows::<f32>::get(vertices, "vertices", &[3], false)?;
-        let triangles = Rows::<i32>::get(triangles, "triangles", &[3], false)?;
-        let edges = edges.map(|e| Rows::<i32>::get(e, "edges", &[2], false)).transpose()?;
+        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        let triangles = Array::<i32>::get(triangles, "triangles", &[3], false)?;
+        let edges = edges.map(|e| Array::<i32>::get(e, "edges", &[2], false)).transpose()?;
         let mut flags = SceneFlags::empty();
         if vt {
             flags |= SceneFlags::VT;
@@ -178,17 +230,17 @@ impl PyScene {
         if drop_incident {
             flags |= SceneFlags::DROP_INCIDENT;
         }
-        // SAFETY: shapes checked above: rows of 3 floats, 3 and 2 int32.
+        // SAFETY: shapes checked: rows of 3 floats, 3 and 2 int32; the arrays live in this frame.
         let desc = unsafe {
-            SceneDesc {
-                vertices: vertices.as_slice(),
-                triangles: triangles.as_slice(),
-                edges: edges.as_ref().map_or(&[][..], |e| e.as_slice()),
+            SceneBuffers {
+                vertices: vertices.buffer(),
+                triangles: triangles.buffer(),
+                edges: edges.as_ref().map_or(Buffer::empty(), |e| e.buffer()),
                 flags,
             }
         };
         let device = &device.inner;
-        let scene = py.allow_threads(|| Scene::new(&lock(device), &desc)).map_err(|e| to_py_err(py, e))?;
+        let scene = py.allow_threads(|| Scene::from_buffers(&lock(device), &desc)).map_err(|e| to_py_err(py, e))?;
         Ok(PyScene {
             vertex_count: scene.vertex_count(),
             triangle_count: scene.triangle_count(),
@@ -198,11 +250,11 @@ impl PyScene {
     }
 
     fn refit(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
-        let vertices = Rows::<f32>::get(vertices, "vertices", &[3], false)?;
-        // SAFETY: rows of 3 floats.
-        let vertices: &[[f32; 3]] = unsafe { vertices.as_slice() };
+        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        // SAFETY: rows of 3 floats, alive in this frame.
+        let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
-        py.allow_threads(|| lock(scene).refit(vertices)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(scene).refit_buffer(vertices)).map_err(|e| to_py_err(py, e))
     }
 
     /// Writes the edges into `out`, an (edge_count, 2) int32 array.
@@ -232,11 +284,11 @@ impl PyScene {
     ) -> PyResult<(u64, Option<u64>)> {
         let query = Query::new(parse_kind(kind)?, parse_mode(mode)?, radius)
             .with_flags(query_flags(leaf_exact, canonical, digest));
-        let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
-        // SAFETY: rows of 2 int32, writable, used only here.
-        let pairs: &mut [[i32; 2]] = unsafe { out.as_mut_slice() };
+        let mut out = Array::<i32>::get(out, "out", &[2], true)?;
+        // SAFETY: rows of 2 int32, writable, packed, used only here.
+        let pairs = unsafe { out.pairs_out() };
         let scene = &self.inner;
-        let info = py.allow_threads(|| lock(scene).query_into(&query, pairs)).map_err(|e| to_py_err(py, e))?;
+        let info = py.allow_threads(|| lock(scene).query_to(&query, pairs)).map_err(|e| to_py_err(py, e))?;
         Ok((info.count, info.digest))
     }
 }
@@ -253,20 +305,20 @@ struct PyBvh {
 impl PyBvh {
     #[new]
     fn new(py: Python<'_>, device: PyRef<'_, PyDevice>, boxes: &PyAny) -> PyResult<Self> {
-        let boxes = Rows::<f32>::get(boxes, "boxes", &[2, 3], false)?;
-        // SAFETY: rows of 6 floats (lo, hi), Aabb's repr(C) layout.
-        let boxes: &[Aabb] = unsafe { boxes.as_slice() };
+        let boxes = Array::<f32>::get(boxes, "boxes", &[2, 3], false)?;
+        // SAFETY: rows of 6 floats (lo, hi), alive in this frame.
+        let boxes = unsafe { boxes.buffer() };
         let device = &device.inner;
-        let bvh = py.allow_threads(|| Bvh::new(&lock(device), boxes)).map_err(|e| to_py_err(py, e))?;
+        let bvh = py.allow_threads(|| Bvh::from_buffer(&lock(device), boxes)).map_err(|e| to_py_err(py, e))?;
         Ok(PyBvh { box_count: bvh.len(), inner: Mutex::new(bvh) })
     }
 
     fn refit(&self, py: Python<'_>, boxes: &PyAny) -> PyResult<()> {
-        let boxes = Rows::<f32>::get(boxes, "boxes", &[2, 3], false)?;
+        let boxes = Array::<f32>::get(boxes, "boxes", &[2, 3], false)?;
         // SAFETY: as in new.
-        let boxes: &[Aabb] = unsafe { boxes.as_slice() };
+        let boxes = unsafe { boxes.buffer() };
         let bvh = &self.inner;
-        py.allow_threads(|| lock(bvh).refit(boxes)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(bvh).refit_buffer(boxes)).map_err(|e| to_py_err(py, e))
     }
 
     /// Runs sphere ("sphere": centres (n, 3)), capsule ("capsule": segments (n, 2, 3)) or box
@@ -285,30 +337,31 @@ impl PyBvh {
     ) -> PyResult<(u64, Option<u64>)> {
         let mode = parse_mode(mode)?;
         let flags = query_flags(false, canonical, digest);
-        let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
-        let (rows, name, trailing): (_, _, &[usize]) = match shape {
-            "sphere" => (queries, "centres", &[3]),
-            "capsule" => (queries, "segments", &[2, 3]),
-            "box" => (queries, "boxes", &[2, 3]),
+        let mut out = Array::<i32>::get(out, "out", &[2], true)?;
+        let (name, trailing): (_, &[usize]) = match shape {
+            "sphere" => ("centres", &[3]),
+            "capsule" => ("segments", &[2, 3]),
+            "box" => ("boxes", &[2, 3]),
             _ => {
                 return Err(PyValueError::new_err(format!(
                     "shape: expected 'sphere', 'capsule' or 'box', got {shape:?}"
                 )))
             }
         };
-        let rows = Rows::<f32>::get(rows, name, trailing, false)?;
-        // SAFETY: the shapes checked above match each slice type; `out` is writable.
-        let query = unsafe {
-            match shape {
-                "sphere" => BvhQuery::spheres(rows.as_slice(), mode, radius),
-                "capsule" => BvhQuery::capsules(rows.as_slice(), mode, radius),
-                _ => BvhQuery { radius, mode, ..BvhQuery::boxes(rows.as_slice()) },
-            }
-        }
-        .with_flags(flags);
-        let pairs: &mut [[i32; 2]] = unsafe { out.as_mut_slice() };
+        let rows = Array::<f32>::get(queries, name, trailing, false)?;
+        // SAFETY: the shapes checked above; segments and boxes hold their second point 12
+        // bytes into each record; `out` is writable and packed.
+        let (query, pairs) = unsafe {
+            let first = rows.buffer();
+            let query = match shape {
+                "sphere" => BvhBufferQuery::spheres(first, mode, radius),
+                "capsule" => BvhBufferQuery::capsules(first, first.offset(12), mode, radius),
+                _ => BvhBufferQuery { radius, mode, ..BvhBufferQuery::boxes(first, first.offset(12)) },
+            };
+            (query.with_flags(flags), out.pairs_out())
+        };
         let bvh = &self.inner;
-        let info = py.allow_threads(|| lock(bvh).query_into(&query, pairs)).map_err(|e| to_py_err(py, e))?;
+        let info = py.allow_threads(|| lock(bvh).query_to(&query, pairs)).map_err(|e| to_py_err(py, e))?;
         Ok((info.count, info.digest))
     }
 }

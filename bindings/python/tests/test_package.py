@@ -16,7 +16,7 @@ from oracle import rolled_sheet
 
 def test_package_ships_type_information():
     root = os.path.dirname(minkq.__file__)
-    for name in ("py.typed", "_native.pyi", "__init__.py", "_errors.py", "_api.py"):
+    for name in ("py.typed", "_native.pyi", "__init__.py", "_errors.py", "_api.py", "_interop.py", "newton.py"):
         assert os.path.exists(os.path.join(root, name)), name
     assert minkq.abi_version() == minkq.ABI_VERSION
     assert minkq.version()[:2] == (0, 1)

@@ -10,6 +10,11 @@ use it for their per-step vertex-triangle (VT) and edge-edge (EE) broad phase::
     ee = scene.query("ee", "capsule_exact", r)                      # (k, 2) int32 (e, f), e < f
     scene.refit(new_vertices)                                       # every step
 
+Arrays of other libraries (``__dlpack__``, ``__cuda_array_interface__``: Warp, PyTorch, CuPy)
+are read in place, on the GPU for a CUDA device, and results come back in their kind.
+:mod:`minkq.newton` (import it explicitly; it needs warp and newton) is a drop-in for Newton's
+``TriMeshCollisionDetector``.
+
 Errors raise subclasses of :class:`MinkqError` named after the C error codes.
 """
 

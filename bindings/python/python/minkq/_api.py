@@ -1,5 +1,6 @@
 """The typed Python surface over minkq._native: argument checks with messages naming the
-argument, numpy arrays in and out, output arrays sized from the exact counts."""
+argument; numpy arrays, and arrays of other libraries read in place through DLPack or the CUDA
+array interface (minkq._interop), in and out; output arrays sized from the exact counts."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 
 from . import _native
 from ._errors import CapacityError
+from ._interop import Like, allocate_pairs, checked, has_protocol, head, like, view
 
 if TYPE_CHECKING:
     from typing import Literal
@@ -84,6 +86,55 @@ def _boxes(value: Any, name: str) -> np.ndarray:
     return _rows(value, name, np.float32, (2, 3))
 
 
+def _like(array: Any) -> Optional[Like]:
+    """What results need of ``array`` (a view or None) to be made like it; the array itself is
+    not kept alive."""
+    return None if array is None else like(array)
+
+
+class _Args:
+    """Array arguments on their way to minkq._native: numpy arrays as they are (the buffer
+    protocol), arrays of other libraries as raw descriptors of their memory (DLPack, the CUDA
+    array interface), whose views this object keeps alive until the call has returned."""
+
+    def __init__(self, device: "Device") -> None:
+        self.device = device
+        self.views: list = []
+
+    def rows(self, value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> Any:
+        if not has_protocol(value):
+            return _rows(value, name, dtype, trailing)
+        array = checked(view(value, name, self.device), name, dtype, trailing)
+        self.views.append(array)
+        return array.descriptor()
+
+    def boxes(self, value: Any, name: str) -> Any:
+        if not has_protocol(value):
+            return _boxes(value, name)
+        array = view(value, name, self.device)
+        array = checked(array, name, np.float32, (6,) if len(array.shape) == 2 else (2, 3))
+        self.views.append(array)
+        return array.descriptor()
+
+    def out(self, value: Any) -> Any:
+        if isinstance(value, np.ndarray) or not has_protocol(value):
+            return _out(value)
+        array = checked(view(value, "out", self.device), "out", np.int32, (2,), writable=True, packed=True)
+        self.views.append(array)
+        return array.descriptor()
+
+    def like(self, value: Any, name: str = "like") -> Optional[Like]:
+        """The library and device results take (None: numpy)."""
+        if value is None or isinstance(value, np.ndarray) or not has_protocol(value):
+            return None
+        return like(view(value, name, self.device))
+
+    @property
+    def last(self) -> Any:
+        """The last array viewed (a minkq._interop.Foreign), or None."""
+        return self.views[-1] if self.views else None
+
+
 def _radius(radius: Any) -> float:
     if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)):
         raise TypeError(f"radius: expected a number, got {type(radius).__name__}")
@@ -98,7 +149,9 @@ def _choice(value: Any, name: str, choices: Tuple[str, ...]) -> str:
 
 def _out(out: Any) -> np.ndarray:
     if not isinstance(out, np.ndarray):
-        raise TypeError(f"out: expected a numpy array, got {type(out).__name__}")
+        raise TypeError(
+            f"out: expected a numpy array or an array with __dlpack__ or __cuda_array_interface__, got {type(out).__name__}"
+        )
     if out.dtype != np.int32:
         raise TypeError(f"out: expected an int32 array, got {out.dtype}")
     if out.ndim != 2 or out.shape[1] != 2:
@@ -112,23 +165,30 @@ def _out(out: Any) -> np.ndarray:
 
 class _SizedQueries:
     """Runs queries into arrays sized by the last count of the same query (one run in the
-    steady state of a simulation) and regrown to the exact count on CapacityError."""
+    steady state of a simulation) and regrown to the exact count on CapacityError. The arrays
+    are numpy arrays, or arrays of the library and device of ``like`` (a Warp array gives Warp
+    results on its device)."""
+
+    device: "Device"
 
     def __init__(self) -> None:
         self._last_count: Dict[Tuple[Any, ...], int] = {}
 
-    def _run(self, key: Tuple[Any, ...], run: Callable[[np.ndarray], Tuple[int, Optional[int]]]) -> Tuple[np.ndarray, Optional[int]]:
-        out = np.empty((self._last_count.get(key, 0), 2), dtype=np.int32)
+    def _run(self, key: Tuple[Any, ...], run: Callable[[Any], Tuple[int, Optional[int]]], like: Optional[Like] = None) -> Tuple[Any, Optional[int]]:
+        def attempt(capacity: int) -> Tuple[Any, int, Optional[int]]:
+            out = allocate_pairs(like, capacity)
+            args = _Args(self.device)
+            count, digest = run(args.out(out))
+            return out, count, digest
+
+        key = key + (None if like is None else (like.kind, like.cuda),)
         try:
-            count, digest = run(out)
+            out, count, digest = attempt(self._last_count.get(key, 0))
         except CapacityError as e:
-            out = np.empty((e.needed, 2), dtype=np.int32)
-            count, digest = run(out)
+            out, count, digest = attempt(e.needed)
         self._last_count[key] = count
-        pairs = out[:count]
-        if 2 * count < len(out):  # do not keep a much larger array alive behind a small result
-            pairs = pairs.copy()
-        return pairs, digest
+        # Do not keep a much larger array alive behind a small result.
+        return head(out, count, 2 * count < len(out)), digest
 
 
 class Device:
@@ -158,6 +218,13 @@ class Device:
         """``"cpu"`` or ``"cuda"``."""
         return self._native.backend
 
+    @property
+    def ordinal(self) -> Optional[int]:
+        """The CUDA device number (``cuda:N``) of a CUDA device; None for the CPU."""
+        if self.backend != "cuda":
+            return None
+        return int(self.name.split()[0].split(":")[1])
+
     def __repr__(self) -> str:
         return f"minkq.Device({self.name!r})"
 
@@ -170,6 +237,15 @@ class Scene(_SizedQueries):
     numpy arrays must have exactly these dtypes and are used without a copy when C-contiguous.
     ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
     a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
+
+    Arrays of other libraries (Warp arrays, PyTorch and CuPy tensors: anything with
+    ``__dlpack__`` or ``__cuda_array_interface__``) are read in place, in host memory or, on a
+    CUDA device, in device memory on their GPU, with their stream respected (see
+    minkq._interop). They must have these dtypes and shapes, each row contiguous (rows may lie
+    at any stride, e.g. the last two columns of an (e, 4) edge table); they are never copied or
+    converted, and a CUDA array on a CPU device or another GPU raises
+    :class:`InvalidArgumentError`. Queries then return arrays of the vertices' library and
+    device (or of ``like``).
 
     The GIL is released while the scene is built, refitted and queried. One scene may be used
     from several threads: calls on it wait for each other (as do builds on one device). Do not
@@ -202,10 +278,12 @@ class Scene(_SizedQueries):
         if not isinstance(device, Device):
             raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
         self.device = device
-        vertices = _rows(vertices, "vertices", np.float32, (3,))
-        triangles = _rows(triangles, "triangles", np.int32, (3,))
+        args = _Args(device)
+        vertices = args.rows(vertices, "vertices", np.float32, (3,))
+        self._like = _like(args.last)
+        triangles = args.rows(triangles, "triangles", np.int32, (3,))
         if edges is not None:
-            edges = _rows(edges, "edges", np.int32, (2,))
+            edges = args.rows(edges, "edges", np.int32, (2,))
         self._native = _native.Scene(device._native, vertices, triangles, edges, bool(vt), bool(ee), bool(drop_incident))
 
     @property
@@ -224,15 +302,20 @@ class Scene(_SizedQueries):
         return self._native.edge_count
 
     def edges(self) -> "Pairs":
-        """The scene's edges as an (edge_count, 2) int32 array, numbered as EE pairs number them."""
+        """The scene's edges as an (edge_count, 2) int32 numpy array, numbered as EE pairs number
+        them."""
         out = np.empty((self.edge_count, 2), dtype=np.int32)
         self._native.edges_into(out)
         return out
 
     def refit(self, vertices: Any) -> None:
-        """Moves the vertices ((n, 3) float32, same n) and refits the trees in place: the
-        per-step call of a simulation. On error the scene keeps its previous positions."""
-        self._native.refit(_rows(vertices, "vertices", np.float32, (3,)))
+        """Moves the vertices ((n, 3) float32, same n; numpy or read in place as in the
+        constructor) and refits the trees in place: the per-step call of a simulation. On error
+        the scene keeps its previous positions."""
+        args = _Args(self.device)
+        native = args.rows(vertices, "vertices", np.float32, (3,))
+        self._native.refit(native)
+        self._like = _like(args.last)
 
     def query(
         self,
@@ -242,6 +325,7 @@ class Scene(_SizedQueries):
         *,
         leaf_exact: bool = False,
         canonical: bool = False,
+        like: Any = None,
     ) -> "Pairs":
         """Pairs within ``radius`` as a (k, 2) int32 array: (vertex, triangle) for ``kind="vt"``,
         (e, f) with e < f for ``"ee"``.
@@ -250,19 +334,25 @@ class Scene(_SizedQueries):
         ``"capsule_ray"``, ``"capsule_exact"``. ``leaf_exact=True`` tests the primitives at the
         leaves, so that the pairs are the true contacts (plus, at most, pairs within
         r + 2**-19 S). ``canonical=True`` sorts the pairs.
-        """
-        return self._query(kind, mode, radius, leaf_exact, canonical, False)[0]
 
-    def query_digest(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> Tuple["Pairs", int]:
+        The result is a numpy array, or an array of the library and device of the vertices last
+        given (a Warp array on ``cuda:0`` gives a Warp array on ``cuda:0``, written there in
+        place), or of ``like`` when given.
+        """
+        return self._query(kind, mode, radius, leaf_exact, canonical, False, like)[0]
+
+    def query_digest(
+        self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False, like: Any = None
+    ) -> Tuple["Pairs", int]:
         """Like :meth:`query`, canonical, with the xxHash64 (seed 0) of the little-endian pairs:
         equal across backends, runs and language bindings."""
-        pairs, digest = self._query(kind, mode, radius, leaf_exact, True, True)
+        pairs, digest = self._query(kind, mode, radius, leaf_exact, True, True, like)
         assert digest is not None
         return pairs, digest
 
     def query_into(
         self,
-        out: np.ndarray,
+        out: Any,
         kind: "Kind",
         mode: "Mode",
         radius: float,
@@ -271,19 +361,22 @@ class Scene(_SizedQueries):
         canonical: bool = False,
         digest: bool = False,
     ) -> QueryInfo:
-        """Runs a query into ``out``, a writable C-contiguous (capacity, 2) int32 array; pairs go
-        to ``out[:count]``. Raises :class:`CapacityError` (``needed``: the exact count) when
+        """Runs a query into ``out``, a writable C-contiguous (capacity, 2) int32 array (numpy,
+        or another library's host or, on a CUDA device, device array written in place); pairs
+        go to ``out[:count]``. Raises :class:`CapacityError` (``needed``: the exact count) when
         ``out`` is too small, writing nothing past it."""
-        checked = (_out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
-        count, dig = self._native.query_into(*checked, bool(leaf_exact), bool(canonical), bool(digest))
+        args = _Args(self.device)
+        checked_args = (args.out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
+        count, dig = self._native.query_into(*checked_args, bool(leaf_exact), bool(canonical), bool(digest))
         return QueryInfo(count, dig)
 
-    def _query(self, kind: Any, mode: Any, radius: Any, leaf_exact: bool, canonical: bool, digest: bool) -> Tuple[np.ndarray, Optional[int]]:
+    def _query(self, kind: Any, mode: Any, radius: Any, leaf_exact: bool, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
         kind = _choice(kind, "kind", KINDS)
         mode = _choice(mode, "mode", MODES)
         r = _radius(radius)
         flags = (bool(leaf_exact), bool(canonical), bool(digest))
-        return self._run((kind, mode) + flags, lambda out: self._native.query_into(out, kind, mode, r, *flags))
+        target = self._like if like is None else _Args(self.device).like(like)
+        return self._run((kind, mode) + flags, lambda out: self._native.query_into(out, kind, mode, r, *flags), target)
 
     def __repr__(self) -> str:
         return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges)"
@@ -291,7 +384,9 @@ class Scene(_SizedQueries):
 
 class BVH(_SizedQueries):
     """A BVH over user boxes: (n, 2, 3) float32 (lo, hi), or (n, 6) as lo x, y, z, hi x, y, z,
-    with lo <= hi. Answers sphere, capsule and box queries; pairs are (query, box).
+    with lo <= hi. Answers sphere, capsule and box queries; pairs are (query, box). Arrays of
+    other libraries are read in place as by :class:`Scene`; results take the library and device
+    of the query array (or of ``like``).
 
     >>> import numpy as np, minkq
     >>> boxes = np.array([[[0, 0, 0], [1, 1, 1]], [[2, 2, 2], [3, 3, 3]]], np.float32)
@@ -306,14 +401,16 @@ class BVH(_SizedQueries):
         if not isinstance(device, Device):
             raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
         self.device = device
-        self._native = _native.Bvh(device._native, _boxes(boxes, "boxes"))
+        args = _Args(device)
+        self._native = _native.Bvh(device._native, args.boxes(boxes, "boxes"))
 
     def __len__(self) -> int:
         return self._native.box_count
 
     def refit(self, boxes: Any) -> None:
         """New boxes (same count); refits in place."""
-        self._native.refit(_boxes(boxes, "boxes"))
+        args = _Args(self.device)
+        self._native.refit(args.boxes(boxes, "boxes"))
 
     def query(
         self,
@@ -323,6 +420,7 @@ class BVH(_SizedQueries):
         *,
         mode: Optional["Mode"] = None,
         canonical: bool = False,
+        like: Any = None,
     ) -> "Pairs":
         """(query, box) pairs for every query shape overlapping a box, as a (k, 2) int32 array.
 
@@ -331,17 +429,19 @@ class BVH(_SizedQueries):
         ``"capsule_exact"`` (default). ``"box"``: boxes (n, 2, 3) or (n, 6); mode ``"box"``,
         radius 0.
         """
-        return self._query(shape, queries, radius, mode, canonical, False)[0]
+        return self._query(shape, queries, radius, mode, canonical, False, like)[0]
 
-    def query_digest(self, shape: "Shape", queries: Any, radius: float = 0.0, *, mode: Optional["Mode"] = None) -> Tuple["Pairs", int]:
+    def query_digest(
+        self, shape: "Shape", queries: Any, radius: float = 0.0, *, mode: Optional["Mode"] = None, like: Any = None
+    ) -> Tuple["Pairs", int]:
         """Like :meth:`query`, canonical, with the xxHash64 of the pairs."""
-        pairs, digest = self._query(shape, queries, radius, mode, True, True)
+        pairs, digest = self._query(shape, queries, radius, mode, True, True, like)
         assert digest is not None
         return pairs, digest
 
     def query_into(
         self,
-        out: np.ndarray,
+        out: Any,
         shape: "Shape",
         queries: Any,
         radius: float = 0.0,
@@ -350,26 +450,31 @@ class BVH(_SizedQueries):
         canonical: bool = False,
         digest: bool = False,
     ) -> QueryInfo:
-        """Runs queries into ``out`` ((capacity, 2) int32); :class:`CapacityError` when too small."""
-        args = self._args(shape, queries, radius, mode)
-        count, dig = self._native.query_into(_out(out), *args, bool(canonical), bool(digest))
+        """Runs queries into ``out`` ((capacity, 2) int32, numpy or read in place as by
+        :meth:`Scene.query_into`); :class:`CapacityError` when too small."""
+        args = _Args(self.device)
+        native_args = self._args(args, shape, queries, radius, mode)
+        count, dig = self._native.query_into(args.out(out), *native_args, bool(canonical), bool(digest))
         return QueryInfo(count, dig)
 
-    def _args(self, shape: Any, queries: Any, radius: Any, mode: Any) -> Tuple[str, np.ndarray, str, float]:
+    def _args(self, args: _Args, shape: Any, queries: Any, radius: Any, mode: Any) -> Tuple[str, Any, str, float]:
         shape = _choice(shape, "shape", ("sphere", "capsule", "box"))
         mode = _DEFAULT_BVH_MODE[shape] if mode is None else _choice(mode, "mode", MODES)
         if shape == "sphere":
-            array = _rows(queries, "centres", np.float32, (3,))
+            array = args.rows(queries, "centres", np.float32, (3,))
         elif shape == "capsule":
-            array = _rows(queries, "segments", np.float32, (2, 3))
+            array = args.rows(queries, "segments", np.float32, (2, 3))
         else:
-            array = _boxes(queries, "boxes")
+            array = args.boxes(queries, "boxes")
         return shape, array, mode, _radius(radius)
 
-    def _query(self, shape: Any, queries: Any, radius: Any, mode: Any, canonical: bool, digest: bool) -> Tuple[np.ndarray, Optional[int]]:
-        args = self._args(shape, queries, radius, mode)
-        key = (args[0], args[2], len(args[1]), bool(canonical), bool(digest))
-        return self._run(key, lambda out: self._native.query_into(out, *args, bool(canonical), bool(digest)))
+    def _query(self, shape: Any, queries: Any, radius: Any, mode: Any, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
+        args = _Args(self.device)
+        native_args = self._args(args, shape, queries, radius, mode)
+        target = _like(args.last) if like is None else args.like(like)
+        count = native_args[1][2] if isinstance(native_args[1], tuple) else len(native_args[1])
+        key = (native_args[0], native_args[2], count, bool(canonical), bool(digest))
+        return self._run(key, lambda out: self._native.query_into(out, *native_args, bool(canonical), bool(digest)), target)
 
     def __repr__(self) -> str:
         return f"minkq.BVH({len(self)} boxes)"

@@ -1,10 +1,14 @@
 """Type stubs for the extension module minkq._native (bindings/python/src/lib.rs). Use the
-typed wrappers in the minkq package; this layer expects arrays already checked by it."""
+typed wrappers in the minkq package; this layer expects arrays already checked by it: numpy
+arrays (the buffer protocol) or raw descriptors (address, byte_stride, count, device memory)
+that minkq._interop built from DLPack / CUDA array interface objects it keeps alive."""
 
-from typing import Optional, Tuple
+from typing import Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
+
+Raw = Tuple[int, int, int, bool]
 
 ABI_VERSION: int
 
@@ -20,18 +24,18 @@ class Scene:
     def __init__(
         self,
         device: Device,
-        vertices: npt.NDArray[np.float32],
-        triangles: npt.NDArray[np.int32],
-        edges: Optional[npt.NDArray[np.int32]],
+        vertices: Union[npt.NDArray[np.float32], Raw],
+        triangles: Union[npt.NDArray[np.int32], Raw],
+        edges: Optional[Union[npt.NDArray[np.int32], Raw]],
         vt: bool,
         ee: bool,
         drop_incident: bool,
     ) -> None: ...
-    def refit(self, vertices: npt.NDArray[np.float32]) -> None: ...
+    def refit(self, vertices: Union[npt.NDArray[np.float32], Raw]) -> None: ...
     def edges_into(self, out: npt.NDArray[np.int32]) -> None: ...
     def query_into(
         self,
-        out: npt.NDArray[np.int32],
+        out: Union[npt.NDArray[np.int32], Raw],
         kind: str,
         mode: str,
         radius: float,
@@ -42,13 +46,13 @@ class Scene:
 
 class Bvh:
     box_count: int
-    def __init__(self, device: Device, boxes: npt.NDArray[np.float32]) -> None: ...
-    def refit(self, boxes: npt.NDArray[np.float32]) -> None: ...
+    def __init__(self, device: Device, boxes: Union[npt.NDArray[np.float32], Raw]) -> None: ...
+    def refit(self, boxes: Union[npt.NDArray[np.float32], Raw]) -> None: ...
     def query_into(
         self,
-        out: npt.NDArray[np.int32],
+        out: Union[npt.NDArray[np.int32], Raw],
         shape: str,
-        queries: npt.NDArray[np.float32],
+        queries: Union[npt.NDArray[np.float32], Raw],
         mode: str,
         radius: float,
         canonical: bool,

@@ -1,13 +1,12 @@
 use std::fmt;
-use std::mem;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
 
+use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
 use crate::pairs::query_vec;
 use crate::query::{Mode, QueryFlags, QueryInfo};
-use crate::scene::host_buffer;
 use crate::sys;
 
 /// An axis-aligned box, `lo <= hi` on every axis: 6 floats, the C API's box layout.
@@ -121,32 +120,159 @@ impl<'a> BvhQuery<'a> {
         self
     }
 
-    fn raw(&self) -> sys::minkq_bvh_query_desc {
+    fn buffers(&self) -> BvhBufferQuery<'a> {
         // Capsule ends and box corners are read in place: two strided views of one array.
-        fn strided<T>(values: &[T], offset: usize) -> sys::minkq_buffer {
-            sys::minkq_buffer {
-                data: if values.is_empty() {
-                    ptr::null()
-                } else {
-                    values.as_ptr().cast::<u8>().wrapping_add(offset).cast()
-                },
-                byte_stride: mem::size_of::<T>(),
-                count: values.len(),
-                memory: sys::MINKQ_MEMORY_HOST,
-            }
-        }
         let (shape, first, second) = match self.shapes {
-            Shapes::Spheres(centres) => (sys::MINKQ_SHAPE_SPHERE, host_buffer(centres), host_buffer::<[f32; 3]>(&[])),
-            Shapes::Capsules(segments) => (sys::MINKQ_SHAPE_CAPSULE, strided(segments, 0), strided(segments, 12)),
-            Shapes::Boxes(boxes) => (sys::MINKQ_SHAPE_BOX, strided(boxes, 0), strided(boxes, 12)),
+            Shapes::Spheres(centres) => (ShapeKind::Sphere, Buffer::from_slice(centres), Buffer::empty()),
+            Shapes::Capsules(segments) => {
+                let starts = Buffer::from_slice(segments);
+                // SAFETY: each 24-byte record holds the end point 12 bytes in.
+                (ShapeKind::Capsule, starts, unsafe { starts.offset(12) })
+            }
+            Shapes::Boxes(boxes) => {
+                let lo = Buffer::from_slice(boxes);
+                // SAFETY: each 24-byte Aabb holds `hi` 12 bytes in.
+                (ShapeKind::Box, lo, unsafe { lo.offset(12) })
+            }
         };
+        BvhBufferQuery { shape, first, second, mode: self.mode, flags: self.flags, radius: self.radius }
+    }
+}
+
+impl<'a> From<&BvhQuery<'a>> for BvhBufferQuery<'a> {
+    fn from(query: &BvhQuery<'a>) -> BvhBufferQuery<'a> {
+        query.buffers()
+    }
+}
+
+/// The query shape of a [`BvhBufferQuery`] (`minkq_shape`).
+///
+/// ```
+/// assert_ne!(minkq::ShapeKind::Sphere, minkq::ShapeKind::Capsule);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ShapeKind {
+    /// `first`: centres (3 floats); modes `Box`, `Sphere`.
+    Sphere,
+    /// `first`, `second`: segment starts and ends (3 floats each); modes `Box`, `CapsuleRay`,
+    /// `CapsuleExact`.
+    Capsule,
+    /// `first`, `second`: two opposite corners (3 floats each); mode `Box`, radius 0.
+    Box,
+}
+
+impl ShapeKind {
+    fn raw(self) -> sys::minkq_shape {
+        match self {
+            ShapeKind::Sphere => sys::MINKQ_SHAPE_SPHERE,
+            ShapeKind::Capsule => sys::MINKQ_SHAPE_CAPSULE,
+            ShapeKind::Box => sys::MINKQ_SHAPE_BOX,
+        }
+    }
+}
+
+/// A [`BvhQuery`] over [`Buffer`]s: strided points in host or (on a CUDA device) device
+/// memory (`minkq_bvh_query_desc`).
+///
+/// ```
+/// use minkq::{Buffer, BvhBufferQuery, BvhQuery, Mode, ShapeKind};
+/// let segments = [[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0]]];
+/// let q = BvhBufferQuery::from(&BvhQuery::capsules(&segments, Mode::CapsuleExact, 0.1));
+/// assert_eq!((q.shape, q.first.len(), q.first.byte_stride()), (ShapeKind::Capsule, 1, 24));
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct BvhBufferQuery<'a> {
+    /// What `first` and `second` hold.
+    pub shape: ShapeKind,
+    /// Centres, segment starts or first corners.
+    pub first: Buffer<'a>,
+    /// Segment ends or second corners (same count as `first`); empty for spheres.
+    pub second: Buffer<'a>,
+    /// The node test.
+    pub mode: Mode,
+    /// `CANONICAL` and `DIGEST`.
+    pub flags: QueryFlags,
+    /// The same r for every query: finite, >= 0.
+    pub radius: f32,
+}
+
+impl<'a> BvhBufferQuery<'a> {
+    /// Spheres of radius `radius` around the points of `centres`.
+    ///
+    /// ```
+    /// use minkq::{Buffer, BvhBufferQuery, Mode};
+    /// let q = BvhBufferQuery::spheres(Buffer::from_slice(&[[0.0f32; 3]]), Mode::Sphere, 0.5);
+    /// assert!(q.second.is_empty());
+    /// ```
+    pub fn spheres(centres: Buffer<'a>, mode: Mode, radius: f32) -> BvhBufferQuery<'a> {
+        BvhBufferQuery {
+            shape: ShapeKind::Sphere,
+            first: centres,
+            second: Buffer::empty(),
+            mode,
+            flags: QueryFlags::empty(),
+            radius,
+        }
+    }
+
+    /// Capsules of radius `radius` around the segments `starts[i]`–`ends[i]`.
+    ///
+    /// ```
+    /// use minkq::{Buffer, BvhBufferQuery, Mode};
+    /// let (a, b) = ([[0.0f32; 3]], [[1.0f32; 3]]);
+    /// let q = BvhBufferQuery::capsules(Buffer::from_slice(&a), Buffer::from_slice(&b), Mode::CapsuleRay, 0.5);
+    /// assert_eq!(q.radius, 0.5);
+    /// ```
+    pub fn capsules(starts: Buffer<'a>, ends: Buffer<'a>, mode: Mode, radius: f32) -> BvhBufferQuery<'a> {
+        BvhBufferQuery {
+            shape: ShapeKind::Capsule,
+            first: starts,
+            second: ends,
+            mode,
+            flags: QueryFlags::empty(),
+            radius,
+        }
+    }
+
+    /// Box–box overlap queries against the boxes with corners `first[i]`, `second[i]`.
+    ///
+    /// ```
+    /// use minkq::{Buffer, BvhBufferQuery, Mode};
+    /// let (lo, hi) = ([[0.0f32; 3]], [[1.0f32; 3]]);
+    /// let q = BvhBufferQuery::boxes(Buffer::from_slice(&lo), Buffer::from_slice(&hi));
+    /// assert_eq!((q.mode, q.radius), (Mode::Box, 0.0));
+    /// ```
+    pub fn boxes(first: Buffer<'a>, second: Buffer<'a>) -> BvhBufferQuery<'a> {
+        BvhBufferQuery {
+            shape: ShapeKind::Box,
+            first,
+            second,
+            mode: Mode::Box,
+            flags: QueryFlags::empty(),
+            radius: 0.0,
+        }
+    }
+
+    /// The same query with `flags` added.
+    ///
+    /// ```
+    /// use minkq::{Buffer, BvhBufferQuery, QueryFlags};
+    /// let q = BvhBufferQuery::boxes(Buffer::empty(), Buffer::empty()).with_flags(QueryFlags::CANONICAL);
+    /// assert!(q.flags.contains(QueryFlags::CANONICAL));
+    /// ```
+    pub fn with_flags(mut self, flags: QueryFlags) -> BvhBufferQuery<'a> {
+        self.flags |= flags;
+        self
+    }
+
+    fn raw(&self) -> sys::minkq_bvh_query_desc {
         sys::minkq_bvh_query_desc {
-            shape,
+            shape: self.shape.raw(),
             mode: self.mode.raw(),
             flags: self.flags.bits(),
             radius: self.radius,
-            first,
-            second,
+            first: self.first.raw(),
+            second: self.second.raw(),
         }
     }
 }
@@ -196,9 +322,23 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn new(device: &Device, boxes: &[Aabb]) -> Result<Bvh> {
+        Bvh::from_buffer(device, Buffer::from_slice(boxes))
+    }
+
+    /// [`Bvh::new`] over a [`Buffer`] of boxes (6 floats per record: lo x, y, z, hi x, y, z),
+    /// host or (on a CUDA device) device memory, read in place.
+    ///
+    /// ```
+    /// use minkq::{Aabb, Buffer, Bvh, Device};
+    /// let boxes = [Aabb::new([0.0; 3], [1.0; 3])];
+    /// let bvh = Bvh::from_buffer(&Device::cpu()?, Buffer::from_slice(&boxes))?;
+    /// assert_eq!(bvh.len(), 1);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn from_buffer(device: &Device, boxes: Buffer<'_>) -> Result<Bvh> {
         let mut raw = ptr::null_mut();
-        // SAFETY: a live device and a buffer describing a live slice.
-        check(unsafe { sys::minkq_bvh_create(device.handle.as_ptr(), host_buffer(boxes), &mut raw) })?;
+        // SAFETY: a live device; the buffer's constructor promised readable records.
+        check(unsafe { sys::minkq_bvh_create(device.handle.as_ptr(), boxes.raw(), &mut raw) })?;
         let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_bvh_create returned NULL".into()))?;
         Ok(Bvh { raw, len: boxes.len(), _device: Arc::clone(&device.handle) })
     }
@@ -217,8 +357,22 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn refit(&mut self, boxes: &[Aabb]) -> Result<()> {
-        // SAFETY: a live BVH and a buffer describing a live slice.
-        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), host_buffer(boxes)) })
+        self.refit_buffer(Buffer::from_slice(boxes))
+    }
+
+    /// [`Bvh::refit`] from a [`Buffer`] of boxes, host or (on a CUDA device) device memory.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let mut bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
+    /// bvh.refit_buffer(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
+    /// let err = bvh.refit_buffer(Buffer::from_slice::<Aabb>(&[])).unwrap_err();
+    /// assert!(matches!(err, Error::InvalidArgument(_)));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn refit_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
+        // SAFETY: a live BVH; the buffer's constructor promised readable records.
+        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), boxes.raw()) })
     }
 
     /// The number of boxes.
@@ -257,7 +411,26 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn query_into(&self, query: &BvhQuery<'_>, out: &mut [[i32; 2]]) -> Result<QueryInfo> {
-        self.query_raw(query, out.as_mut_ptr().cast(), out.len())
+        self.query_to(&BvhBufferQuery::from(query), PairsOut::from_slice(out))
+    }
+
+    /// Queries over [`Buffer`]s into a [`PairsOut`], host or (on a CUDA device) device
+    /// memory; [`Error::Capacity`] with the exact count when `out` is too small.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
+    /// // Centres with a fourth float each (16-byte records), read in place.
+    /// let points = [[0.5f32, 0.5, 0.5, 1.0], [5.0, 5.0, 5.0, 1.0]];
+    /// // SAFETY: two 16-byte records starting with x, y, z, borrowed from `points`.
+    /// let centres = unsafe { Buffer::from_raw_parts(points.as_ptr().cast(), 16, 2, Memory::Host) };
+    /// let mut out = [[0; 2]; 2];
+    /// let info = bvh.query_to(&BvhBufferQuery::spheres(centres, Mode::Sphere, 0.1), PairsOut::from_slice(&mut out))?;
+    /// assert_eq!(&out[..info.count as usize], &[[0, 0]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_to(&self, query: &BvhBufferQuery<'_>, out: PairsOut<'_>) -> Result<QueryInfo> {
+        self.query_raw(query, out.data(), out.capacity(), out.memory())
     }
 
     /// Pairs (query, box) into a `Vec`, grown to the exact count when too small.
@@ -272,16 +445,23 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn query_vec(&self, query: &BvhQuery<'_>, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
-        query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity))
+        let query = BvhBufferQuery::from(query);
+        query_vec(out, |pairs, capacity| self.query_raw(&query, pairs, capacity, Memory::Host))
     }
 
-    fn query_raw(&self, query: &BvhQuery<'_>, pairs: *mut i32, capacity: usize) -> Result<QueryInfo> {
+    fn query_raw(
+        &self,
+        query: &BvhBufferQuery<'_>,
+        pairs: *mut i32,
+        capacity: usize,
+        memory: Memory,
+    ) -> Result<QueryInfo> {
         let desc = query.raw();
         let mut info = QueryInfo::raw();
-        // SAFETY: the description's buffers view live slices; `pairs` holds 2 * capacity int32.
-        let status = unsafe {
-            sys::minkq_bvh_query(self.raw.as_ptr(), &desc, pairs, capacity, sys::MINKQ_MEMORY_HOST, &mut info)
-        };
+        // SAFETY: the description's buffers are readable (their constructors' promise);
+        // `pairs` holds 2 * capacity writable int32 in `memory`.
+        let status =
+            unsafe { sys::minkq_bvh_query(self.raw.as_ptr(), &desc, pairs, capacity, memory.raw(), &mut info) };
         match check(status) {
             Ok(()) => Ok(QueryInfo::from_raw(&info, query.flags)),
             Err(Error::Capacity { message, .. }) => Err(Error::Capacity { needed: info.count, message }),

@@ -44,11 +44,22 @@
 //! call into the same object). Scenes and BVHs keep their device alive, and can be sent to
 //! other threads independently of it.
 //!
+//! # Device memory and strided arrays
+//! Besides slices, scenes and BVHs take [`Buffer`]s: records at any byte stride, in host
+//! memory or, on a CUDA device, in device memory read in place ([`Scene::from_buffers`],
+//! [`Scene::refit_buffer`], [`Scene::query_to`] with a [`PairsOut`], and the same on
+//! [`Bvh`]). A buffer over a raw pointer is built with the `unsafe`
+//! [`Buffer::from_raw_parts`]; every call taking it is safe. The C API has no stream argument:
+//! on a CUDA device the library works on the calling thread's per-thread default stream and
+//! synchronises it before each call returns, so inputs must be ready (or ordered before that
+//! stream) when a call is made, and outputs are ready for every stream when it returns.
+//!
 //! # Linking
 //! `minkq-sys` links `libminkq.so` from `MINKQ_LIB_DIR` (the CMake build's `capi/` folder) or
 //! builds it with CMake; this crate's tests and examples find it at run time through an rpath.
 #![deny(missing_docs)]
 
+mod buffer;
 mod bvh;
 mod device;
 mod error;
@@ -56,19 +67,20 @@ mod pairs;
 mod query;
 mod scene;
 
-/// The raw FFI bindings (`minkq-sys`), for what the safe API does not cover (device memory).
+/// The raw FFI bindings (`minkq-sys`), for what the safe API does not cover.
 ///
 /// ```
 /// assert_eq!(minkq::sys::MINKQ_ABI_VERSION, minkq::ABI_VERSION);
 /// ```
 pub use minkq_sys as sys;
 
-pub use bvh::{Aabb, Bvh, BvhQuery, Shapes};
+pub use buffer::{Buffer, Memory, PairsOut, Record};
+pub use bvh::{Aabb, Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
 pub use pairs::PairBuffer;
 pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, SceneFlags, WorkStats};
-pub use scene::{Scene, SceneDesc};
+pub use scene::{Scene, SceneBuffers, SceneDesc};
 
 /// The ABI version this crate was generated against (`MINKQ_ABI_VERSION`).
 ///

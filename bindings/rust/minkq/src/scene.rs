@@ -1,23 +1,13 @@
 use std::fmt;
-use std::mem;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
 
+use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
 use crate::pairs::{query_vec, PairBuffer};
 use crate::query::{Query, QueryInfo, SceneFlags};
 use crate::sys;
-
-/// A host buffer description of a packed slice.
-pub(crate) fn host_buffer<T>(values: &[T]) -> sys::minkq_buffer {
-    sys::minkq_buffer {
-        data: if values.is_empty() { ptr::null() } else { values.as_ptr().cast() },
-        byte_stride: mem::size_of::<T>(),
-        count: values.len(),
-        memory: sys::MINKQ_MEMORY_HOST,
-    }
-}
 
 /// The mesh and options a [`Scene`] is built from (`minkq_scene_desc`).
 ///
@@ -85,6 +75,91 @@ impl<'a> SceneDesc<'a> {
     }
 }
 
+/// A [`SceneDesc`] over [`Buffer`]s instead of slices: strided records, host or CUDA device
+/// memory (`minkq_scene_desc`). Build it from a `SceneDesc` with `From`, or from buffers.
+///
+/// ```
+/// use minkq::{Buffer, SceneBuffers, SceneDesc, SceneFlags};
+/// let vertices = [[0.0f32; 3]; 3];
+/// let triangles = [[0, 1, 2]];
+/// let desc = SceneBuffers::new(Buffer::from_slice(&vertices), Buffer::from_slice(&triangles));
+/// assert_eq!(desc.flags, SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT);
+/// let same = SceneBuffers::from(&SceneDesc::new(&vertices, &triangles));
+/// assert_eq!(same.vertices.data(), desc.vertices.data());
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct SceneBuffers<'a> {
+    /// Vertex positions: 3 floats per record (byte stride >= 12).
+    pub vertices: Buffer<'a>,
+    /// Triangles: 3 int32 vertex indices per record (byte stride >= 12).
+    pub triangles: Buffer<'a>,
+    /// Edges: 2 int32 vertex indices per record (byte stride >= 8), or empty to derive them.
+    pub edges: Buffer<'a>,
+    /// Which trees to build (at least one of VT and EE) and whether to drop incident pairs.
+    pub flags: SceneFlags,
+}
+
+impl<'a> SceneBuffers<'a> {
+    /// VT and EE with incident pairs dropped, edges derived: as [`SceneDesc::new`].
+    ///
+    /// ```
+    /// use minkq::{Buffer, SceneBuffers};
+    /// let desc = SceneBuffers::new(Buffer::from_slice(&[[0.0f32; 3]; 3]), Buffer::from_slice(&[[0, 1, 2]]));
+    /// assert!(desc.edges.is_empty());
+    /// ```
+    pub fn new(vertices: Buffer<'a>, triangles: Buffer<'a>) -> SceneBuffers<'a> {
+        SceneBuffers {
+            vertices,
+            triangles,
+            edges: Buffer::empty(),
+            flags: SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT,
+        }
+    }
+
+    /// The same description with explicit edges, e.g. the last two columns of an (E, 4)
+    /// edge table read in place with a byte stride of 16.
+    ///
+    /// ```
+    /// use minkq::{Buffer, Device, Memory, Scene, SceneBuffers};
+    /// let vertices = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// // (opposite vertex, opposite vertex, v0, v1) per edge, as Newton stores them.
+    /// let table = [[-1, 2, 0, 1], [-1, 0, 1, 2]];
+    /// // SAFETY: two 16-byte records whose last 8 bytes are the edge's vertices.
+    /// let edges = unsafe { Buffer::from_raw_parts(table[0][2..].as_ptr().cast(), 16, 2, Memory::Host) };
+    /// let desc = SceneBuffers::new(Buffer::from_slice(&vertices), Buffer::from_slice(&[[0, 1, 2]])).edges(edges);
+    /// let scene = Scene::from_buffers(&Device::cpu()?, &desc)?;
+    /// assert_eq!(scene.edges()?, vec![[0, 1], [1, 2]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn edges(mut self, edges: Buffer<'a>) -> SceneBuffers<'a> {
+        self.edges = edges;
+        self
+    }
+
+    /// The same description with other flags.
+    ///
+    /// ```
+    /// use minkq::{Buffer, SceneBuffers, SceneFlags};
+    /// let desc = SceneBuffers::new(Buffer::empty(), Buffer::empty()).flags(SceneFlags::VT);
+    /// assert_eq!(desc.flags, SceneFlags::VT);
+    /// ```
+    pub fn flags(mut self, flags: SceneFlags) -> SceneBuffers<'a> {
+        self.flags = flags;
+        self
+    }
+}
+
+impl<'a> From<&SceneDesc<'a>> for SceneBuffers<'a> {
+    fn from(desc: &SceneDesc<'a>) -> SceneBuffers<'a> {
+        SceneBuffers {
+            vertices: Buffer::from_slice(desc.vertices),
+            triangles: Buffer::from_slice(desc.triangles),
+            edges: Buffer::from_slice(desc.edges),
+            flags: desc.flags,
+        }
+    }
+}
+
 /// A triangle mesh on a device with the BVHs its flags ask for, answering VT and EE queries
 /// (`minkq_scene`). Released when dropped; keeps its device alive.
 ///
@@ -139,15 +214,32 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn new(device: &Device, desc: &SceneDesc<'_>) -> Result<Scene> {
+        Scene::from_buffers(device, &SceneBuffers::from(desc))
+    }
+
+    /// [`Scene::new`] over [`Buffer`]s: strided records in host or (on a CUDA device) device
+    /// memory, read in place. The scene keeps its own copy; the buffers may change or go
+    /// away once this returns. Device memory on a CPU device is [`Error::InvalidArgument`].
+    ///
+    /// ```
+    /// use minkq::{Buffer, Device, Scene, SceneBuffers, SceneFlags};
+    /// let vertices = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let triangles = [[0, 1, 2]];
+    /// let desc = SceneBuffers::new(Buffer::from_slice(&vertices), Buffer::from_slice(&triangles)).flags(SceneFlags::EE);
+    /// let scene = Scene::from_buffers(&Device::cpu()?, &desc)?;
+    /// assert_eq!(scene.edge_count(), 3);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn from_buffers(device: &Device, desc: &SceneBuffers<'_>) -> Result<Scene> {
         let raw_desc = sys::minkq_scene_desc {
             flags: desc.flags.bits(),
-            vertices: host_buffer(desc.vertices),
-            triangles: host_buffer(desc.triangles),
-            edges: host_buffer(desc.edges),
+            vertices: desc.vertices.raw(),
+            triangles: desc.triangles.raw(),
+            edges: desc.edges.raw(),
         };
         let mut raw = ptr::null_mut();
-        // SAFETY: the buffers describe live slices of the right element sizes; the library
-        // copies them before returning.
+        // SAFETY: the buffers' constructors promise readable records for their lifetime,
+        // which outlives this call; the library copies them before returning.
         check(unsafe { sys::minkq_scene_create(device.handle.as_ptr(), &raw_desc, &mut raw) })?;
         let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_scene_create returned NULL".into()))?;
         Ok(Scene { raw, _device: Arc::clone(&device.handle) })
@@ -175,8 +267,25 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn refit(&mut self, vertices: &[[f32; 3]]) -> Result<()> {
-        // SAFETY: a live scene and a buffer describing a live slice.
-        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), host_buffer(vertices)) })
+        self.refit_buffer(Buffer::from_slice(vertices))
+    }
+
+    /// [`Scene::refit`] from a [`Buffer`]: strided records, host or (on a CUDA device) device
+    /// memory, read in place on the device. On error the scene keeps its previous positions.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let vertices = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&vertices, &[[0, 1, 2]]))?;
+    /// // x, y, z and a fourth float per vertex (16-byte records), as a vec4 array holds them.
+    /// let moved = [[0.0f32, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 0.0]];
+    /// // SAFETY: three 16-byte records starting with x, y, z, borrowed from `moved`.
+    /// scene.refit_buffer(unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) })?;
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn refit_buffer(&mut self, vertices: Buffer<'_>) -> Result<()> {
+        // SAFETY: a live scene; the buffer's constructor promised readable records.
+        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), vertices.raw()) })
     }
 
     /// The number of vertices.
@@ -280,7 +389,30 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn query_into(&self, query: &Query, out: &mut [[i32; 2]]) -> Result<QueryInfo> {
-        self.query_raw(query, out.as_mut_ptr().cast(), out.len())
+        self.query_to(query, PairsOut::from_slice(out))
+    }
+
+    /// Runs a query into a [`PairsOut`]: host memory, or (on a CUDA device) device memory
+    /// written in place, ready for any stream when this returns. [`Error::Capacity`] with the
+    /// exact count when it is too small; nothing is written past it.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let mut pairs = [[0; 2]; 8];
+    /// let info = scene.query_to(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::CANONICAL), PairsOut::from_slice(&mut pairs))?;
+    /// assert_eq!(&pairs[..info.count as usize], &[[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]);
+    /// // Device memory on a CPU device is refused before it is written.
+    /// // SAFETY: never written: the CPU device rejects device memory.
+    /// let on_gpu = unsafe { PairsOut::from_raw_parts(pairs.as_mut_ptr().cast(), 8, Memory::Device) };
+    /// assert!(matches!(scene.query_to(&Query::vt(Mode::Sphere, 0.2), on_gpu), Err(Error::InvalidArgument(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_to(&self, query: &Query, out: PairsOut<'_>) -> Result<QueryInfo> {
+        self.query_raw(query, out.data(), out.capacity(), out.memory())
     }
 
     /// Runs a query into a `Vec`, growing it to the exact count when it is too small (the
@@ -299,16 +431,16 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn query_vec(&self, query: &Query, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
-        query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity))
+        query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity, Memory::Host))
     }
 
-    fn query_raw(&self, query: &Query, pairs: *mut i32, capacity: usize) -> Result<QueryInfo> {
+    fn query_raw(&self, query: &Query, pairs: *mut i32, capacity: usize, memory: Memory) -> Result<QueryInfo> {
         let desc = query.raw();
         let mut info = QueryInfo::raw();
-        // SAFETY: `pairs` holds 2 * capacity int32 of host memory.
-        let status = unsafe {
-            sys::minkq_scene_query(self.raw.as_ptr(), &desc, pairs, capacity, sys::MINKQ_MEMORY_HOST, &mut info)
-        };
+        // SAFETY: `pairs` holds 2 * capacity writable int32 in `memory` (a slice, a Vec's
+        // spare capacity, or a PairsOut whose constructor promised it).
+        let status =
+            unsafe { sys::minkq_scene_query(self.raw.as_ptr(), &desc, pairs, capacity, memory.raw(), &mut info) };
         match check(status) {
             Ok(()) => Ok(QueryInfo::from_raw(&info, query.flags)),
             Err(Error::Capacity { message, .. }) => Err(Error::Capacity { needed: info.count, message }),

@@ -6,7 +6,8 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 
 use minkq::{
-    Aabb, Bvh, BvhQuery, Device, Error, Mode, PairBuffer, Query, QueryFlags, QueryKind, Scene, SceneDesc, SceneFlags,
+    Aabb, Buffer, Bvh, BvhBufferQuery, BvhQuery, Device, Error, Memory, Mode, PairBuffer, PairsOut, Query, QueryFlags,
+    QueryKind, Scene, SceneBuffers, SceneDesc, SceneFlags,
 };
 
 type V = [f64; 3];
@@ -266,6 +267,84 @@ fn explicit_edges_and_scene_flags() {
         for &v in tri {
             assert!(all.contains(&(v, t as i32)));
         }
+    }
+}
+
+/// Strided records read in place give the pairs of the packed slices: vertices as vec4
+/// records, edges as the last two columns of a (E, 4) table, pairs written through PairsOut.
+#[test]
+fn strided_buffers_give_the_pairs_of_packed_slices() {
+    let device = Device::cpu().unwrap();
+    let mesh = crumpled_sheet(9, 21);
+    let r = 0.03;
+    let packed = Scene::new(&device, &SceneDesc::new(&mesh.vertices, &mesh.triangles)).unwrap();
+    let edges = packed.edges().unwrap();
+    let vec4: Vec<[f32; 4]> = mesh.vertices.iter().map(|v| [v[0], v[1], v[2], f32::NAN]).collect();
+    let table: Vec<[i32; 4]> = edges.iter().map(|e| [-7, -7, e[0], e[1]]).collect();
+    // SAFETY: vec4 records of 16 bytes starting with x, y, z; 16-byte edge records with the
+    // two vertices 8 bytes in; both borrowed for the scene's construction.
+    let (vertices, table_edges) = unsafe {
+        (
+            Buffer::from_raw_parts(vec4.as_ptr().cast(), 16, vec4.len(), Memory::Host),
+            Buffer::from_raw_parts(table.as_ptr().cast(), 16, table.len(), Memory::Host).offset(8),
+        )
+    };
+    let mut strided = Scene::from_buffers(
+        &device,
+        &SceneBuffers::new(vertices, Buffer::from_slice(&mesh.triangles)).edges(table_edges),
+    )
+    .unwrap();
+    assert_eq!(strided.edges().unwrap(), edges);
+    for query in [
+        Query::vt(Mode::Sphere, r).with_flags(QueryFlags::LEAF_EXACT),
+        Query::ee(Mode::CapsuleExact, r).with_flags(QueryFlags::LEAF_EXACT),
+    ] {
+        let expected = pairs_of(&packed, query);
+        let mut storage = vec![[0i32; 2]; expected.len() + 3];
+        let info = strided.query_to(&query, PairsOut::from_slice(&mut storage)).unwrap();
+        let got: Pairs = storage[..info.count as usize].iter().map(|p| (p[0], p[1])).collect();
+        assert_eq!(got, expected, "{:?}", query.kind);
+    }
+    // Refit from strided records: lift every vertex; the pairs stay those of a packed refit.
+    let lifted: Vec<[f32; 4]> = vec4.iter().map(|v| [v[0] * 0.5, v[1], v[2] * 0.5, 0.0]).collect();
+    // SAFETY: as above.
+    strided
+        .refit_buffer(unsafe { Buffer::from_raw_parts(lifted.as_ptr().cast(), 16, lifted.len(), Memory::Host) })
+        .unwrap();
+    let mut packed = packed;
+    packed.refit(&lifted.iter().map(|v| [v[0], v[1], v[2]]).collect::<Vec<_>>()).unwrap();
+    let query = Query::ee(Mode::CapsuleExact, r).with_flags(QueryFlags::LEAF_EXACT);
+    assert_eq!(pairs_of(&strided, query), pairs_of(&packed, query));
+    // Device memory on the CPU backend: refused, the scene unchanged.
+    // SAFETY: never read: the CPU device rejects device memory before reading.
+    let on_gpu = unsafe { Buffer::from_raw_parts(vec4.as_ptr().cast(), 16, vec4.len(), Memory::Device) };
+    assert!(matches!(strided.refit_buffer(on_gpu), Err(Error::InvalidArgument(m)) if m.contains("device memory")));
+    assert_eq!(pairs_of(&strided, query), pairs_of(&packed, query));
+}
+
+#[test]
+fn bvh_buffer_queries_equal_slice_queries() {
+    let device = Device::cpu().unwrap();
+    let boxes: Vec<Aabb> = (0..40).map(|i| Aabb::new([i as f32 * 0.1; 3], [i as f32 * 0.1 + 0.15; 3])).collect();
+    let bvh = Bvh::from_buffer(&device, Buffer::from_slice(&boxes)).unwrap();
+    let segments: Vec<[[f32; 3]; 2]> =
+        (0..30).map(|i| [[i as f32 * 0.13, 0.5, 0.5], [1.0, i as f32 * 0.1, 2.0]]).collect();
+    let mut expected = Vec::new();
+    let query = BvhQuery::capsules(&segments, Mode::CapsuleExact, 0.05).with_flags(QueryFlags::CANONICAL);
+    bvh.query_vec(&query, &mut expected).unwrap();
+    assert!(!expected.is_empty());
+    let starts: Vec<[f32; 3]> = segments.iter().map(|s| s[0]).collect();
+    let ends: Vec<[f32; 3]> = segments.iter().map(|s| s[1]).collect();
+    let split =
+        BvhBufferQuery::capsules(Buffer::from_slice(&starts), Buffer::from_slice(&ends), Mode::CapsuleExact, 0.05)
+            .with_flags(QueryFlags::CANONICAL);
+    let mut out = vec![[0; 2]; expected.len()];
+    let info = bvh.query_to(&split, PairsOut::from_slice(&mut out)).unwrap();
+    assert_eq!((info.count as usize, out), (expected.len(), expected.clone()));
+    let mut small = vec![[0; 2]; 1];
+    match bvh.query_to(&split, PairsOut::from_slice(&mut small)) {
+        Err(Error::Capacity { needed, .. }) => assert_eq!(needed as usize, expected.len()),
+        other => panic!("{other:?}"),
     }
 }
 
