@@ -291,6 +291,17 @@ impl PyScene {
         let info = py.allow_threads(|| lock(scene).query_to(&query, pairs)).map_err(|e| to_py_err(py, e))?;
         Ok((info.count, info.digest))
     }
+
+    /// Runs a query with MINKQ_QUERY_STATS (pairs discarded); returns (nodes_visited,
+    /// node_tests, primitive_tests, candidates).
+    fn work(&self, py: Python<'_>, kind: &str, mode: &str, radius: f32, leaf_exact: bool) -> PyResult<(u64, u64, u64, u64)> {
+        let query = Query::new(parse_kind(kind)?, parse_mode(mode)?, radius)
+            .with_flags(query_flags(leaf_exact, false, false) | QueryFlags::STATS);
+        let scene = &self.inner;
+        let info = py.allow_threads(|| lock(scene).query_vec(&query, &mut Vec::new())).map_err(|e| to_py_err(py, e))?;
+        let w = info.stats.unwrap_or_default();
+        Ok((w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates))
+    }
 }
 
 /// A BVH over user boxes: sphere, capsule and box queries.

@@ -168,3 +168,21 @@ def test_strided_and_list_inputs_give_the_same_pairs(device):
     from_lists = minkq.Scene(device, xyz.tolist(), tris.tolist()).query_digest("ee", "capsule_exact", 0.05)
     assert base[1] == from_strided[1] == from_lists[1]
     assert point_segment_sq(np.zeros(3), np.ones(3), np.ones(3)) == 3.0  # the oracle's own sanity
+
+
+def test_work_counts_match_the_pairs_and_shrink_with_finer_modes(device):
+    xyz, tris = rolled_sheet(16, 2)
+    scene = minkq.Scene(device, xyz, tris)
+    r = 0.02
+    for kind, coarse, fine in (("vt", "box", "sphere"), ("ee", "box", "capsule_exact")):
+        a, b = scene.work(kind, coarse, r), scene.work(kind, fine, r)
+        assert a.candidates == len(scene.query(kind, coarse, r))
+        assert b.candidates == len(scene.query(kind, fine, r))
+        assert a.nodes_visited > 0 and a.node_tests >= a.nodes_visited
+        # Finer node tests pass a subset of the coarser one's nodes and leaves.
+        assert (b.nodes_visited, b.node_tests, b.primitive_tests) <= (a.nodes_visited, a.node_tests, a.primitive_tests)
+        assert b.nodes_visited <= a.nodes_visited and b.primitive_tests <= a.primitive_tests
+    leaf = scene.work("ee", "capsule_exact", r, leaf_exact=True)
+    assert leaf.candidates == len(scene.query("ee", "capsule_exact", r, leaf_exact=True))
+    with pytest.raises(ValueError, match="mode"):
+        scene.work("ee", "cube", r)

@@ -19,7 +19,7 @@ Errors raise subclasses of :class:`MinkqError` named after the C error codes.
 """
 
 from . import _native
-from ._api import BVH, KINDS, MODES, Device, QueryInfo, Scene, abi_version, cuda_device_count, version
+from ._api import BVH, KINDS, MODES, Device, QueryInfo, Scene, WorkStats, abi_version, cuda_device_count, version
 from ._errors import (
     CapacityError,
     DeviceError,
@@ -56,6 +56,7 @@ __all__ = [
     "Scene",
     "SizeOverflowError",
     "UnsupportedError",
+    "WorkStats",
     "abi_version",
     "cuda_device_count",
     "version",

@@ -29,6 +29,20 @@ _DEFAULT_BVH_MODE = {"sphere": "sphere", "capsule": "capsule_exact", "box": "box
 
 
 @dataclass(frozen=True)
+class WorkStats:
+    """The work of one query (:meth:`Scene.work`; the C API's ``minkq_query_stats``)."""
+
+    nodes_visited: int
+    """Internal node records read."""
+    node_tests: int
+    """Child boxes tested against a query shape."""
+    primitive_tests: int
+    """Primitives whose box passed, handed to the leaf filter."""
+    candidates: int
+    """Pairs emitted: the query's pair count."""
+
+
+@dataclass(frozen=True)
 class QueryInfo:
     """What :meth:`Scene.query_into` and :meth:`BVH.query_into` report."""
 
@@ -369,6 +383,21 @@ class Scene(_SizedQueries):
         checked_args = (args.out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
         count, dig = self._native.query_into(*checked_args, bool(leaf_exact), bool(canonical), bool(digest))
         return QueryInfo(count, dig)
+
+    def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
+        """Runs the query once with the library's work counters on and returns them (the pairs
+        are not kept). The counts depend only on the tree and the queries: the same on every
+        backend.
+
+        >>> import numpy as np, minkq
+        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2]], np.int32))
+        >>> w = scene.work("vt", "sphere", 0.2)
+        >>> (w.candidates, w.primitive_tests >= w.candidates)
+        (1, True)
+        """
+        checked = (_choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
+        return WorkStats(*self._native.work(*checked, bool(leaf_exact)))
 
     def _query(self, kind: Any, mode: Any, radius: Any, leaf_exact: bool, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
         kind = _choice(kind, "kind", KINDS)

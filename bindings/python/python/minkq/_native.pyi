@@ -43,6 +43,7 @@ class Scene:
         canonical: bool,
         digest: bool,
     ) -> Tuple[int, Optional[int]]: ...
+    def work(self, kind: str, mode: str, radius: float, leaf_exact: bool) -> Tuple[int, int, int, int]: ...
 
 class Bvh:
     box_count: int
