@@ -3,6 +3,8 @@
 // the work counters (the same on every backend) and CPU time (median of repeats, all
 // threads). Variants:
 //   VT   queries in vertex id order         vs  in vertex Morton order (kept)
+//   leaf ranges of 1 (the binary tree), 2, 4, 8 (kept) or 16 primitives: VT sphere, EE box and
+//        EE capsule_exact on each
 //   EE   every edge queries the whole tree  vs  each pair met once: a query reaches only the
 //        and keeps f > e (each pair met        leaves after its own, and tests the pair the
 //        twice)                                other way round at the leaf (kept), the box of
@@ -128,6 +130,38 @@ std::string compare_ee(const SceneFrames& sc, const Vec3* v, const Edge* e, floa
          row(sc.name, "EE", mode, "once, reverse test from the node's box", c, ne, a);
 }
 
+// Trees with leaf ranges of up to 1 (the binary tree: before), 2, 4, 8 and 16 primitives
+// (the library's kLeafSize marked kept): VT sphere, EE box and EE capsule_exact on each; the pairs must not change.
+std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
+                               int repeats, bool& ok) {
+  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
+  const int32_t ne = int32_t(sc.mesh.edge_count());
+  std::vector<uint64_t> keys;
+  std::vector<int32_t> order;
+  sort_by_morton(PointBoxes{v}, nv, keys, order);
+  std::string out;
+  Outcome base[3];
+  for (int32_t leaf : {1, 2, 4, 8, 16}) {
+    CpuTree triangles, edges;
+    triangles.build(TriangleBoxes{v, t}, nt, leaf);
+    edges.build(EdgeBoxes{v, e}, ne, leaf);
+    const double node_bytes = 64.0 * double(triangles.nodes().size() + edges.nodes().size()) / double(nt);
+    char label[160];
+    std::snprintf(label, sizeof label, "leaf size %d%s: %.1f B of nodes / triangle", leaf,
+                  leaf == 1 ? " (before)" : leaf == kLeafSize ? " (kept)" : "", node_bytes);
+    const VertexTriangleQueries vt{v, t, order.data(), r, kDropIncident};
+    const EdgeEdgeQueries ee{v, e, edges.sorted_prims().data(), r, kDropIncident};
+    const Outcome got[3] = {run<SphereShape>(triangles.view(), vt, nv, repeats),
+                            run<BoxShape>(edges.view(), ee, ne, repeats),
+                            run<CapsuleExactShape>(edges.view(), ee, ne, repeats)};
+    if (leaf == 1) std::copy(got, got + 3, base);
+    for (int k = 0; k < 3; ++k) ok &= got[k].pairs == base[k].pairs;
+    out += row(sc.name, "VT", "sphere", label, got[0], nv, base[0]) + row(sc.name, "EE", "box", label, got[1], ne, base[1]) +
+           row(sc.name, "EE", "capsule_exact", label, got[2], ne, base[2]);
+  }
+  return out;
+}
+
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
   const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
@@ -148,7 +182,7 @@ std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
                     row(sc.name, "VT", "sphere", "vertex Morton order", b, nv, a);
   out += compare_ee<BoxShape>(sc, v, e, r, "box", repeats, ok);
   out += compare_ee<CapsuleExactShape>(sc, v, e, r, "capsule_exact", repeats, ok);
-  return out;
+  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok);
 }
 
 }  // namespace

@@ -21,6 +21,8 @@
 #include <sstream>
 
 #include "common.h"
+#include "cpu_tree.h"
+#include "minkq/queries.h"
 #include "embree_vt.h"
 #include "minkq/predicates.h"
 #include "scenes.h"
@@ -149,12 +151,21 @@ struct Report {
 
 // Bytes of trees and scene data of a CPU VT+EE scene from the library's layouts: vertices
 // (12 B), triangles (12 B) and edges (8 B) in the store, and the vertices' query order (4 B);
-// per tree of n primitives n - 1 nodes of 64 B, a 4 B leaf-parent link and a 4 B sorted-leaf
-// entry per leaf, and a 4 B refit counter per node; the C API's scene keeps a second copy of
-// triangles and edges (capi/minkq.cpp, struct minkq_scene).
-double layout_bytes(int64_t v, int64_t t, int64_t e) {
-  auto tree = [](int64_t n) { return n > 1 ? 64.0 * (n - 1) + 8.0 * n + 4.0 * (n - 1) : 64.0 + 8.0 * n; };
-  return 16.0 * v + 12.0 * t + 8.0 * e + tree(t) + tree(e) + 12.0 * t + 8.0 * e;
+// per tree of n primitives its node records (64 B, plus a 4 B refit counter each: the count is
+// the library's own tree's, built here) and per leaf a sorted-order primitive id, a range
+// link and a leaf box (4 + 4 + 24 B); the C API's scene keeps a second copy of triangles and
+// edges (capi/minkq.cpp, struct minkq_scene).
+double layout_bytes(const SceneFrames& sc) {
+  const auto* v = reinterpret_cast<const minkq::Vec3*>(sc.mesh.xyz.data());
+  const auto* t = reinterpret_cast<const minkq::Triangle*>(sc.mesh.tris.data());
+  const auto* e = reinterpret_cast<const minkq::Edge*>(sc.mesh.edges.data());
+  const int64_t nv = int64_t(sc.mesh.vertex_count()), nt = int64_t(sc.mesh.triangle_count());
+  const int64_t ne = int64_t(sc.mesh.edge_count());
+  minkq::CpuTree triangles, edges;
+  triangles.build(minkq::TriangleBoxes{v, t}, int32_t(nt));
+  edges.build(minkq::EdgeBoxes{v, e}, int32_t(ne));
+  const double nodes = double(triangles.nodes().size() + edges.nodes().size());
+  return 16.0 * nv + 12.0 * nt + 8.0 * ne + 68.0 * nodes + 32.0 * double(nt + ne) + 12.0 * nt + 8.0 * ne;
 }
 
 // The narrow phase a simulator runs on every candidate, at its cheapest: the double-precision
@@ -233,7 +244,7 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
   info.r = r;
   info.mean_edge = sc.mean_edge;
   info.load_start = load_average();
-  info.layout_bytes = layout_bytes(info.vertices, info.triangles, info.edges);
+  info.layout_bytes = layout_bytes(sc);
   if (cfg.max_pairs > 0) {  // count box candidates without storing them (capacity 0)
     Device dev = open_device("cpu");
     Scene scene = create_scene(dev.get(), sc.frames.back(), sc.mesh.tris);

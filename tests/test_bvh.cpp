@@ -1,5 +1,6 @@
-// BVH invariants after build and after refit: every primitive is exactly one leaf, parent links
-// agree with child links, each stored child box is exactly the union of the boxes below it,
+// BVH invariants after build and after refit: every primitive lies in exactly one leaf range of
+// at most kLeafSize positions, parent links agree with child links, each stored child box is
+// exactly the union of the boxes below it,
 // and depth stays within the traversal stack's bound even when all Morton codes tie.
 #include <gtest/gtest.h>
 
@@ -25,12 +26,19 @@ Box check_subtree(const CpuTree& tree, const std::vector<Box>& boxes, int32_t no
   for (int side = 0; side < 2; ++side) {
     const int32_t child = children[side];
     if (child == kNoChild) continue;
-    Box below;
-    if (child < 0) {
-      const int32_t prim = ~child;
-      EXPECT_EQ(tree.leaf_parent()[prim], node << 1 | side);
-      ++seen[prim];
-      below = boxes[prim];
+    Box below = Box::empty();
+    if (child < 0) {  // a leaf range of sorted positions
+      const int32_t first = side ? n.split + 1 : ~child, last = side ? ~child : n.split;
+      EXPECT_LE(first, last);
+      EXPECT_LE(last - first + 1, kLeafSize);
+      EXPECT_EQ(tree.range_parent()[first], node << 1 | side);
+      for (int32_t p = first; p <= last; ++p) {
+        const int32_t prim = tree.sorted_prims()[p];
+        ++seen[prim];
+        EXPECT_TRUE(same_box(tree.leaf_boxes()[p], boxes[prim])) << "position " << p;
+        if (p > first) EXPECT_EQ(tree.range_parent()[p], -1);
+        below = box_union(below, boxes[prim]);
+      }
     } else {
       EXPECT_EQ(tree.nodes()[child].parent, node << 1 | side);
       below = check_subtree(tree, boxes, child, depth + 1, seen, max_depth);
@@ -65,6 +73,8 @@ TEST(Bvh, invariants_hold_after_build_and_refit) {
     CpuTree tree;
     tree.build(GivenBoxes{boxes.data()}, n);
     check_tree(tree, boxes);
+    // Subtrees of up to kLeafSize leaves are collapsed: well under the binary tree's n - 1 nodes.
+    if (n >= 100) EXPECT_LT(tree.nodes().size(), size_t(n) / 2);
     for (Box& b : boxes) {
       const Vec3 shift = rng.vec3(-3, 3);
       b = {b.lo + shift, b.hi + shift};

@@ -49,30 +49,48 @@ void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::ve
 class CpuTree {
  public:
   const std::vector<BvhNode>& nodes() const { return nodes_; }
-  const std::vector<int32_t>& leaf_parent() const { return leaf_parent_; }
+  // For each sorted position: the parent slot of the leaf range starting there, else -1.
+  const std::vector<int32_t>& range_parent() const { return range_parent_; }
+  const std::vector<Box>& leaf_boxes() const { return leaf_boxes_; }
   // Primitive at each sorted leaf position.
   const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
+  // leaf_size: primitives per leaf range at most (1 to kLeafSize; other sizes for studies).
   template <class Boxes>
-  void build(Boxes boxes, int32_t n) {
+  void build(Boxes boxes, int32_t n, int32_t leaf_size = kLeafSize) {
     n_ = n;
-    nodes_.assign(size_t(n > 1 ? n - 1 : n), BvhNode{});
-    leaf_parent_.assign(size_t(n), 0);
-    arrivals_.assign(nodes_.size(), 0);
+    nodes_.clear();
+    range_parent_.assign(size_t(n), -1);
+    leaf_boxes_.assign(size_t(n), Box{});
     sorted_prims_.assign(size_t(n), 0);
+    arrivals_.clear();
     if (n == 0) return;
     if (n == 1) {
+      nodes_.assign(1, BvhNode{});
       nodes_[0].left = ~0;
       nodes_[0].right = kNoChild;
       nodes_[0].parent = -1;
       nodes_[0].split = 0;
+      range_parent_[0] = 0;
+      arrivals_.assign(1, 0);
       refit(boxes);
       return;
     }
     std::vector<uint64_t> keys;
     sort_by_morton(boxes, n, keys, sorted_prims_);
+    std::vector<KarrasNode> karras(size_t(n - 1));
+    parallel_for_each(n - 1, [&](int64_t i) { karras[i] = karras_node(int32_t(i), keys.data(), n); });
+    std::vector<int32_t> new_index(size_t(n - 1));
+    int32_t kept = 0;
+    for (int32_t i = 0; i < n - 1; ++i) {
+      new_index[i] = kept;
+      kept += keeps_node(i, karras[i], leaf_size) ? 1 : 0;
+    }
+    nodes_.assign(size_t(kept), BvhNode{});
+    arrivals_.assign(size_t(kept), 0);
     parallel_for_each(n - 1, [&](int64_t i) {
-      build_internal_node(int32_t(i), keys.data(), sorted_prims_.data(), n, nodes_.data(), leaf_parent_.data());
+      if (keeps_node(int32_t(i), karras[i], leaf_size))
+        collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes_.data(), range_parent_.data());
     });
     refit(boxes);
   }
@@ -81,19 +99,21 @@ class CpuTree {
   void refit(Boxes boxes) {
     std::fill(arrivals_.begin(), arrivals_.end(), 0);
     parallel_for_each(n_, [&](int64_t p) {
-      refit_from_leaf(int32_t(p), boxes(int32_t(p)), leaf_parent_.data(), nodes_.data(), arrivals_.data());
+      refit_from_range(int32_t(p), boxes, sorted_prims_.data(), range_parent_.data(), leaf_boxes_.data(), nodes_.data(),
+                       arrivals_.data());
     });
   }
 
-  BvhView view() const { return {nodes_.data(), n_}; }
+  BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
   int32_t size() const { return n_; }
 
  private:
   int32_t n_ = 0;
   std::vector<BvhNode> nodes_;
-  std::vector<int32_t> leaf_parent_;
+  std::vector<int32_t> range_parent_;
   std::vector<int32_t> arrivals_;
   std::vector<int32_t> sorted_prims_;
+  std::vector<Box> leaf_boxes_;
 };
 
 }  // namespace minkq

@@ -6,6 +6,7 @@
 
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
+#include <cub/device/device_scan.cuh>
 #include <thrust/iterator/counting_iterator.h>
 
 #include <algorithm>
@@ -178,16 +179,25 @@ __global__ void morton_kernel(Boxes boxes, int32_t n, const Box* centre_bounds, 
   ids[i] = int32_t(i);
 }
 
-__global__ void internal_node_kernel(const uint64_t* keys, const int32_t* prims, int32_t n, BvhNode* nodes,
-                                     int32_t* leaf_parent) {
+__global__ void karras_kernel(const uint64_t* keys, int32_t n, KarrasNode* karras, int32_t* kept) {
   const int64_t i = global_index();
-  if (i < n - 1) build_internal_node(int32_t(i), keys, prims, n, nodes, leaf_parent);
+  if (i >= n - 1) return;
+  karras[i] = karras_node(int32_t(i), keys, n);
+  kept[i] = keeps_node(int32_t(i), karras[i], kLeafSize) ? 1 : 0;
+}
+
+__global__ void collapse_kernel(const KarrasNode* karras, const int32_t* new_index, int32_t n, BvhNode* nodes,
+                                int32_t* range_parent) {
+  const int64_t i = global_index();
+  if (i < n - 1 && keeps_node(int32_t(i), karras[i], kLeafSize))
+    collapse_node(int32_t(i), karras, new_index, kLeafSize, nodes, range_parent);
 }
 
 template <class Boxes>
-__global__ void refit_kernel(Boxes boxes, int32_t n, const int32_t* leaf_parent, BvhNode* nodes, int32_t* arrivals) {
+__global__ void refit_kernel(Boxes boxes, int32_t n, const int32_t* sorted_prims, const int32_t* range_parent,
+                             Box* leaf_boxes, BvhNode* nodes, int32_t* arrivals) {
   const int64_t p = global_index();
-  if (p < n) refit_from_leaf(int32_t(p), boxes(int32_t(p)), leaf_parent, nodes, arrivals);
+  if (p < n) refit_from_range(int32_t(p), boxes, sorted_prims, range_parent, leaf_boxes, nodes, arrivals);
 }
 
 // Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id: cpu_tree.h's
@@ -222,20 +232,18 @@ void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<uint64_t>& sorted_keys,
   }
 }
 
-// CpuTree::build step by step; the arrays start zeroed as the CPU's value-initialised vectors.
+// CpuTree::build step by step.
 class CudaTree {
  public:
   template <class Boxes>
   void build(Boxes boxes, int32_t n) {
     n_ = n;
-    const size_t num_nodes = size_t(n > 1 ? n - 1 : n);
-    nodes_.ensure(num_nodes);
-    leaf_parent_.ensure(size_t(n));
-    arrivals_.ensure(num_nodes);
+    range_parent_.ensure(size_t(n));
+    leaf_boxes_.ensure(size_t(n));
     sorted_prims_.ensure(size_t(n));
-    zero(nodes_, num_nodes);
-    zero(leaf_parent_, size_t(n));
+    if (n) check(cudaMemsetAsync(range_parent_.data(), 0xff, size_t(n) * sizeof(int32_t), kStream), "cudaMemsetAsync");
     zero(sorted_prims_, size_t(n));
+    num_nodes_ = 0;
     if (n == 0) return;
     if (n == 1) {
       BvhNode root{};
@@ -243,33 +251,58 @@ class CudaTree {
       root.right = kNoChild;
       root.parent = -1;
       root.split = 0;
+      num_nodes_ = 1;
+      nodes_.ensure(1);
+      arrivals_.ensure(1);
       copy(nodes_.data(), &root, sizeof(root), cudaMemcpyHostToDevice);
+      const int32_t root_slot = 0;
+      copy(range_parent_.data(), &root_slot, sizeof(root_slot), cudaMemcpyHostToDevice);
       refit(boxes);
       return;
     }
     DeviceBuffer<uint64_t> sorted_keys;
     sort_by_morton(boxes, n, sorted_keys, sorted_prims_);
-    launch("internal_node_kernel launch", internal_node_kernel, n - 1, kThreads, sorted_keys.data(),
-           sorted_prims_.data(), n, nodes_.data(), leaf_parent_.data());
+    DeviceBuffer<KarrasNode> karras(size_t(n - 1));
+    DeviceBuffer<int32_t> kept(size_t(n - 1)), new_index(size_t(n - 1));
+    launch("karras_kernel launch", karras_kernel, n - 1, kThreads, sorted_keys.data(), n, karras.data(), kept.data());
+    DeviceBuffer<char> temp;
+    size_t bytes = 0;
+    for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
+      check(cub::DeviceScan::ExclusiveSum(pass ? temp.data() : nullptr, bytes, kept.data(), new_index.data(), n - 1,
+                                          kStream),
+            "cub::DeviceScan::ExclusiveSum");
+      temp.ensure(bytes);
+    }
+    int32_t last_index = 0, last_kept = 0;
+    copy(&last_index, new_index.data() + (n - 2), sizeof(int32_t), cudaMemcpyDeviceToHost);
+    copy(&last_kept, kept.data() + (n - 2), sizeof(int32_t), cudaMemcpyDeviceToHost);
+    num_nodes_ = last_index + last_kept;
+    nodes_.ensure(size_t(num_nodes_));
+    arrivals_.ensure(size_t(num_nodes_));
+    zero(nodes_, size_t(num_nodes_));
+    launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, karras.data(), new_index.data(), n,
+           nodes_.data(), range_parent_.data());
     refit(boxes);
   }
 
   template <class Boxes>
   void refit(Boxes boxes) {
-    zero(arrivals_, arrivals_.size());
-    launch("refit_kernel launch", refit_kernel<Boxes>, n_, kThreads, boxes, n_, leaf_parent_.data(), nodes_.data(),
-           arrivals_.data());
+    zero(arrivals_, size_t(num_nodes_));
+    launch("refit_kernel launch", refit_kernel<Boxes>, n_, kThreads, boxes, n_, sorted_prims_.data(),
+           range_parent_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
   }
 
-  BvhView view() const { return {nodes_.data(), n_}; }
+  BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
   const int32_t* sorted_prims() const { return sorted_prims_.data(); }
 
  private:
   int32_t n_ = 0;
+  int32_t num_nodes_ = 0;
   DeviceBuffer<BvhNode> nodes_;
-  DeviceBuffer<int32_t> leaf_parent_;
+  DeviceBuffer<int32_t> range_parent_;  // parent slot of the leaf range starting at each position, else -1
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
+  DeviceBuffer<Box> leaf_boxes_;        // box of the primitive at each sorted position
 };
 
 // ---- Queries --------------------------------------------------------------------------------

@@ -1,5 +1,6 @@
-// Linear BVH (Karras 2012) over primitive boxes: flat arrays of PODs, identical on CPU and
-// GPU. Each step is a per-element __host__ __device__ function; a backend only loops over it.
+// Linear BVH (Karras 2012) over primitive boxes, with subtrees of up to kLeafSize primitives
+// collapsed into leaf ranges: flat arrays of PODs, identical on CPU and GPU. Each step is a
+// per-element __host__ __device__ function; a backend only loops over it.
 #pragma once
 
 #include "minkq/hd.h"
@@ -7,9 +8,10 @@
 namespace minkq {
 
 // One internal node in 64 bytes: both children's boxes travel together, so a visit reads one
-// record. Child >= 0: internal node index; child < 0: leaf holding primitive ~child.
-// A node covers the sorted leaf positions [first, last]; its left child covers [first, split]
-// and its right child [split + 1, last] (Karras), which lets a self-query skip the left child.
+// record. A node covers the sorted leaf positions [first, last]; its left child covers
+// [first, split] and its right child [split + 1, last] (Karras), which lets a self-query skip
+// the left child. Child >= 0: internal node index; child < 0: a leaf range of at most
+// kLeafSize positions, [~left, split] on the left and [split + 1, ~right] on the right.
 struct BvhNode {
   Box left_box;
   Box right_box;
@@ -20,15 +22,21 @@ struct BvhNode {
 };
 static_assert(sizeof(BvhNode) == 64, "node record must stay one 64-byte line");
 
+// Primitives per leaf range at most: the bottom levels of the binary tree become a short scan
+// of contiguous leaf boxes (fewer node records to read and to store). The library's trees use
+// kLeafSize (bench/results/ablation.md compares sizes); 1 gives the plain binary tree.
+constexpr int32_t kLeafSize = 8;
 constexpr int32_t kNoChild = INT32_MIN;
 // Keys are 63 Morton bits plus a 32-bit index tie-break; each level down lengthens the shared
 // key prefix, so depth <= 96 and a traversal stack of 128 entries never overflows.
 constexpr int kTraversalStack = 128;
-// Primitive ids must leave ~id distinct from kNoChild.
+// Leaf positions must leave ~position distinct from kNoChild.
 constexpr int64_t kMaxPrimitives = INT32_MAX - 1;
 
 struct BvhView {
   const BvhNode* nodes;
+  const Box* leaf_boxes;        // the box of the primitive at each sorted position
+  const int32_t* sorted_prims;  // the primitive at each sorted position
   int32_t num_prims;
 };
 
@@ -87,10 +95,13 @@ MINKQ_HD int common_prefix(const uint64_t* keys, int32_t n, int32_t i, int64_t j
   return 64 + count_leading_zeros64(uint64_t(uint32_t(i) ^ uint32_t(j))) - 32;  // index tie-break
 }
 
-// Internal node i of the Karras tree over n >= 2 sorted leaves. sorted_prims maps leaf
-// position to primitive id. Writes node i's children and the parent links of its children.
-MINKQ_HD void build_internal_node(int32_t i, const uint64_t* keys, const int32_t* sorted_prims,
-                                  int32_t n, BvhNode* nodes, int32_t* leaf_parent) {
+// Node i of the binary Karras tree over n >= 2 sorted leaves: it covers positions
+// [first, last]; its left child covers [first, split] (internal node `split` unless it is one
+// leaf) and its right child [split + 1, last] (internal node split + 1 unless one leaf).
+struct KarrasNode {
+  int32_t first, last, split;
+};
+MINKQ_HD KarrasNode karras_node(int32_t i, const uint64_t* keys, int32_t n) {
   const int dir = common_prefix(keys, n, i, i + 1) - common_prefix(keys, n, i, i - 1) > 0 ? 1 : -1;
   const int delta_min = common_prefix(keys, n, i, i - dir);
   int64_t lmax = 2;
@@ -107,24 +118,41 @@ MINKQ_HD void build_internal_node(int32_t i, const uint64_t* keys, const int32_t
     if (t <= 1) break;
   }
   const int32_t split = int32_t(i + s * dir + (dir < 0 ? -1 : 0));
-  const int32_t first = i < j ? i : j, last = i < j ? j : i;
-  BvhNode& node = nodes[i];
-  node.split = split;
-  if (first == split) {
-    node.left = ~sorted_prims[split];
-    leaf_parent[sorted_prims[split]] = i << 1;
-  } else {
-    node.left = split;
-    nodes[split].parent = i << 1;
-  }
-  if (last == split + 1) {
-    node.right = ~sorted_prims[split + 1];
-    leaf_parent[sorted_prims[split + 1]] = i << 1 | 1;
-  } else {
-    node.right = split + 1;
-    nodes[split + 1].parent = i << 1 | 1;
-  }
+  return {i < j ? i : j, i < j ? j : i, split};
+}
+
+// Whether Karras node i stays an internal node: it covers more than leaf_size leaves (the root
+// always stays). Kept nodes form the top of the tree: a parent covers more than its child.
+MINKQ_HD bool keeps_node(int32_t i, const KarrasNode& k, int32_t leaf_size) {
+  return i == 0 || k.last - k.first + 1 > leaf_size;
+}
+
+// Writes kept Karras node i as node new_index[i]: children that are kept nodes by their new
+// index, every other child (a small subtree or one leaf) as a leaf range; links each child to
+// it (range_parent is indexed by the range's first position; -1 elsewhere).
+MINKQ_HD void collapse_node(int32_t i, const KarrasNode* karras, const int32_t* new_index, int32_t leaf_size,
+                            BvhNode* nodes, int32_t* range_parent) {
+  const KarrasNode k = karras[i];
+  const int32_t self = new_index[i];
+  BvhNode& node = nodes[self];
+  node.split = k.split;
   if (i == 0) node.parent = -1;
+  const bool left_internal = k.first != k.split && keeps_node(k.split, karras[k.split], leaf_size);
+  if (left_internal) {
+    node.left = new_index[k.split];
+    nodes[node.left].parent = self << 1;
+  } else {
+    node.left = ~k.first;
+    range_parent[k.first] = self << 1;
+  }
+  const bool right_internal = k.last != k.split + 1 && keeps_node(k.split + 1, karras[k.split + 1], leaf_size);
+  if (right_internal) {
+    node.right = new_index[k.split + 1];
+    nodes[node.right].parent = self << 1 | 1;
+  } else {
+    node.right = ~k.last;
+    range_parent[k.split + 1] = self << 1 | 1;
+  }
 }
 
 // ---- Bottom-up refit ---------------------------------------------------------------------------
@@ -152,11 +180,23 @@ MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
   if (slot & 1) parent.right_box = box; else parent.left_box = box;
 }
 
-// Refit from leaf prim with its new box: the second of two children to arrive at a node
-// (counters zeroed before the pass) merges both boxes and climbs on. Unions are exact.
-MINKQ_HD void refit_from_leaf(int32_t prim, const Box& box, const int32_t* leaf_parent,
-                              BvhNode* nodes, int32_t* arrivals) {
-  int32_t slot = leaf_parent[prim];
+// Refit from the leaf range starting at sorted position p (a thread per position; the others
+// return at once): writes its primitives' boxes and merges them into the parent's child box.
+// The second of two children to arrive at a node (counters zeroed before the pass) merges
+// both boxes and climbs on. Unions are exact.
+template <class Boxes>
+MINKQ_HD void refit_from_range(int32_t p, const Boxes& boxes, const int32_t* sorted_prims, const int32_t* range_parent,
+                               Box* leaf_boxes, BvhNode* nodes, int32_t* arrivals) {
+  int32_t slot = range_parent[p];
+  if (slot < 0) return;
+  const BvhNode& parent = nodes[slot >> 1];
+  const int32_t last = (slot & 1) ? ~parent.right : parent.split;
+  Box box = Box::empty();
+  for (int32_t q = p; q <= last; ++q) {
+    const Box b = boxes(sorted_prims[q]);
+    leaf_boxes[q] = b;
+    box = box_union(box, b);
+  }
   store_child_box(nodes, slot, box);
   int32_t node = slot >> 1;
   while (true) {
@@ -208,6 +248,15 @@ struct NoWork {
 template <class Shape, class OnLeaf, class Work>
 MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
+  // A range's box is the union of its leaf boxes: one leaf's box is the range's own.
+  auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
+    if (first == last) return on_leaf(bvh.sorted_prims[first], range_box);
+    for (int32_t p = first > after ? first : after + 1; p <= last; ++p) {
+      const Box box = bvh.leaf_boxes[p];
+      work.test_node();
+      if (shape.overlaps(box)) on_leaf(bvh.sorted_prims[p], box);
+    }
+  };
   int32_t stack[kTraversalStack];
   int sp = 0;
   int32_t node = 0;
@@ -218,14 +267,14 @@ MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
     if (n.split > after) {
       work.test_node();
       if (shape.overlaps(n.left_box)) {
-        if (n.left < 0) on_leaf(~n.left, n.left_box); else next = n.left;
+        if (n.left < 0) visit_range(~n.left, n.split, n.left_box); else next = n.left;
       }
     }
     if (n.right != kNoChild) {
       work.test_node();
       if (shape.overlaps(n.right_box)) {
         if (n.right < 0) {
-          on_leaf(~n.right, n.right_box);
+          visit_range(n.split + 1, ~n.right, n.right_box);
         } else if (next < 0) {
           next = n.right;
         } else {
