@@ -65,6 +65,18 @@ struct EdgeEdgeOnceFromVertices {
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
 };
 
+// Each pair once, queries in edge id order: query i is edge i, pruned at its own leaf position.
+struct EdgeEdgeOnceByIdOrder {
+  EdgeEdgeQueries base;
+  const int32_t* position;  // sorted leaf position of each edge
+  static constexpr bool kOncePerPair = true;
+  QueryTarget target(int32_t i) const { return {i, position[i]}; }
+  QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
+  template <class Shape>
+  bool accept(int32_t e, int32_t f, const Box& f_box) const { return base.accept<Shape>(e, f, f_box); }
+  Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
+};
+
 struct Outcome {
   WorkCounts work;
   double ms = 0;
@@ -120,14 +132,20 @@ std::string compare_ee(const SceneFrames& sc, const Vec3* v, const Edge* e, floa
   const EdgeEdgeQueries once{v, e, tree.sorted_prims().data(), r, kDropIncident};
   const EdgeEdgeTwice twice{once};
   const EdgeEdgeOnceFromVertices once_from_vertices{once};
+  std::vector<int32_t> position(static_cast<size_t>(ne));
+  for (int32_t i = 0; i < ne; ++i) position[size_t(tree.sorted_prims()[size_t(i)])] = i;
+  const EdgeEdgeOnceByIdOrder once_by_id{once, position.data()};
   const Outcome a = run<Shape>(tree.view(), twice, ne, repeats);
   const Outcome b = run<Shape>(tree.view(), once_from_vertices, ne, repeats);
   const Outcome c = run<Shape>(tree.view(), once, ne, repeats);
+  const Outcome d = run<Shape>(tree.view(), once_by_id, ne, repeats);
   // The once-variants' set is the twice-variant's minus pairs failing the reverse node test.
-  ok &= std::includes(a.pairs.begin(), a.pairs.end(), c.pairs.begin(), c.pairs.end()) && b.pairs == c.pairs;
+  ok &= std::includes(a.pairs.begin(), a.pairs.end(), c.pairs.begin(), c.pairs.end()) && b.pairs == c.pairs &&
+        d.pairs == c.pairs;
   return row(sc.name, "EE", mode, "each pair twice (before)", a, ne, a) +
          row(sc.name, "EE", mode, "once, reverse test from vertices", b, ne, a) +
-         row(sc.name, "EE", mode, "once, reverse test from the node's box", c, ne, a);
+         row(sc.name, "EE", mode, "once, reverse test from the node's box (kept)", c, ne, a) +
+         row(sc.name, "EE", mode, "once, node's box, queries in edge id order", d, ne, a);
 }
 
 // Trees with leaf ranges of up to 1 (the binary tree: before), 2, 4, 8 and 16 primitives
