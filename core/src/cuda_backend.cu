@@ -7,6 +7,8 @@
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
+#include <cooperative_groups.h>
+#include <cooperative_groups/scan.h>
 #include <thrust/iterator/counting_iterator.h>
 
 #include <algorithm>
@@ -19,6 +21,8 @@
 
 namespace minkq {
 namespace {
+
+namespace cg = cooperative_groups;
 
 const cudaStream_t kStream = cudaStreamPerThread;
 constexpr int kThreads = 256;       // element-wise kernels
@@ -314,8 +318,18 @@ struct PairSlots {
   unsigned long long* count;
 };
 
-// emit() of one query's thread: buffers up to kFlush pairs and reserves their slots with one
-// atomicAdd, far fewer atomics than one per pair on dense scenes.
+// Reserves n slots of *count for each lane that calls it: the lanes of a warp calling together
+// share one atomicAdd (its last lane adds the group's total; each lane gets its prefix).
+__device__ unsigned long long reserve_slots(unsigned long long* count, unsigned long long n) {
+  const cg::coalesced_group group = cg::coalesced_threads();
+  const unsigned long long before = cg::exclusive_scan(group, n);
+  unsigned long long base = 0;
+  if (group.thread_rank() == group.size() - 1) base = atomicAdd(count, before + n);
+  return group.shfl(base, group.size() - 1) + before;
+}
+
+// emit() of one query's thread: buffers up to kFlush pairs and reserves their slots in one
+// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair.
 class PairBuffer {
  public:
   static constexpr int kFlush = 16;
@@ -326,7 +340,7 @@ class PairBuffer {
   }
   __device__ void flush() {
     if (n_ == 0) return;
-    const unsigned long long first = atomicAdd(slots_.count, static_cast<unsigned long long>(n_));
+    const unsigned long long first = reserve_slots(slots_.count, static_cast<unsigned long long>(n_));
     for (int k = 0; k < n_; ++k) {
       const unsigned long long slot = first + k;
       if (slot >= slots_.capacity) break;
