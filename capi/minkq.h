@@ -133,7 +133,9 @@ typedef enum minkq_query_kind {
 } minkq_query_kind;
 
 /* The node test, from fast to tight. Points are zero-length capsules: for VT, capsule_ray is
- * the box test and capsule_exact the sphere test. */
+ * the box test and capsule_exact the sphere test. EE keeps a pair {e, f} when the test passes
+ * both ways (e's shape against f's box and f's shape against e's box), so the set does not
+ * depend on which edge queried. */
 typedef enum minkq_mode {
   MINKQ_MODE_BOX = 0,           /* r-padded box of the query element against node boxes */
   MINKQ_MODE_SPHERE = 1,        /* point-box distance (point queries only: VT, spheres) */
