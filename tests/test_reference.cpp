@@ -103,6 +103,18 @@ TEST(ReferenceDistance, SegmentSegment) {
   }
 }
 
+// Two nearly parallel segments whose lines cross just beyond both (s = -1.5e-6, t = 1 + 4e-12):
+// the closed-form parameters of the textbook (bf - ce) / nn cancelled in long double and put
+// the crossing inside, giving distance 0 for 3.339e23 (fuzz_differential, fuzz/RESULTS.md).
+TEST(ReferenceDistance, NearlyParallelSegmentsDoNotTakeTheLinesCrossing) {
+  const double z = -0x1p+126;
+  const double p0[3] = {0x1.ffffeep+96, 0x1.ffffeep+96, z}, p1[3] = {0x1.fffff8p+97, 0x1.fffff8p+97, z};
+  const double q0[3] = {-0x1.0c6f7ap+78, -0x1.0b60fp+78, z}, q1[3] = {0x1.ffffbcp+96, 0x1.ffffbcp+96, z};
+  const double expected = 3.3392173632851924e+23;  // exact rational arithmetic: |p0 - q1|
+  EXPECT_NEAR(ss(p0, p1, q0, q1), expected, 1e-12 * expected);
+  EXPECT_NEAR(ss(q0, q1, p0, p1), expected, 1e-12 * expected);
+}
+
 // The distance is a minimum, so it never exceeds a sampled distance, and the best of a dense
 // sample is within the sampling step times the Lipschitz constant of it.
 TEST(ReferenceDistance, AgreesWithDenseSampling) {
