@@ -675,8 +675,10 @@ std::string memory_table(const Report& rep, const Options& opt, const std::strin
   std::ostringstream o;
   o << header("Memory per triangle (VT + EE scene)", machine, opt, rep.scenes.empty() ? 0 : rep.scenes.front().load_start);
   o << "Layout bytes from the library's structures (CPU backend; the CUDA backend keeps the same arrays in device "
-       "memory): vertices 12 B, triangles 12 B, edges 8 B; per tree of n primitives n - 1 nodes of 64 B plus a 4 B "
-       "leaf-parent link per primitive and a 4 B refit counter per node; plus the C API scene's second copy of "
+       "memory): vertices 12 B plus a 4 B query-order entry, triangles 12 B, edges 8 B; per tree its node records "
+       "(64 B and a 4 B refit counter each; leaf ranges of up to 8 primitives leave about n / 5 nodes for n "
+       "primitives) and per primitive a sorted-order id, a range link and a leaf box (4 + 4 + 24 B); plus the C "
+       "API scene's second copy of "
        "triangles and edges (capi/minkq.cpp keeps them for minkq_scene_edges and checks). Output buffers excluded. "
        "RSS delta: resident memory before and after minkq_scene_create (malloc_trim first; includes allocator slack, "
        "excludes pages freed after the build).\n\n";
