@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "../fuzz/scene_checks.h"
 #include "capi_util.h"
 #include "contact_checks.h"
 #include "minkq/queries.h"
@@ -20,33 +21,6 @@ using test::ee_distance;
 using test::vt_distance;
 
 constexpr uint32_t kBoth = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
-
-struct Views {  // the mesh as the core's types, for brute-force definitions
-  std::vector<Vec3> vertices;
-  std::vector<Triangle> triangles;
-  std::vector<Edge> edges;
-  Views(const Mesh& mesh, const std::vector<int32_t>& edge_ids) {
-    vertices.resize(mesh.xyz.size() / 3);
-    std::memcpy(vertices.data(), mesh.xyz.data(), mesh.xyz.size() * sizeof(float));
-    triangles.resize(mesh.tris.size() / 3);
-    std::memcpy(triangles.data(), mesh.tris.data(), mesh.tris.size() * sizeof(int32_t));
-    edges.resize(edge_ids.size() / 2);
-    std::memcpy(edges.data(), edge_ids.data(), edge_ids.size() * sizeof(int32_t));
-  }
-};
-
-// The candidate set a mode defines: the node test of its shape applied to every primitive box,
-// then the leaf filter. Traversal must find exactly this set.
-template <class Shape, class Queries, class Boxes>
-Pairs brute_force_definition(const Queries& queries, int32_t num_queries, const Boxes& boxes, int32_t num_prims) {
-  Pairs out;
-  for (int32_t q = 0; q < num_queries; ++q) {
-    const Shape shape = Shape::from(queries.geometry(q));
-    for (int32_t p = Queries::kOncePerPair ? q + 1 : 0; p < num_prims; ++p)
-      if (shape.overlaps(boxes(p)) && queries.template accept<Shape>(q, p)) out.push_back({q, p});
-  }
-  return out;
-}
 
 // Runs every mode of both kinds and checks the whole contract against the brute-force oracle.
 void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* label, bool check_definition = true) {
@@ -99,23 +73,18 @@ void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* labe
   }
 
   if (!check_definition) return;
-  const Views views(mesh, edges);
+  // The brute-force definitions the differential fuzzer uses (fuzz/scene_checks.h).
+  const fuzz::MeshGeometry g(mesh.xyz, mesh.tris, edges);
   const uint32_t filters = drop_incident ? kDropIncident : 0u;
-  const VertexTriangleQueries vt{views.vertices.data(), views.triangles.data(), nullptr, r, filters};
-  const VertexTriangleQueries vt_exact{views.vertices.data(), views.triangles.data(), nullptr, r, filters | kLeafExact};
-  const TriangleBoxes tri_boxes{views.vertices.data(), views.triangles.data()};
-  const int32_t nv = int32_t(views.vertices.size()), nt = int32_t(views.triangles.size());
-  EXPECT_EQ(vt_box, brute_force_definition<BoxShape>(vt, nv, tri_boxes, nt));
-  EXPECT_EQ(vt_sphere, brute_force_definition<SphereShape>(vt, nv, tri_boxes, nt));
-  EXPECT_EQ(vt_leaf, brute_force_definition<SphereShape>(vt_exact, nv, tri_boxes, nt));
-  const EdgeEdgeQueries ee{views.vertices.data(), views.edges.data(), nullptr, r, filters};
-  const EdgeEdgeQueries ee_exact_q{views.vertices.data(), views.edges.data(), nullptr, r, filters | kLeafExact};
-  const EdgeBoxes edge_boxes{views.vertices.data(), views.edges.data()};
-  const int32_t ne = int32_t(views.edges.size());
-  EXPECT_EQ(ee_box, brute_force_definition<BoxShape>(ee, ne, edge_boxes, ne));
-  EXPECT_EQ(ee_ray, brute_force_definition<CapsuleRayShape>(ee, ne, edge_boxes, ne));
-  EXPECT_EQ(ee_exact, brute_force_definition<CapsuleExactShape>(ee, ne, edge_boxes, ne));
-  EXPECT_EQ(ee_leaf, brute_force_definition<CapsuleExactShape>(ee_exact_q, ne, edge_boxes, ne));
+  const auto vt = g.vt(r, filters), vt_exact = g.vt(r, filters | kLeafExact);
+  EXPECT_EQ(vt_box, fuzz::definition_set<BoxShape>(vt, g.nv(), g.triangle_boxes(), g.nt()));
+  EXPECT_EQ(vt_sphere, fuzz::definition_set<SphereShape>(vt, g.nv(), g.triangle_boxes(), g.nt()));
+  EXPECT_EQ(vt_leaf, fuzz::definition_set<SphereShape>(vt_exact, g.nv(), g.triangle_boxes(), g.nt()));
+  const auto ee = g.ee(r, filters), ee_exact_q = g.ee(r, filters | kLeafExact);
+  EXPECT_EQ(ee_box, fuzz::definition_set<BoxShape>(ee, g.ne(), g.edge_boxes(), g.ne()));
+  EXPECT_EQ(ee_ray, fuzz::definition_set<CapsuleRayShape>(ee, g.ne(), g.edge_boxes(), g.ne()));
+  EXPECT_EQ(ee_exact, fuzz::definition_set<CapsuleExactShape>(ee, g.ne(), g.edge_boxes(), g.ne()));
+  EXPECT_EQ(ee_leaf, fuzz::definition_set<CapsuleExactShape>(ee_exact_q, g.ne(), g.edge_boxes(), g.ne()));
 }
 
 class Queries : public ::testing::Test {
