@@ -1,6 +1,7 @@
 // minkq: the command-line tool. `demo` measures every query mode on a built-in scene against
 // the reference oracle; `query` runs one mode on a mesh file and prints comparable digests.
 #include "minkq.h"
+#include "minkq_handles.hpp"
 #include "minkq_reference.h"
 
 #include <algorithm>
@@ -55,21 +56,8 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-void check(minkq_status status, const char* call) {
-  if (status != MINKQ_SUCCESS)
-    throw std::runtime_error(std::string(call) + " failed: " + minkq_status_name(status) + ": " +
-                             minkq_last_error_message());
-}
-
-// Owning handles for the C API objects.
-struct Release {
-  void operator()(minkq_device* d) const { minkq_device_release(d); }
-  void operator()(minkq_scene* s) const { minkq_scene_release(s); }
-  void operator()(minkq_result* r) const { minkq_result_release(r); }
-};
-using Device = std::unique_ptr<minkq_device, Release>;
-using Scene = std::unique_ptr<minkq_scene, Release>;
-using Result = std::unique_ptr<minkq_result, Release>;
+// Owning handles, check(), open_device() and new_result() (capi/minkq_handles.hpp).
+using namespace minkq::cxx;
 
 // "--name value" or "--name=value" options, and "--name" switches, after the positional
 // arguments.
@@ -118,12 +106,6 @@ double parse_number(const std::string& option, const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v)) throw UsageError(option + ": not a finite number: '" + text + "'");
   return v;
-}
-
-Device open_device(const std::string& spec) {
-  minkq_device* d = nullptr;
-  check(minkq_device_create(spec.c_str(), &d), ("minkq_device_create(\"" + spec + "\")").c_str());
-  return Device(d);
 }
 
 // A VT + EE scene with incident pairs dropped; edges are derived by the library.
@@ -205,12 +187,7 @@ int demo(const Args& args) {
   };
   std::printf("%-4s %-26s %12s %12s %9s %10s %10s %8s\n", "kind", "mode", "candidates", "true", "fp ratio",
               "false neg", "query ms", "speedup");
-  Result result;
-  {
-    minkq_result* res = nullptr;
-    check(minkq_result_create(&res), "minkq_result_create");
-    result.reset(res);
-  }
+  Result result = new_result();
   uint64_t total_false_negatives = 0;
   double box_ms = 0;
   for (const DemoMode& m : modes) {
@@ -286,9 +263,7 @@ int query(const Args& args) {
   const ref::Mesh mesh = ref::load_mesh(args.positional[0]);
   Device device = open_device(backend);
   Scene scene = make_scene(device.get(), mesh);
-  minkq_result* res = nullptr;
-  check(minkq_result_create(&res), "minkq_result_create");
-  Result result(res);
+  Result result = new_result();
   const std::string* out = args.get("--out");
   for (const auto& [kind, name, m] : {std::tuple{MINKQ_QUERY_VT, "vt", vt_mode}, std::tuple{MINKQ_QUERY_EE, "ee", ee_mode}}) {
     const minkq_query_desc q{kind, m, flags, float(radius)};
