@@ -66,11 +66,7 @@ class CpuTree {
     arrivals_.clear();
     if (n == 0) return;
     if (n == 1) {
-      nodes_.assign(1, BvhNode{});
-      nodes_[0].left = ~0;
-      nodes_[0].right = kNoChild;
-      nodes_[0].parent = -1;
-      nodes_[0].split = 0;
+      nodes_.assign(1, one_leaf_root());
       range_parent_[0] = 0;
       arrivals_.assign(1, 0);
       refit(boxes);

@@ -250,11 +250,7 @@ class CudaTree {
     num_nodes_ = 0;
     if (n == 0) return;
     if (n == 1) {
-      BvhNode root{};
-      root.left = ~0;
-      root.right = kNoChild;
-      root.parent = -1;
-      root.split = 0;
+      const BvhNode root = one_leaf_root();
       num_nodes_ = 1;
       nodes_.ensure(1);
       arrivals_.ensure(1);

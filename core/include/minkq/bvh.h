@@ -121,6 +121,17 @@ MINKQ_HD KarrasNode karras_node(int32_t i, const uint64_t* keys, int32_t n) {
   return {i < j ? i : j, i < j ? j : i, split};
 }
 
+// The root of a one-primitive tree: a single leaf range [0, 0] on the left, no right child
+// (its range link is slot 0).
+MINKQ_HD BvhNode one_leaf_root() {
+  BvhNode root{};
+  root.left = ~0;
+  root.right = kNoChild;
+  root.parent = -1;
+  root.split = 0;
+  return root;
+}
+
 // Whether Karras node i stays an internal node: it covers more than leaf_size leaves (the root
 // always stays). Kept nodes form the top of the tree: a parent covers more than its child.
 MINKQ_HD bool keeps_node(int32_t i, const KarrasNode& k, int32_t leaf_size) {
