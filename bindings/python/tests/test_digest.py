@@ -20,7 +20,7 @@ def load_library() -> ctypes.CDLL:
         candidates.insert(0, os.path.join(os.environ["MINKQ_LIB_DIR"], "libminkq.so.1"))
     for path in candidates:
         if os.path.exists(path):
-            return ctypes.CDLL(path)
+            return declare(ctypes.CDLL(path))
     pytest.skip(f"no libminkq.so.1 in {candidates}")
 
 
@@ -36,8 +36,36 @@ class QueryDesc(ctypes.Structure):
     _fields_ = [("kind", ctypes.c_uint), ("mode", ctypes.c_uint), ("flags", ctypes.c_uint32), ("radius", ctypes.c_float)]
 
 
+class QueryStats(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_uint64) for name in ("nodes_visited", "node_tests", "primitive_tests", "candidates")]
+
+
 class QueryInfo(ctypes.Structure):
-    _fields_ = [("count", ctypes.c_uint64), ("digest", ctypes.c_uint64)]
+    # The whole struct of ABI 2: the library writes all of it (stats zeroed when not asked for),
+    # so a shorter mirror would let it write past this buffer.
+    _fields_ = [("count", ctypes.c_uint64), ("digest", ctypes.c_uint64), ("stats", QueryStats)]
+
+
+MIRRORED_ABI_VERSION = 2
+
+
+def declare(lib: ctypes.CDLL) -> ctypes.CDLL:
+    """Prototypes for the functions used here, so ctypes converts every argument to its C type
+    (without them a Python int is passed as a C int, whatever the parameter's width)."""
+    p, size, u32 = ctypes.c_void_p, ctypes.c_size_t, ctypes.c_uint32
+    for name, restype, argtypes in [
+        ("minkq_abi_version", u32, []),
+        ("minkq_device_create", ctypes.c_int, [ctypes.c_char_p, p]),
+        ("minkq_device_release", None, [p]),
+        ("minkq_scene_create", ctypes.c_int, [p, ctypes.POINTER(SceneDesc), p]),
+        ("minkq_scene_release", None, [p]),
+        ("minkq_scene_query", ctypes.c_int, [p, ctypes.POINTER(QueryDesc), p, size, ctypes.c_uint, ctypes.POINTER(QueryInfo)]),
+    ]:
+        function = getattr(lib, name)
+        function.restype, function.argtypes = restype, argtypes
+    if lib.minkq_abi_version() != MIRRORED_ABI_VERSION:
+        pytest.fail(f"libminkq ABI {lib.minkq_abi_version()}, this ctypes mirror is of ABI {MIRRORED_ABI_VERSION}: update it")
+    return lib
 
 
 KIND = {"vt": 0, "ee": 1}
