@@ -150,11 +150,10 @@ struct Report {
 };
 
 // Bytes of trees and scene data of a CPU VT+EE scene from the library's layouts: vertices
-// (12 B), triangles (12 B) and edges (8 B) in the store, and the vertices' query order (4 B);
-// per tree of n primitives its node records (64 B, plus a 4 B refit counter each: the count is
-// the library's own tree's, built here) and per leaf a sorted-order primitive id, a range
-// link and a leaf box (4 + 4 + 24 B); the C API's scene keeps a second copy of triangles and
-// edges (capi/minkq.cpp, struct minkq_scene).
+// (12 B), triangles (12 B) and edges (8 B) in the store (the only copy: the C API keeps none),
+// and the vertices' query order (4 B); per tree what CpuTree::bytes() counts (node records of
+// 64 B plus a 4 B refit counter, and a sorted-order primitive id of 4 B per primitive) on the
+// library's own trees, built here.
 double layout_bytes(const SceneFrames& sc) {
   const auto* v = reinterpret_cast<const minkq::Vec3*>(sc.mesh.xyz.data());
   const auto* t = reinterpret_cast<const minkq::Triangle*>(sc.mesh.tris.data());
@@ -164,8 +163,7 @@ double layout_bytes(const SceneFrames& sc) {
   minkq::CpuTree triangles, edges;
   triangles.build(minkq::TriangleBoxes{v, t}, int32_t(nt));
   edges.build(minkq::EdgeBoxes{v, e}, int32_t(ne));
-  const double nodes = double(triangles.nodes().size() + edges.nodes().size());
-  return 16.0 * nv + 12.0 * nt + 8.0 * ne + 68.0 * nodes + 32.0 * double(nt + ne) + 12.0 * nt + 8.0 * ne;
+  return 16.0 * double(nv) + 12.0 * double(nt) + 8.0 * double(ne) + double(triangles.bytes() + edges.bytes());
 }
 
 // The narrow phase a simulator runs on every candidate, at its cheapest: the double-precision
@@ -661,8 +659,7 @@ std::string targets(const Report& rep, const Options& opt, const std::string& ma
     if (largest) {
       const double b = largest->layout_bytes / double(largest->triangles);
       o << "| memory <= 128 B per triangle for a VT+EE scene (trees + scene data) | " << fmt(b, 4) << " B/triangle on "
-        << largest->scene << " (" << fmt(b - (12.0 * double(largest->triangles) + 8.0 * double(largest->edges)) / double(largest->triangles), 4)
-        << " without the C API's copies of triangles and edges); " << fmt(lo, 4) << "–" << fmt(hi, 4)
+        << largest->scene << "; " << fmt(lo, 4) << "–" << fmt(hi, 4)
         << " over scenes of >= 1000 triangles (memory.md) | cpu layout | " << (b <= 128 ? "yes" : "no") << " |\n";
     }
   }
@@ -675,19 +672,18 @@ std::string memory_table(const Report& rep, const Options& opt, const std::strin
   std::ostringstream o;
   o << header("Memory per triangle (VT + EE scene)", machine, opt, rep.scenes.empty() ? 0 : rep.scenes.front().load_start);
   o << "Layout bytes from the library's structures (CPU backend; the CUDA backend keeps the same arrays in device "
-       "memory): vertices 12 B plus a 4 B query-order entry, triangles 12 B, edges 8 B; per tree its node records "
-       "(64 B and a 4 B refit counter each; leaf ranges of up to 8 primitives leave about n / 5 nodes for n "
-       "primitives) and per primitive a sorted-order id, a range link and a leaf box (4 + 4 + 24 B); plus the C "
-       "API scene's second copy of "
-       "triangles and edges (capi/minkq.cpp keeps them for minkq_scene_edges and checks). Output buffers excluded. "
+       "memory): vertices 12 B plus a 4 B query-order entry, triangles 12 B, edges 8 B (the store's copy is the only "
+       "one); per tree its node records (64 B and a 4 B refit counter each; leaf ranges of up to 8 primitives leave "
+       "about n / 5 nodes for n primitives) and a sorted-order id per primitive (4 B); no primitive boxes (a leaf "
+       "scan computes them from the vertices). Output buffers excluded. "
        "RSS delta: resident memory before and after minkq_scene_create (malloc_trim first; includes allocator slack, "
        "excludes pages freed after the build).\n\n";
-  o << "| suite | scene | vertices | triangles | edges | layout B/triangle | without the C API copies | RSS delta B/triangle | target |\n|---|---|---|---|---|---|---|---|---|\n";
+  o << "| suite | scene | vertices | triangles | edges | layout B/triangle | RSS delta B/triangle | target |\n|---|---|---|---|---|---|---|---|\n";
   for (const SceneInfo& s : rep.scenes) {
     if (s.suite == "sweep") continue;
     const double t = double(s.triangles);
     o << "| " << s.suite << " | " << s.scene << " | " << s.vertices << " | " << s.triangles << " | " << s.edges << " | "
-      << fmt(s.layout_bytes / t, 4) << " | " << fmt((s.layout_bytes - 12.0 * t - 8.0 * double(s.edges)) / t, 4) << " | "
+      << fmt(s.layout_bytes / t, 4) << " | "
       << (s.rss_bytes > 0 ? fmt(s.rss_bytes / t, 4) : "–") << " | 128 |\n";
   }
   return o.str();

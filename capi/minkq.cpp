@@ -31,10 +31,8 @@ struct minkq_device {
 struct minkq_scene {
   minkq_device* device;
   uint32_t flags;
-  size_t vertex_count;
-  std::vector<minkq::Triangle> triangles;
-  std::vector<minkq::Edge> edges;
-  std::unique_ptr<minkq::Store> store;
+  size_t vertex_count, triangle_count, edge_count;
+  std::unique_ptr<minkq::MeshStore> store;  // holds the scene's only copy of its topology
 };
 
 struct minkq_bvh {
@@ -304,17 +302,20 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
     scene->device = device;
     scene->flags = desc->flags;
     scene->vertex_count = size_t(vertices.count);
-    scene->triangles = host_copy<minkq::Triangle>(backend, triangles);
-    require_indices<3>(scene->triangles, scene->vertex_count, "triangle");
+    std::vector<minkq::Triangle> triangle_list = host_copy<minkq::Triangle>(backend, triangles);
+    require_indices<3>(triangle_list, scene->vertex_count, "triangle");
+    std::vector<minkq::Edge> edge_list;
     if (edges.count > 0) {
-      scene->edges = host_copy<minkq::Edge>(backend, edges);
-      require_indices<2>(scene->edges, scene->vertex_count, "edge");
+      edge_list = host_copy<minkq::Edge>(backend, edges);
+      require_indices<2>(edge_list, scene->vertex_count, "edge");
     } else if (desc->flags & MINKQ_SCENE_EE) {
-      scene->edges = derive_edges(scene->triangles);
-      require(scene->edges.size() <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
+      edge_list = derive_edges(triangle_list);
+      require(edge_list.size() <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
               "the triangles have more than 2^31 - 2 edges");
     }
-    scene->store = backend.create_mesh_store(vertices, scene->triangles, scene->edges,
+    scene->triangle_count = triangle_list.size();
+    scene->edge_count = edge_list.size();
+    scene->store = backend.create_mesh_store(vertices, std::move(triangle_list), std::move(edge_list),
                                              desc->flags & MINKQ_SCENE_VT, desc->flags & MINKQ_SCENE_EE);
     *out_scene = scene.release();
   });
@@ -322,17 +323,17 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
 
 void minkq_scene_release(minkq_scene* scene) { delete scene; }
 size_t minkq_scene_vertex_count(const minkq_scene* scene) { return scene ? scene->vertex_count : 0; }
-size_t minkq_scene_triangle_count(const minkq_scene* scene) { return scene ? scene->triangles.size() : 0; }
-size_t minkq_scene_edge_count(const minkq_scene* scene) { return scene ? scene->edges.size() : 0; }
+size_t minkq_scene_triangle_count(const minkq_scene* scene) { return scene ? scene->triangle_count : 0; }
+size_t minkq_scene_edge_count(const minkq_scene* scene) { return scene ? scene->edge_count : 0; }
 
 minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, size_t capacity) {
   return guarded([&] {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
     require(capacity == 0 || out_edges != nullptr, Status::kInvalidArgument, "out_edges is NULL");
-    require(scene->edges.size() <= capacity, Status::kCapacity,
-            "the scene has " + std::to_string(scene->edges.size()) + " edges but the buffer holds " +
+    require(scene->edge_count <= capacity, Status::kCapacity,
+            "the scene has " + std::to_string(scene->edge_count) + " edges but the buffer holds " +
                 std::to_string(capacity));
-    if (!scene->edges.empty()) std::memcpy(out_edges, scene->edges.data(), scene->edges.size() * sizeof(minkq::Edge));
+    if (scene->edge_count) scene->store->copy_edges(reinterpret_cast<minkq::Edge*>(out_edges));
   });
 }
 

@@ -73,6 +73,14 @@ class Store {
   virtual uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) = 0;
 };
 
+// A mesh scene's store. It holds the scene's only copy of the topology (the C API keeps
+// none): triangles where it has a triangle tree, edges always (minkq_scene_edges).
+class MeshStore : public Store {
+ public:
+  // The scene's edges, copied to host memory (edge_count entries).
+  virtual void copy_edges(Edge* host_out) = 0;
+};
+
 class Backend {
  public:
   virtual ~Backend() = default;
@@ -82,10 +90,10 @@ class Backend {
   virtual int64_t first_non_finite(const Strided& values, int floats) = 0;
   // Copies `bytes` from host or device memory to the host.
   virtual void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) = 0;
-  virtual std::unique_ptr<Store> create_mesh_store(const Strided& vertices,
-                                                   const std::vector<Triangle>& triangles,
-                                                   const std::vector<Edge>& edges,
-                                                   bool triangle_tree, bool edge_tree) = 0;
+  // Takes the topology over (host vectors, validated by the caller).
+  virtual std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
+                                                       std::vector<Edge> edges, bool triangle_tree,
+                                                       bool edge_tree) = 0;
   virtual std::unique_ptr<Store> create_box_store(const Strided& boxes) = 0;
 };
 

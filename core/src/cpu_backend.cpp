@@ -91,11 +91,12 @@ uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView
   return total;
 }
 
-class CpuMeshStore final : public Store {
+class CpuMeshStore final : public MeshStore {
  public:
   CpuMeshStore(const Strided& vertices, std::vector<Triangle> triangles, std::vector<Edge> edges, bool triangle_tree,
                bool edge_tree)
-      : vertices_(gather_vec3(vertices)), triangles_(std::move(triangles)), edges_(std::move(edges)),
+      : vertices_(gather_vec3(vertices)), triangles_(triangle_tree ? std::move(triangles) : std::vector<Triangle>()),
+        edges_(std::move(edges)),
         has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
     if (has_triangle_tree_) {
       triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles_.data()}, int32_t(triangles_.size()));
@@ -103,6 +104,10 @@ class CpuMeshStore final : public Store {
       sort_by_morton(PointBoxes{vertices_.data()}, int32_t(vertices_.size()), keys, vertex_order_);
     }
     if (has_edge_tree_) edge_tree_.build(EdgeBoxes{vertices_.data(), edges_.data()}, int32_t(edges_.size()));
+  }
+
+  void copy_edges(Edge* host_out) override {
+    if (!edges_.empty()) std::memcpy(host_out, edges_.data(), edges_.size() * sizeof(Edge));
   }
 
   void refit(const Strided& vertices) override {
@@ -124,7 +129,7 @@ class CpuMeshStore final : public Store {
 
  private:
   std::vector<Vec3> vertices_;
-  std::vector<Triangle> triangles_;
+  std::vector<Triangle> triangles_;  // only with a triangle tree
   std::vector<Edge> edges_;
   std::vector<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   bool has_triangle_tree_, has_edge_tree_;
@@ -143,7 +148,7 @@ class CpuBoxStore final : public Store {
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     const std::vector<Vec3> first = gather_vec3(request.first);
     const std::vector<Vec3> second = gather_vec3(request.second);
-    const UserQueries queries{first.data(), second.empty() ? nullptr : second.data(), request.r};
+    const UserQueries queries{boxes_.data(), first.data(), second.empty() ? nullptr : second.data(), request.r};
     return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
                     int32_t(first.size()), out, work);
   }
@@ -172,10 +177,9 @@ class CpuBackend final : public Backend {
   void copy_to_host(void* dst, const void* src, size_t bytes, Memory) override {
     if (bytes) std::memcpy(dst, src, bytes);
   }
-  std::unique_ptr<Store> create_mesh_store(const Strided& vertices, const std::vector<Triangle>& triangles,
-                                           const std::vector<Edge>& edges, bool triangle_tree,
-                                           bool edge_tree) override {
-    return std::make_unique<CpuMeshStore>(vertices, triangles, edges, triangle_tree, edge_tree);
+  std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
+                                               std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
+    return std::make_unique<CpuMeshStore>(vertices, std::move(triangles), std::move(edges), triangle_tree, edge_tree);
   }
   std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
     return std::make_unique<CpuBoxStore>(boxes);

@@ -49,9 +49,6 @@ void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::ve
 class CpuTree {
  public:
   const std::vector<BvhNode>& nodes() const { return nodes_; }
-  // For each sorted position: the parent slot of the leaf range starting there, else -1.
-  const std::vector<int32_t>& range_parent() const { return range_parent_; }
-  const std::vector<Box>& leaf_boxes() const { return leaf_boxes_; }
   // Primitive at each sorted leaf position.
   const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
@@ -60,14 +57,12 @@ class CpuTree {
   void build(Boxes boxes, int32_t n, int32_t leaf_size = kLeafSize) {
     n_ = n;
     nodes_.clear();
-    range_parent_.assign(size_t(n), -1);
-    leaf_boxes_.assign(size_t(n), Box{});
     sorted_prims_.assign(size_t(n), 0);
+    leaf_boxes_.assign(size_t(n), QuantizedBox{});
     arrivals_.clear();
     if (n == 0) return;
     if (n == 1) {
       nodes_.assign(1, one_leaf_root());
-      range_parent_[0] = 0;
       arrivals_.assign(1, 0);
       refit(boxes);
       return;
@@ -86,7 +81,7 @@ class CpuTree {
     arrivals_.assign(size_t(kept), 0);
     parallel_for_each(n - 1, [&](int64_t i) {
       if (keeps_node(int32_t(i), karras[i], leaf_size))
-        collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes_.data(), range_parent_.data());
+        collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes_.data());
     });
     refit(boxes);
   }
@@ -94,22 +89,27 @@ class CpuTree {
   template <class Boxes>
   void refit(Boxes boxes) {
     std::fill(arrivals_.begin(), arrivals_.end(), 0);
-    parallel_for_each(n_, [&](int64_t p) {
-      refit_from_range(int32_t(p), boxes, sorted_prims_.data(), range_parent_.data(), leaf_boxes_.data(), nodes_.data(),
-                       arrivals_.data());
+    parallel_for_each(int64_t(nodes_.size()) * 2, [&](int64_t slot) {
+      refit_from_slot(int32_t(slot), boxes, sorted_prims_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
     });
   }
 
   BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
+  const std::vector<QuantizedBox>& leaf_boxes() const { return leaf_boxes_; }
   int32_t size() const { return n_; }
+  // Bytes held: node records with their refit counters, the sorted primitive ids and their
+  // quantized boxes.
+  size_t bytes() const {
+    return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) +
+           size_t(n_) * (sizeof(int32_t) + sizeof(QuantizedBox));
+  }
 
  private:
   int32_t n_ = 0;
   std::vector<BvhNode> nodes_;
-  std::vector<int32_t> range_parent_;
   std::vector<int32_t> arrivals_;
   std::vector<int32_t> sorted_prims_;
-  std::vector<Box> leaf_boxes_;
+  std::vector<QuantizedBox> leaf_boxes_;
 };
 
 }  // namespace minkq

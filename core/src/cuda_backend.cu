@@ -190,18 +190,16 @@ __global__ void karras_kernel(const uint64_t* keys, int32_t n, KarrasNode* karra
   kept[i] = keeps_node(int32_t(i), karras[i], kLeafSize) ? 1 : 0;
 }
 
-__global__ void collapse_kernel(const KarrasNode* karras, const int32_t* new_index, int32_t n, BvhNode* nodes,
-                                int32_t* range_parent) {
+__global__ void collapse_kernel(const KarrasNode* karras, const int32_t* new_index, int32_t n, BvhNode* nodes) {
   const int64_t i = global_index();
-  if (i < n - 1 && keeps_node(int32_t(i), karras[i], kLeafSize))
-    collapse_node(int32_t(i), karras, new_index, kLeafSize, nodes, range_parent);
+  if (i < n - 1 && keeps_node(int32_t(i), karras[i], kLeafSize)) collapse_node(int32_t(i), karras, new_index, kLeafSize, nodes);
 }
 
 template <class Boxes>
-__global__ void refit_kernel(Boxes boxes, int32_t n, const int32_t* sorted_prims, const int32_t* range_parent,
-                             Box* leaf_boxes, BvhNode* nodes, int32_t* arrivals) {
-  const int64_t p = global_index();
-  if (p < n) refit_from_range(int32_t(p), boxes, sorted_prims, range_parent, leaf_boxes, nodes, arrivals);
+__global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, QuantizedBox* leaf_boxes,
+                             BvhNode* nodes, int32_t* arrivals) {
+  const int64_t slot = global_index();
+  if (slot < 2 * int64_t(num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_boxes, nodes, arrivals);
 }
 
 // Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id: cpu_tree.h's
@@ -242,10 +240,8 @@ class CudaTree {
   template <class Boxes>
   void build(Boxes boxes, int32_t n) {
     n_ = n;
-    range_parent_.ensure(size_t(n));
-    leaf_boxes_.ensure(size_t(n));
     sorted_prims_.ensure(size_t(n));
-    if (n) check(cudaMemsetAsync(range_parent_.data(), 0xff, size_t(n) * sizeof(int32_t), kStream), "cudaMemsetAsync");
+    leaf_boxes_.ensure(size_t(n));
     zero(sorted_prims_, size_t(n));
     num_nodes_ = 0;
     if (n == 0) return;
@@ -255,8 +251,6 @@ class CudaTree {
       nodes_.ensure(1);
       arrivals_.ensure(1);
       copy(nodes_.data(), &root, sizeof(root), cudaMemcpyHostToDevice);
-      const int32_t root_slot = 0;
-      copy(range_parent_.data(), &root_slot, sizeof(root_slot), cudaMemcpyHostToDevice);
       refit(boxes);
       return;
     }
@@ -281,15 +275,15 @@ class CudaTree {
     arrivals_.ensure(size_t(num_nodes_));
     zero(nodes_, size_t(num_nodes_));
     launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, karras.data(), new_index.data(), n,
-           nodes_.data(), range_parent_.data());
+           nodes_.data());
     refit(boxes);
   }
 
   template <class Boxes>
   void refit(Boxes boxes) {
     zero(arrivals_, size_t(num_nodes_));
-    launch("refit_kernel launch", refit_kernel<Boxes>, n_, kThreads, boxes, n_, sorted_prims_.data(),
-           range_parent_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
+    launch("refit_kernel launch", refit_kernel<Boxes>, int64_t(num_nodes_) * 2, kThreads, boxes, num_nodes_,
+           sorted_prims_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
   }
 
   BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
@@ -299,10 +293,9 @@ class CudaTree {
   int32_t n_ = 0;
   int32_t num_nodes_ = 0;
   DeviceBuffer<BvhNode> nodes_;
-  DeviceBuffer<int32_t> range_parent_;  // parent slot of the leaf range starting at each position, else -1
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
-  DeviceBuffer<Box> leaf_boxes_;        // box of the primitive at each sorted position
+  DeviceBuffer<QuantizedBox> leaf_boxes_;  // its box, quantized within its leaf range's box
 };
 
 // ---- Queries --------------------------------------------------------------------------------
@@ -476,7 +469,8 @@ uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView
 
 // Selects the store's device for every public call. The final classes' destructors select it
 // too, before their members (and this base's) are freed.
-class CudaStore : public Store {
+template <class Interface>
+class CudaStore : public Interface {
  protected:
   explicit CudaStore(int ordinal) : ordinal_(ordinal) { use_device(ordinal_); }
   void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }  // errors belong to this call
@@ -484,7 +478,7 @@ class CudaStore : public Store {
   QueryWorkspace ws_;
 };
 
-class CudaMeshStore final : public CudaStore {
+class CudaMeshStore final : public CudaStore<MeshStore> {
  public:
   CudaMeshStore(int ordinal, const Strided& vertices, const std::vector<Triangle>& triangles,
                 const std::vector<Edge>& edges, bool triangle_tree, bool edge_tree)
@@ -493,7 +487,7 @@ class CudaMeshStore final : public CudaStore {
     num_vertices_ = int32_t(vertices.count);
     num_triangles_ = int32_t(triangles.size());
     num_edges_ = int32_t(edges.size());
-    upload(triangles_, triangles.data(), triangles.size());
+    if (has_triangle_tree_) upload(triangles_, triangles.data(), triangles.size());
     upload(edges_, edges.data(), edges.size());
     if (has_triangle_tree_) {
       triangle_tree_.build(triangle_boxes(), num_triangles_);
@@ -504,6 +498,11 @@ class CudaMeshStore final : public CudaStore {
     finish();
   }
   ~CudaMeshStore() override { cudaSetDevice(ordinal_); }
+
+  void copy_edges(Edge* host_out) override {
+    use_device(ordinal_);
+    copy(host_out, edges_.data(), size_t(num_edges_) * sizeof(Edge), cudaMemcpyDeviceToHost);
+  }
 
   void refit(const Strided& vertices) override {
     use_device(ordinal_);
@@ -530,7 +529,7 @@ class CudaMeshStore final : public CudaStore {
   EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data()}; }
 
   DeviceBuffer<Vec3> vertices_;
-  DeviceBuffer<Triangle> triangles_;
+  DeviceBuffer<Triangle> triangles_;  // only with a triangle tree
   DeviceBuffer<Edge> edges_;
   DeviceBuffer<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   int32_t num_vertices_ = 0, num_triangles_ = 0, num_edges_ = 0;
@@ -538,7 +537,7 @@ class CudaMeshStore final : public CudaStore {
   CudaTree triangle_tree_, edge_tree_;
 };
 
-class CudaBoxStore final : public CudaStore {
+class CudaBoxStore final : public CudaStore<Store> {
  public:
   CudaBoxStore(int ordinal, const Strided& boxes) : CudaStore(ordinal) {
     gather_to_device(boxes, boxes_);
@@ -560,7 +559,8 @@ class CudaBoxStore final : public CudaStore {
     DeviceBuffer<Vec3> first, second;
     gather_to_device(request.first, first);
     gather_to_device(request.second, second);
-    const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
+    const UserQueries queries{boxes_.data(), first.data(), request.second.count == 0 ? nullptr : second.data(),
+                              request.r};
     return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
                     int32_t(request.first.count), out, ws_, work);
   }
@@ -601,9 +601,8 @@ class CudaBackend final : public Backend {
     copy(dst, src, bytes, cudaMemcpyDeviceToHost);
   }
 
-  std::unique_ptr<Store> create_mesh_store(const Strided& vertices, const std::vector<Triangle>& triangles,
-                                           const std::vector<Edge>& edges, bool triangle_tree,
-                                           bool edge_tree) override {
+  std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
+                                               std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
     return std::make_unique<CudaMeshStore>(ordinal_, vertices, triangles, edges, triangle_tree, edge_tree);
   }
   std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
