@@ -8,13 +8,8 @@
 //   EE   every edge queries the whole tree  vs  each pair met once: a query reaches only the
 //        and keeps f > e (each pair met        leaves after its own, and tests the pair the
 //        twice)                                other way round at the leaf (kept), the box of
-//                                              that test handed on from the leaf test (kept) or
-//                                              recomputed
-//   primitive boxes stored by the tree (24 B per primitive, read by primitive id)  vs  none
-//        (each computed at the leaf scan from the scene's vertices)  vs  8-byte boxes quantized
-//        within the leaf range's box screening the primitives, the exact box computed from the
-//        vertices for those that pass (kept): VT sphere, EE box and EE capsule_exact. The first
-//        two run the library's traversal without quantized boxes (BvhView::leaf_boxes null).
+//                                              that test read from the node record (kept) or
+//                                              computed from the vertices
 // Both variants of a kind must return the same pairs (checked). Writes
 // bench/results/ablation.md; see bench/README.md.
 #include <tbb/parallel_for.h>
@@ -43,7 +38,6 @@ struct EdgeEdgeTwice {
   static constexpr bool kOncePerPair = true;
   QueryTarget target(int32_t i) const { return {i, -1}; }
   QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  EdgeBoxes prim_boxes() const { return base.prim_boxes(); }
   template <class Shape>
   bool accept(int32_t e, int32_t f, const Box&) const {
     if (f <= e) return false;
@@ -66,7 +60,6 @@ struct EdgeEdgeOnceFromVertices {
   static constexpr bool kOncePerPair = true;
   QueryTarget target(int32_t i) const { return base.target(i); }
   QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  EdgeBoxes prim_boxes() const { return base.prim_boxes(); }
   template <class Shape>
   bool accept(int32_t e, int32_t f, const Box&) const { return base.accept<Shape>(e, f); }
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
@@ -79,33 +72,10 @@ struct EdgeEdgeOnceByIdOrder {
   static constexpr bool kOncePerPair = true;
   QueryTarget target(int32_t i) const { return {i, position[i]}; }
   QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  EdgeBoxes prim_boxes() const { return base.prim_boxes(); }
   template <class Shape>
   bool accept(int32_t e, int32_t f, const Box& f_box) const { return base.accept<Shape>(e, f, f_box); }
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
 };
-
-// A query source whose tree keeps a box per primitive (as before: the leaf scan reads it)
-// instead of computing it from the vertices.
-template <class Base>
-struct StoredPrimitiveBoxes {
-  Base base;
-  const Box* boxes;  // by primitive id
-  static constexpr bool kOncePerPair = Base::kOncePerPair;
-  QueryTarget target(int32_t i) const { return base.target(i); }
-  QueryGeometry geometry(int32_t q) const { return base.geometry(q); }
-  GivenBoxes prim_boxes() const { return {boxes}; }
-  template <class Shape>
-  bool accept(int32_t q, int32_t prim, const Box& box) const { return base.template accept<Shape>(q, prim, box); }
-  Pair pair(int32_t q, int32_t prim) const { return base.pair(q, prim); }
-};
-
-template <class Boxes>
-std::vector<Box> boxes_of(Boxes boxes, int32_t n) {
-  std::vector<Box> out(static_cast<size_t>(n));
-  for (int32_t i = 0; i < n; ++i) out[size_t(i)] = boxes(i);
-  return out;
-}
 
 struct Outcome {
   WorkCounts work;
@@ -173,9 +143,9 @@ std::string compare_ee(const SceneFrames& sc, const Vec3* v, const Edge* e, floa
   ok &= std::includes(a.pairs.begin(), a.pairs.end(), c.pairs.begin(), c.pairs.end()) && b.pairs == c.pairs &&
         d.pairs == c.pairs;
   return row(sc.name, "EE", mode, "each pair twice (before)", a, ne, a) +
-         row(sc.name, "EE", mode, "once, reverse test's box recomputed", b, ne, a) +
-         row(sc.name, "EE", mode, "once, reverse test's box from the leaf test (kept)", c, ne, a) +
-         row(sc.name, "EE", mode, "once, queries in edge id order", d, ne, a);
+         row(sc.name, "EE", mode, "once, reverse test from vertices", b, ne, a) +
+         row(sc.name, "EE", mode, "once, reverse test from the node's box (kept)", c, ne, a) +
+         row(sc.name, "EE", mode, "once, node's box, queries in edge id order", d, ne, a);
 }
 
 // Trees with leaf ranges of up to 1 (the binary tree: before), 2, 4, 8 and 16 primitives
@@ -210,48 +180,6 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
   return out;
 }
 
-// Primitive boxes stored (before), computed from the vertices at the leaf scan, or screened
-// by quantized boxes first (kept).
-std::string compare_stored_boxes(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
-                                 int repeats, bool& ok) {
-  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
-  const int32_t ne = int32_t(sc.mesh.edge_count());
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> order;
-  sort_by_morton(PointBoxes{v}, nv, keys, order);
-  CpuTree triangles, edges;
-  triangles.build(TriangleBoxes{v, t}, nt);
-  edges.build(EdgeBoxes{v, e}, ne);
-  const std::vector<Box> triangle_boxes = boxes_of(TriangleBoxes{v, t}, nt), edge_boxes = boxes_of(EdgeBoxes{v, e}, ne);
-  const VertexTriangleQueries vt{v, t, order.data(), r, kDropIncident};
-  const EdgeEdgeQueries ee{v, e, edges.sorted_prims().data(), r, kDropIncident};
-  const StoredPrimitiveBoxes<VertexTriangleQueries> vt_stored{vt, triangle_boxes.data()};
-  const StoredPrimitiveBoxes<EdgeEdgeQueries> ee_stored{ee, edge_boxes.data()};
-  BvhView triangles_unscreened = triangles.view(), edges_unscreened = edges.view();
-  triangles_unscreened.leaf_boxes = edges_unscreened.leaf_boxes = nullptr;
-  const Outcome before[3] = {run<SphereShape>(triangles_unscreened, vt_stored, nv, repeats),
-                             run<BoxShape>(edges_unscreened, ee_stored, ne, repeats),
-                             run<CapsuleExactShape>(edges_unscreened, ee_stored, ne, repeats)};
-  const Outcome computed[3] = {run<SphereShape>(triangles_unscreened, vt, nv, repeats),
-                               run<BoxShape>(edges_unscreened, ee, ne, repeats),
-                               run<CapsuleExactShape>(edges_unscreened, ee, ne, repeats)};
-  const Outcome kept[3] = {run<SphereShape>(triangles.view(), vt, nv, repeats),
-                           run<BoxShape>(edges.view(), ee, ne, repeats),
-                           run<CapsuleExactShape>(edges.view(), ee, ne, repeats)};
-  const char* kinds[3] = {"VT", "EE", "EE"};
-  const char* modes[3] = {"sphere", "box", "capsule_exact"};
-  const int32_t queries[3] = {nv, ne, ne};
-  std::string out;
-  for (int k = 0; k < 3; ++k) {
-    ok &= kept[k].pairs == before[k].pairs && computed[k].pairs == before[k].pairs;
-    out += row(sc.name, kinds[k], modes[k], "primitive boxes stored, 24 B each (before)", before[k], queries[k], before[k]) +
-           row(sc.name, kinds[k], modes[k], "no primitive boxes: each from the vertices", computed[k], queries[k], before[k]) +
-           row(sc.name, kinds[k], modes[k], "8 B quantized boxes screen, exact from the vertices (kept)", kept[k], queries[k],
-               before[k]);
-  }
-  return out;
-}
-
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
   const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
@@ -272,7 +200,7 @@ std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
                     row(sc.name, "VT", "sphere", "vertex Morton order", b, nv, a);
   out += compare_ee<BoxShape>(sc, v, e, r, "box", repeats, ok);
   out += compare_ee<CapsuleExactShape>(sc, v, e, r, "capsule_exact", repeats, ok);
-  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok) + compare_stored_boxes(sc, v, t, e, r, repeats, ok);
+  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok);
 }
 
 }  // namespace

@@ -152,8 +152,8 @@ struct Report {
 // Bytes of trees and scene data of a CPU VT+EE scene from the library's layouts: vertices
 // (12 B), triangles (12 B) and edges (8 B) in the store (the only copy: the C API keeps none),
 // and the vertices' query order (4 B); per tree what CpuTree::bytes() counts (node records of
-// 64 B plus a 4 B refit counter, and a sorted-order primitive id of 4 B per primitive) on the
-// library's own trees, built here.
+// 64 B plus a 4 B refit counter, and per primitive a sorted-order id and a leaf box, 4 + 24 B)
+// on the library's own trees, built here.
 double layout_bytes(const SceneFrames& sc) {
   const auto* v = reinterpret_cast<const minkq::Vec3*>(sc.mesh.xyz.data());
   const auto* t = reinterpret_cast<const minkq::Triangle*>(sc.mesh.tris.data());
@@ -673,9 +673,9 @@ std::string memory_table(const Report& rep, const Options& opt, const std::strin
   o << header("Memory per triangle (VT + EE scene)", machine, opt, rep.scenes.empty() ? 0 : rep.scenes.front().load_start);
   o << "Layout bytes from the library's structures (CPU backend; the CUDA backend keeps the same arrays in device "
        "memory): vertices 12 B plus a 4 B query-order entry, triangles 12 B, edges 8 B (the store's copy is the only "
-       "one); per tree its node records (64 B and a 4 B refit counter each; leaf ranges of up to 8 primitives leave "
-       "about n / 5 nodes for n primitives) and a sorted-order id per primitive (4 B); no primitive boxes (a leaf "
-       "scan computes them from the vertices). Output buffers excluded. "
+       "one); per tree its node records (64 B and a 4 B refit counter each; leaf ranges of up to 16 primitives leave "
+       "about n / 10 nodes for n primitives) and per primitive a sorted-order id and its box in leaf order (4 + 24 "
+       "B). Output buffers excluded. "
        "RSS delta: resident memory before and after minkq_scene_create (malloc_trim first; includes allocator slack, "
        "excludes pages freed after the build).\n\n";
   o << "| suite | scene | vertices | triangles | edges | layout B/triangle | RSS delta B/triangle | target |\n|---|---|---|---|---|---|---|---|\n";

@@ -109,7 +109,7 @@ PairSet ee_pairs_with(const ref::Mesh& m, MakeShape make) {
         parts[size_t(b)].push_back(pack(q, f));
       };
       minkq::NoWork work;
-      minkq::traverse(tree.view(), minkq::EdgeBoxes{v, e}, shape, -1, on_leaf, work);
+      minkq::traverse(tree.view(), shape, -1, on_leaf, work);
     }
   });
   PairSet out;

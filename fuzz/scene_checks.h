@@ -258,9 +258,7 @@ struct BoxGeometry {
     if (!f.empty()) std::memcpy(first.data(), f.data(), first.size() * sizeof(Vec3));
     if (!s.empty()) std::memcpy(second.data(), s.data(), second.size() * sizeof(Vec3));
   }
-  UserQueries queries(float r) const {
-    return {boxes.data(), first.data(), second.empty() ? nullptr : second.data(), r};
-  }
+  UserQueries queries(float r) const { return {first.data(), second.empty() ? nullptr : second.data(), r}; }
   GivenBoxes given_boxes() const { return {boxes.data()}; }
   int32_t nq() const { return int32_t(first.size()); }
   int32_t nb() const { return int32_t(boxes.size()); }

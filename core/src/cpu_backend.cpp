@@ -148,7 +148,7 @@ class CpuBoxStore final : public Store {
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     const std::vector<Vec3> first = gather_vec3(request.first);
     const std::vector<Vec3> second = gather_vec3(request.second);
-    const UserQueries queries{boxes_.data(), first.data(), second.empty() ? nullptr : second.data(), request.r};
+    const UserQueries queries{first.data(), second.empty() ? nullptr : second.data(), request.r};
     return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
                     int32_t(first.size()), out, work);
   }

@@ -58,7 +58,7 @@ class CpuTree {
     n_ = n;
     nodes_.clear();
     sorted_prims_.assign(size_t(n), 0);
-    leaf_boxes_.assign(size_t(n), QuantizedBox{});
+    leaf_boxes_.assign(size_t(n), Box{});
     arrivals_.clear();
     if (n == 0) return;
     if (n == 1) {
@@ -95,13 +95,12 @@ class CpuTree {
   }
 
   BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
-  const std::vector<QuantizedBox>& leaf_boxes() const { return leaf_boxes_; }
+  const std::vector<Box>& leaf_boxes() const { return leaf_boxes_; }
   int32_t size() const { return n_; }
-  // Bytes held: node records with their refit counters, the sorted primitive ids and their
-  // quantized boxes.
+  // Bytes held: node records with their refit counters, and per primitive its id and box in
+  // leaf order.
   size_t bytes() const {
-    return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) +
-           size_t(n_) * (sizeof(int32_t) + sizeof(QuantizedBox));
+    return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) + size_t(n_) * (sizeof(int32_t) + sizeof(Box));
   }
 
  private:
@@ -109,7 +108,7 @@ class CpuTree {
   std::vector<BvhNode> nodes_;
   std::vector<int32_t> arrivals_;
   std::vector<int32_t> sorted_prims_;
-  std::vector<QuantizedBox> leaf_boxes_;
+  std::vector<Box> leaf_boxes_;  // box of the primitive at each sorted position
 };
 
 }  // namespace minkq

@@ -196,7 +196,7 @@ __global__ void collapse_kernel(const KarrasNode* karras, const int32_t* new_ind
 }
 
 template <class Boxes>
-__global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, QuantizedBox* leaf_boxes,
+__global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, Box* leaf_boxes,
                              BvhNode* nodes, int32_t* arrivals) {
   const int64_t slot = global_index();
   if (slot < 2 * int64_t(num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_boxes, nodes, arrivals);
@@ -295,7 +295,7 @@ class CudaTree {
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
-  DeviceBuffer<QuantizedBox> leaf_boxes_;  // its box, quantized within its leaf range's box
+  DeviceBuffer<Box> leaf_boxes_;        // box of the primitive at each sorted position
 };
 
 // ---- Queries --------------------------------------------------------------------------------
@@ -559,8 +559,7 @@ class CudaBoxStore final : public CudaStore<Store> {
     DeviceBuffer<Vec3> first, second;
     gather_to_device(request.first, first);
     gather_to_device(request.second, second);
-    const UserQueries queries{boxes_.data(), first.data(), request.second.count == 0 ? nullptr : second.data(),
-                              request.r};
+    const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
     return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
                     int32_t(request.first.count), out, ws_, work);
   }

@@ -23,9 +23,9 @@ struct BvhNode {
 static_assert(sizeof(BvhNode) == 64, "node record must stay one 64-byte line");
 
 // Primitives per leaf range at most: the bottom levels of the binary tree become a short scan
-// of the primitives at contiguous sorted positions (fewer node records to read and to store). The library's trees use
+// of contiguous leaf boxes (fewer node records to read and to store). The library's trees use
 // kLeafSize (bench/results/ablation.md compares sizes); 1 gives the plain binary tree.
-constexpr int32_t kLeafSize = 8;
+constexpr int32_t kLeafSize = 16;
 constexpr int32_t kNoChild = INT32_MIN;
 // Keys are 63 Morton bits plus a 32-bit index tie-break; each level down lengthens the shared
 // key prefix, so depth <= 96 and a traversal stack of 128 entries never overflows.
@@ -33,86 +33,12 @@ constexpr int kTraversalStack = 128;
 // Leaf positions must leave ~position distinct from kNoChild.
 constexpr int64_t kMaxPrimitives = INT32_MAX - 1;
 
-// A primitive's box in 8 bytes, relative to the box of its leaf range (the node's child box):
-// per axis the bounds are decode_bound(q, range lo, range hi, step) with step from
-// quantum(range lo, range hi). Encoded so the decoded box contains the primitive's box: a
-// leaf scan tests it first, and computes the exact box (from the scene's vertices) only for
-// the primitives it passes (bench/results/ablation.md: 24-byte boxes, none, or these).
-struct QuantizedBox {
-  uint8_t lo[3], hi[3];
-  uint8_t unused[2];  // 8-byte records: one load
-};
-static_assert(sizeof(QuantizedBox) == 8, "quantized box must stay 8 bytes");
-
 struct BvhView {
   const BvhNode* nodes;
-  // The box of the primitive at each sorted position, quantized; nullptr: no screening (every
-  // primitive's exact box is computed; bench/ablation.cpp's variants).
-  const QuantizedBox* leaf_boxes;
-  const int32_t* sorted_prims;     // the primitive at each sorted position
+  const Box* leaf_boxes;        // the box of the primitive at each sorted position
+  const int32_t* sorted_prims;  // the primitive at each sorted position
   int32_t num_prims;
 };
-
-// ---- Quantized primitive boxes -----------------------------------------------------------------
-
-// Step of an axis whose leaf range spans [lo, hi]: a power of two with (hi - lo) / step < 128,
-// so a code q * step is exact (no rounding, whatever the compiler fuses) and the one rounded
-// addition in decode_bound is monotone. Bit operations: identical on both backends. Kept
-// within [2^-126, 2^120] (no subnormal step, no overflow of 254 * step); where that makes the
-// codes run out, the encoder falls back to the range's own bounds (codes 0 and 255).
-MINKQ_HD float quantum(float lo, float hi) {
-  const float d = hi - lo;
-  if (!(d > 0.0f)) return 0.0f;  // flat axis: every bound is lo
-  uint32_t bits;
-  memcpy(&bits, &d, 4);
-  const int32_t exponent = int32_t(bits >> 23) & 0xff;  // d < 2^(exponent - 126)
-  int32_t step_exponent = exponent - 6;                 // step = 2^(exponent - 133)
-  if (step_exponent < 1) step_exponent = 1;
-  if (step_exponent > 247) step_exponent = 247;
-  bits = uint32_t(step_exponent) << 23;
-  float step;
-  memcpy(&step, &bits, 4);
-  return step;
-}
-// Code 255 is the range's hi, exactly; others lo + q * step (code 0: lo, exactly).
-MINKQ_HD float decode_bound(uint8_t q, float lo, float hi, float step) {
-  return q == 255 ? hi : lo + float(q) * step;
-}
-// The code for a lower bound x in [lo, hi] (decodes to <= x) and the one for an upper bound
-// (decodes to >= x), each decoding within [lo, hi]: a first guess, then corrected with the
-// decoder itself, so the containment holds by construction.
-MINKQ_HD uint8_t encode_lower(float x, float lo, float hi, float step) {
-  if (step == 0.0f) return 0;
-  const float guess = floorf((x - lo) * (1.0f / step));
-  int32_t q = guess > 254.0f ? 254 : guess < 0.0f ? 0 : int32_t(guess);
-  while (q > 0 && decode_bound(uint8_t(q), lo, hi, step) > x) --q;
-  return uint8_t(q);
-}
-MINKQ_HD uint8_t encode_upper(float x, float lo, float hi, float step) {
-  if (step == 0.0f) return 0;
-  const float guess = ceilf((x - lo) * (1.0f / step));
-  int32_t q = guess > 254.0f ? 254 : guess < 0.0f ? 0 : int32_t(guess);
-  while (q < 255 && decode_bound(uint8_t(q), lo, hi, step) < x) ++q;
-  return decode_bound(uint8_t(q), lo, hi, step) > hi ? 255 : uint8_t(q);  // never past the range
-}
-MINKQ_HD Vec3 range_steps(const Box& range) {
-  return {quantum(range.lo.x, range.hi.x), quantum(range.lo.y, range.hi.y), quantum(range.lo.z, range.hi.z)};
-}
-MINKQ_HD QuantizedBox encode_box(const Box& b, const Box& range, Vec3 steps) {
-  QuantizedBox q{};
-  for (int axis = 0; axis < 3; ++axis) {
-    const float lo = component(range.lo, axis), hi = component(range.hi, axis), step = component(steps, axis);
-    q.lo[axis] = encode_lower(component(b.lo, axis), lo, hi, step);
-    q.hi[axis] = encode_upper(component(b.hi, axis), lo, hi, step);
-  }
-  return q;
-}
-MINKQ_HD Box decode_box(const QuantizedBox& q, const Box& range, Vec3 steps) {
-  return {{decode_bound(q.lo[0], range.lo.x, range.hi.x, steps.x), decode_bound(q.lo[1], range.lo.y, range.hi.y, steps.y),
-           decode_bound(q.lo[2], range.lo.z, range.hi.z, steps.z)},
-          {decode_bound(q.hi[0], range.lo.x, range.hi.x, steps.x), decode_bound(q.hi[1], range.lo.y, range.hi.y, steps.y),
-           decode_bound(q.hi[2], range.lo.z, range.hi.z, steps.z)}};
-}
 
 // ---- Morton codes ----------------------------------------------------------------------------
 
@@ -263,21 +189,21 @@ MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
 }
 
 // Refit from child slot `slot` = (node << 1) | side (a thread per slot, 2 per node; a slot
-// holding an internal node or no child returns at once): a leaf range merges its primitives'
-// boxes into the node's child box. The second of two children to arrive at a node (counters
+// holding an internal node or no child returns at once): a leaf range writes its primitives'
+// boxes in leaf order and merges them into the node's child box. The second of two children to arrive at a node (counters
 // zeroed before the pass) merges both boxes and climbs on. Unions are exact.
 template <class Boxes>
-MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* sorted_prims, QuantizedBox* leaf_boxes,
+MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* sorted_prims, Box* leaf_boxes,
                               BvhNode* nodes, int32_t* arrivals) {
   const BvhNode& parent = nodes[slot >> 1];
   const int32_t child = (slot & 1) ? parent.right : parent.left;
   if (child >= 0 || child == kNoChild) return;
   const int32_t first = (slot & 1) ? parent.split + 1 : ~child, last = (slot & 1) ? ~child : parent.split;
   Box box = Box::empty();
-  for (int32_t q = first; q <= last; ++q) box = box_union(box, boxes(sorted_prims[q]));
-  if (last > first) {  // a one-primitive range's box is the node's child box itself
-    const Vec3 steps = range_steps(box);
-    for (int32_t q = first; q <= last; ++q) leaf_boxes[q] = encode_box(boxes(sorted_prims[q]), box, steps);
+  for (int32_t q = first; q <= last; ++q) {
+    const Box b = boxes(sorted_prims[q]);
+    leaf_boxes[q] = b;
+    box = box_union(box, b);
   }
   store_child_box(nodes, slot, box);
   int32_t node = slot >> 1;
@@ -320,30 +246,23 @@ struct NoWork {
   MINKQ_HD void emit_candidate() {}
 };
 
-// The one traversal: every query shape supplies overlaps(const Box&); prim_boxes(prim) gives a
-// primitive's box (as the refit computed it); on_leaf(prim, box) is called for every primitive
-// whose box the shape overlaps, provided the test also accepts every
+// The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim, box) is
+// called for every primitive whose box the shape overlaps, provided the test also accepts every
 // ancestor box (monotone under box inclusion: true of each shape here; tests/test_queries.cpp
 // checks traversal against the test applied to every primitive). Only leaves at sorted
 // positions after `after` are reached: a self-query from the leaf at position i passes i and
 // meets each pair once; other queries pass -1. A node is entered only when its last position
 // is past `after` (the root: n - 1 > after), so only the left child (last = split) can fail.
-template <class PrimBoxes, class Shape, class OnLeaf, class Work>
-MINKQ_HD void traverse(const BvhView& bvh, const PrimBoxes& prim_boxes, const Shape& shape, int32_t after,
-                       OnLeaf& on_leaf, Work& work) {
+template <class Shape, class OnLeaf, class Work>
+MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
-  // A range's box is the union of its primitives' boxes: one primitive's box is the range's own.
-  // Otherwise each primitive's quantized box (which contains its box; the shape's test is
-  // monotone) screens it before its exact box is computed and tested.
+  // A range's box is the union of its leaf boxes: one leaf's box is the range's own.
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
     if (first == last) return on_leaf(bvh.sorted_prims[first], range_box);
-    const Vec3 steps = range_steps(range_box);
     for (int32_t p = first > after ? first : after + 1; p <= last; ++p) {
+      const Box box = bvh.leaf_boxes[p];
       work.test_node();
-      if (bvh.leaf_boxes && !shape.overlaps(decode_box(bvh.leaf_boxes[p], range_box, steps))) continue;
-      const int32_t prim = bvh.sorted_prims[p];
-      const Box box = prim_boxes(prim);
-      if (shape.overlaps(box)) on_leaf(prim, box);
+      if (shape.overlaps(box)) on_leaf(bvh.sorted_prims[p], box);
     }
   };
   int32_t stack[kTraversalStack];

@@ -69,7 +69,6 @@ struct VertexTriangleQueries {
   static constexpr bool kOncePerPair = false;
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], r}; }
-  MINKQ_HD TriangleBoxes prim_boxes() const { return {vertices, triangles}; }
   // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t, const Box& /*t_box*/) const {
@@ -102,7 +101,6 @@ struct EdgeEdgeQueries {
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], r};
   }
-  MINKQ_HD EdgeBoxes prim_boxes() const { return {vertices, edges}; }
   // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f_box, f's box.
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
@@ -133,14 +131,12 @@ struct EdgeEdgeQueries {
 // User queries against a tree of user boxes: spheres (p1 == nullptr), capsules, or boxes
 // (lo in p0, hi in p1, r == 0). No leaf filter: the node test at a leaf is the exact test.
 struct UserQueries {
-  const Box* boxes;  // the tree's boxes, by primitive
   const Vec3* p0;
   const Vec3* p1;
   float r;
   static constexpr bool kOncePerPair = false;
   MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
-  MINKQ_HD GivenBoxes prim_boxes() const { return {boxes}; }
   template <class Shape>
   MINKQ_HD bool accept(int32_t, int32_t, const Box& = Box{}) const { return true; }
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
@@ -158,7 +154,7 @@ MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, E
     const Pair pair = queries.pair(target.q, prim);
     emit(pair.first, pair.second);
   };
-  traverse(bvh, queries.prim_boxes(), shape, target.after, on_leaf, work);
+  traverse(bvh, shape, target.after, on_leaf, work);
 }
 
 }  // namespace minkq
