@@ -116,6 +116,39 @@ TEST_F(Fixture, bad_radius_mode_kind_and_flags_are_rejected) {
   EXPECT_EQ(minkq_scene_query(both.handle, &ok, nullptr, 5, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
 }
 
+// The backend's store holds the scene's only copy of its topology: counts and edges come back
+// from it, on the CPU and on a CUDA device where one exists.
+TEST_F(Fixture, scene_edges_come_back_derived_in_lexicographic_order_or_as_given) {
+  std::vector<std::string> specs = {"cpu"};
+  if (minkq_cuda_device_count() > 0) specs.push_back("cuda");
+  const std::vector<int32_t> derived = {0, 1, 0, 2, 1, 2, 3, 4, 3, 5, 4, 5};
+  const std::vector<int32_t> given = {2, 0, 5, 4, 1, 3};
+  for (const std::string& spec : specs) {
+    test::Device dev(spec.c_str());
+    for (const bool give : {false, true})
+      for (const uint32_t flags : {uint32_t(MINKQ_SCENE_EE), uint32_t(MINKQ_SCENE_VT), uint32_t(MINKQ_SCENE_VT | MINKQ_SCENE_EE)}) {
+        minkq_scene_desc d = desc();
+        d.flags = flags;
+        if (give) d.edges = host_buffer(given.data(), given.size() / 2);
+        minkq_scene* scene = nullptr;
+        ASSERT_EQ(minkq_scene_create(dev.handle, &d, &scene), MINKQ_SUCCESS) << message();
+        const std::vector<int32_t> expected = give ? given : (flags & MINKQ_SCENE_EE) ? derived : std::vector<int32_t>{};
+        EXPECT_EQ(minkq_scene_triangle_count(scene), 2u);
+        ASSERT_EQ(minkq_scene_edge_count(scene), expected.size() / 2);
+        std::vector<int32_t> edges(expected.size() + 2, -5);
+        EXPECT_EQ(minkq_scene_edges(scene, edges.data(), expected.size() / 2), MINKQ_SUCCESS) << message();
+        EXPECT_EQ(std::vector<int32_t>(edges.begin(), edges.end() - 2), expected) << spec << " flags " << flags;
+        EXPECT_EQ(edges[expected.size()], -5);  // nothing past the edges
+        if (!expected.empty()) {
+          EXPECT_EQ(minkq_scene_edges(scene, edges.data(), expected.size() / 2 - 1), MINKQ_ERROR_CAPACITY);
+          EXPECT_NE(message().find("the scene has " + std::to_string(expected.size() / 2) + " edges"), std::string::npos)
+              << message();
+        }
+        minkq_scene_release(scene);
+      }
+  }
+}
+
 TEST_F(Fixture, capacity_reports_the_exact_count_and_writes_nothing_past_the_buffer) {
   test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const test::Pairs all = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);
