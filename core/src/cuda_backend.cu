@@ -192,7 +192,8 @@ __global__ void karras_kernel(const uint64_t* keys, int32_t n, KarrasNode* karra
 
 __global__ void collapse_kernel(const KarrasNode* karras, const int32_t* new_index, int32_t n, BvhNode* nodes) {
   const int64_t i = global_index();
-  if (i < n - 1 && keeps_node(int32_t(i), karras[i], kLeafSize)) collapse_node(int32_t(i), karras, new_index, kLeafSize, nodes);
+  if (i < n - 1 && keeps_node(int32_t(i), karras[i], kLeafSize))
+    collapse_node(int32_t(i), karras, new_index, kLeafSize, nodes);
 }
 
 template <class Boxes>

@@ -190,8 +190,9 @@ MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
 
 // Refit from child slot `slot` = (node << 1) | side (a thread per slot, 2 per node; a slot
 // holding an internal node or no child returns at once): a leaf range writes its primitives'
-// boxes in leaf order and merges them into the node's child box. The second of two children to arrive at a node (counters
-// zeroed before the pass) merges both boxes and climbs on. Unions are exact.
+// boxes in leaf order and merges them into the node's child box. The second of two children
+// to arrive at a node (counters zeroed before the pass) merges both boxes and climbs on.
+// Unions are exact.
 template <class Boxes>
 MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* sorted_prims, Box* leaf_boxes,
                               BvhNode* nodes, int32_t* arrivals) {
