@@ -77,6 +77,16 @@ struct EdgeEdgeOnceByIdOrder {
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
 };
 
+// The node tests before: the mode's own test at every node, not only at primitive boxes.
+template <class Shape>
+struct FineAtEveryNode {
+  Shape shape;
+  static constexpr bool kFinerAtPrimitives = false;
+  static FineAtEveryNode from(const QueryGeometry& q) { return {Shape::from(q)}; }
+  bool overlaps(const Box& b) const { return shape.overlaps(b); }
+  bool may_overlap(const Box& b) const { return shape.overlaps(b); }
+};
+
 struct Outcome {
   WorkCounts work;
   double ms = 0;
@@ -180,6 +190,41 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
   return out;
 }
 
+// The fine node tests (sphere, capsule_ray, capsule_exact) at every node (before) or only at
+// primitive boxes, the padded box inside the tree (kept); at the scene's radius and at 8x it.
+template <class Shape, class Queries>
+std::string compare_fine_nodes_one(const SceneFrames& sc, const BvhView& bvh, const Queries& queries, int32_t n,
+                                   const char* kind, const char* mode, const char* radius, int repeats, bool& ok) {
+  const Outcome a = run<FineAtEveryNode<Shape>>(bvh, queries, n, repeats);
+  const Outcome b = run<Shape>(bvh, queries, n, repeats);
+  ok &= a.pairs == b.pairs;
+  return row(sc.name, kind, mode, (std::string("fine test at every node (before), ") + radius).c_str(), a, n, a) +
+         row(sc.name, kind, mode, (std::string("padded box inside, fine at primitives (kept), ") + radius).c_str(), b, n, a);
+}
+
+std::string compare_fine_nodes(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
+                               int repeats, bool& ok) {
+  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
+  const int32_t ne = int32_t(sc.mesh.edge_count());
+  CpuTree triangles, edges;
+  triangles.build(TriangleBoxes{v, t}, nt);
+  edges.build(EdgeBoxes{v, e}, ne);
+  std::vector<uint64_t> keys;
+  std::vector<int32_t> order;
+  sort_by_morton(PointBoxes{v}, nv, keys, order);
+  std::string out;
+  for (const float factor : {1.0f, 8.0f}) {
+    const float rr = r * factor;
+    const char* radius = factor == 1.0f ? "r" : "8 r";
+    const VertexTriangleQueries vt{v, t, order.data(), rr, kDropIncident};
+    const EdgeEdgeQueries ee{v, e, edges.sorted_prims().data(), rr, kDropIncident};
+    out += compare_fine_nodes_one<SphereShape>(sc, triangles.view(), vt, nv, "VT", "sphere", radius, repeats, ok);
+    out += compare_fine_nodes_one<CapsuleRayShape>(sc, edges.view(), ee, ne, "EE", "capsule_ray", radius, repeats, ok);
+    out += compare_fine_nodes_one<CapsuleExactShape>(sc, edges.view(), ee, ne, "EE", "capsule_exact", radius, repeats, ok);
+  }
+  return out;
+}
+
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
   const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
@@ -200,7 +245,7 @@ std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
                     row(sc.name, "VT", "sphere", "vertex Morton order", b, nv, a);
   out += compare_ee<BoxShape>(sc, v, e, r, "box", repeats, ok);
   out += compare_ee<CapsuleExactShape>(sc, v, e, r, "capsule_exact", repeats, ok);
-  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok);
+  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok) + compare_fine_nodes(sc, v, t, e, r, repeats, ok);
 }
 
 }  // namespace

@@ -247,10 +247,12 @@ struct NoWork {
   MINKQ_HD void emit_candidate() {}
 };
 
-// The one traversal: every query shape supplies overlaps(const Box&); on_leaf(prim, box) is
-// called for every primitive whose box the shape overlaps, provided the test also accepts every
-// ancestor box (monotone under box inclusion: true of each shape here; tests/test_queries.cpp
-// checks traversal against the test applied to every primitive). Only leaves at sorted
+// The one traversal: every query shape supplies overlaps(const Box&), its test, and
+// may_overlap(const Box&), the test of internal and leaf-range boxes (see shapes.h);
+// on_leaf(prim, box) is called for every primitive whose box the shape overlaps, provided
+// may_overlap accepts every ancestor box (it is monotone under box inclusion and accepts
+// wherever overlaps does: true of each shape here; tests/test_queries.cpp checks traversal
+// against the test applied to every primitive). Only leaves at sorted
 // positions after `after` are reached: a self-query from the leaf at position i passes i and
 // meets each pair once; other queries pass -1. A node is entered only when its last position
 // is past `after` (the root: n - 1 > after), so only the left child (last = split) can fail.
@@ -259,7 +261,10 @@ MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
   // A range's box is the union of its leaf boxes: one leaf's box is the range's own.
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    if (first == last) return on_leaf(bvh.sorted_prims[first], range_box);
+    if (first == last) {
+      if (Shape::kFinerAtPrimitives && !shape.overlaps(range_box)) return;
+      return on_leaf(bvh.sorted_prims[first], range_box);
+    }
     for (int32_t p = first > after ? first : after + 1; p <= last; ++p) {
       const Box box = bvh.leaf_boxes[p];
       work.test_node();
@@ -275,13 +280,13 @@ MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
     int32_t next = -1;
     if (n.split > after) {
       work.test_node();
-      if (shape.overlaps(n.left_box)) {
+      if (shape.may_overlap(n.left_box)) {
         if (n.left < 0) visit_range(~n.left, n.split, n.left_box); else next = n.left;
       }
     }
     if (n.right != kNoChild) {
       work.test_node();
-      if (shape.overlaps(n.right_box)) {
+      if (shape.may_overlap(n.right_box)) {
         if (n.right < 0) {
           visit_range(n.split + 1, ~n.right, n.right_box);
         } else if (next < 0) {

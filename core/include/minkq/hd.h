@@ -8,10 +8,12 @@
 #include <cstdint>
 #include <cstring>
 
+// Forced inline on both sides: the node tests run tens of times per query, and g++ left the
+// small ones (vmin, the shapes' overlaps) as out-of-line calls in the shared library.
 #if defined(__CUDACC__)
 #define MINKQ_HD __host__ __device__ __forceinline__
 #else
-#define MINKQ_HD inline
+#define MINKQ_HD inline __attribute__((always_inline))
 #endif
 
 namespace minkq {
@@ -29,8 +31,24 @@ MINKQ_HD Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.
 MINKQ_HD Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 MINKQ_HD Vec3 operator*(float s, Vec3 a) { return {s * a.x, s * a.y, s * a.z}; }
 MINKQ_HD float component(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
-MINKQ_HD Vec3 vmin(Vec3 a, Vec3 b) { return {fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
-MINKQ_HD Vec3 vmax(Vec3 a, Vec3 b) { return {fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+
+// fmin/fmax semantics (a NaN operand yields the other one; the predicates rely on it to stay
+// conservative when an intermediate overflows). The device has them as instructions; on the
+// host g++ calls libm for each unless -ffinite-math-only, so there they are plain selects.
+#if defined(__CUDA_ARCH__)
+MINKQ_HD float min_num(float a, float b) { return fminf(a, b); }
+MINKQ_HD float max_num(float a, float b) { return fmaxf(a, b); }
+MINKQ_HD double min_num(double a, double b) { return fmin(a, b); }
+MINKQ_HD double max_num(double a, double b) { return fmax(a, b); }
+#else
+template <class T>
+MINKQ_HD T min_num(T a, T b) { return (a < b || b != b) ? a : b; }
+template <class T>
+MINKQ_HD T max_num(T a, T b) { return (a > b || b != b) ? a : b; }
+#endif
+
+MINKQ_HD Vec3 vmin(Vec3 a, Vec3 b) { return {min_num(a.x, b.x), min_num(a.y, b.y), min_num(a.z, b.z)}; }
+MINKQ_HD Vec3 vmax(Vec3 a, Vec3 b) { return {max_num(a.x, b.x), max_num(a.y, b.y), max_num(a.z, b.z)}; }
 
 // Axis-aligned box; an empty box has lo > hi (see Box::empty()).
 struct Box {

@@ -18,9 +18,9 @@ namespace minkq {
 // d2f <= d2 * (1 + 6u) + 3 * 2^-150 (u = 2^-24): three exact-input subtractions, squares and
 // two additions of non-negative terms, each one rounding.
 MINKQ_HD float point_box_distance2(Vec3 p, const Box& b) {
-  const float dx = fmaxf(fmaxf(b.lo.x - p.x, p.x - b.hi.x), 0.0f);
-  const float dy = fmaxf(fmaxf(b.lo.y - p.y, p.y - b.hi.y), 0.0f);
-  const float dz = fmaxf(fmaxf(b.lo.z - p.z, p.z - b.hi.z), 0.0f);
+  const float dx = max_num(max_num(b.lo.x - p.x, p.x - b.hi.x), 0.0f);
+  const float dy = max_num(max_num(b.lo.y - p.y, p.y - b.hi.y), 0.0f);
+  const float dz = max_num(max_num(b.lo.z - p.z, p.z - b.hi.z), 0.0f);
   return dx * dx + dy * dy + dz * dz;
 }
 
@@ -59,8 +59,8 @@ MINKQ_HD bool capsule_ray_overlaps_box(Vec3 p0, Vec3 d, float r, const Box& b) {
     if (t0 > t1) { const float t = t0; t0 = t1; t1 = t; }
     t0 = t0 - fabsf(t0) * 9.5367431640625e-07f - FLT_MIN;  // 2^-20
     t1 = t1 + fabsf(t1) * 9.5367431640625e-07f + FLT_MIN;
-    t_near = fmaxf(t_near, t0);
-    t_far = fminf(t_far, t1);
+    t_near = max_num(t_near, t0);
+    t_far = min_num(t_far, t1);
   }
   return t_near <= t_far;
 }
@@ -124,7 +124,7 @@ MINKQ_HD float segment_box_distance2(Vec3 p0, Vec3 p1, const Box& b) {
     if (x < lo || x > hi) { num += face * dk; den += dk * dk; }
   }
   float s = den > 0.0f ? num / den : mid;
-  s = fminf(fmaxf(s, s_lo), s_hi);
+  s = min_num(max_num(s, s_lo), s_hi);
   const float g = segment_box_g(s, d, rl, rh);
   return g == g ? g : 0.0f;
 }
@@ -173,9 +173,9 @@ MINKQ_HD double point_segment_distance2(Vec3d p, Vec3d a, Vec3d b) {
 // error stays O(u * S) even for near-parallel segments (unlike the 2x2 normal equations).
 MINKQ_HD double segment_segment_distance2(Vec3d p0, Vec3d p1, Vec3d q0, Vec3d q1) {
   double best = point_segment_distance2(p0, q0, q1);
-  best = fmin(best, point_segment_distance2(p1, q0, q1));
-  best = fmin(best, point_segment_distance2(q0, p0, p1));
-  best = fmin(best, point_segment_distance2(q1, p0, p1));
+  best = min_num(best, point_segment_distance2(p1, q0, q1));
+  best = min_num(best, point_segment_distance2(q0, p0, p1));
+  best = min_num(best, point_segment_distance2(q1, p0, p1));
   const Vec3d d1 = p1 - p0, d2 = q1 - q0, w = p0 - q0;
   const double l2 = dot(d2, d2);
   if (!(l2 > 0.0) || !(dot(d1, d1) > 0.0)) return best;
@@ -187,16 +187,16 @@ MINKQ_HD double segment_segment_distance2(Vec3d p0, Vec3d p1, Vec3d q0, Vec3d q1
   } else {
     double s0 = -a / b, s1 = (l2 - a) / b;
     if (s0 > s1) { const double t = s0; s0 = s1; s1 = t; }
-    s_lo = fmax(s_lo, s0);
-    s_hi = fmin(s_hi, s1);
+    s_lo = max_num(s_lo, s0);
+    s_hi = min_num(s_hi, s1);
     if (s_lo > s_hi) return best;
   }
   const Vec3d n = cross(d1, d2), m = cross(w, d2);
   const double nn = dot(n, n);
   double s = nn > 0.0 ? -dot(m, n) / nn : s_lo;
-  s = fmin(fmax(s, s_lo), s_hi);
+  s = min_num(max_num(s, s_lo), s_hi);
   const Vec3d e = m + s * n;
-  return fmin(best, dot(e, e) / l2);
+  return min_num(best, dot(e, e) / l2);
 }
 
 // Squared distance from p to triangle abc, robust to zero-area and repeated-vertex triangles:
@@ -207,8 +207,8 @@ MINKQ_HD double segment_segment_distance2(Vec3d p0, Vec3d p1, Vec3d q0, Vec3d q1
 // the true distance, so that widening only errs towards "may be within r").
 MINKQ_HD double point_triangle_distance2(Vec3d p, Vec3d a, Vec3d b, Vec3d c, double scale) {
   double best = point_segment_distance2(p, a, b);
-  best = fmin(best, point_segment_distance2(p, b, c));
-  best = fmin(best, point_segment_distance2(p, c, a));
+  best = min_num(best, point_segment_distance2(p, b, c));
+  best = min_num(best, point_segment_distance2(p, c, a));
   const Vec3d ab = b - a, bc = c - b, ca = a - c;
   const Vec3d n = cross(ab, c - a);
   const double nn = dot(n, n);
@@ -221,10 +221,10 @@ MINKQ_HD double point_triangle_distance2(Vec3d p, Vec3d a, Vec3d b, Vec3d c, dou
   if (dot(n, cross(bc, pb)) < -band * sqrt(dot(bc, bc))) return best;
   if (dot(n, cross(ca, pc)) < -band * sqrt(dot(ca, ca))) return best;
   const double h = dot(pa, n);
-  return fmin(best, h * h / nn);
+  return min_num(best, h * h / nn);
 }
 
-MINKQ_HD double max3(double a, double b, double c) { return fmax(a, fmax(b, c)); }
+MINKQ_HD double max3(double a, double b, double c) { return max_num(a, max_num(b, c)); }
 
 // Operand size S for the leaf tests: the largest distance from the query's first point to a
 // point of the primitive, or between the query's own points.
@@ -232,7 +232,7 @@ MINKQ_HD double triangle_scale(Vec3d p, Vec3d a, Vec3d b, Vec3d c) {
   return sqrt(max3(dot(a - p, a - p), dot(b - p, b - p), dot(c - p, c - p)));
 }
 MINKQ_HD double segments_scale(Vec3d p0, Vec3d p1, Vec3d q0, Vec3d q1) {
-  return sqrt(fmax(dot(p1 - p0, p1 - p0), max3(dot(q0 - p0, q0 - p0), dot(q1 - p0, q1 - p0),
+  return sqrt(max_num(dot(p1 - p0, p1 - p0), max3(dot(q0 - p0, q0 - p0), dot(q1 - p0, q1 - p0),
                                                  dot(q1 - q0, q1 - q0))));
 }
 
