@@ -193,13 +193,13 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
 // The fine node tests (sphere, capsule_ray, capsule_exact) at every node (before) or only at
 // primitive boxes, the padded box inside the tree (kept); at the scene's radius and at 8x it.
 template <class Shape, class Queries>
-std::string compare_fine_nodes_one(const SceneFrames& sc, const BvhView& bvh, const Queries& queries, int32_t n,
+std::string compare_fine_nodes_one(const std::string& scene, const BvhView& bvh, const Queries& queries, int32_t n,
                                    const char* kind, const char* mode, const char* radius, int repeats, bool& ok) {
   const Outcome a = run<FineAtEveryNode<Shape>>(bvh, queries, n, repeats);
   const Outcome b = run<Shape>(bvh, queries, n, repeats);
   ok &= a.pairs == b.pairs;
-  return row(sc.name, kind, mode, (std::string("fine test at every node (before), ") + radius).c_str(), a, n, a) +
-         row(sc.name, kind, mode, (std::string("padded box inside, fine at primitives (kept), ") + radius).c_str(), b, n, a);
+  return row(scene, kind, mode, (std::string("fine test at every node (before), ") + radius).c_str(), a, n, a) +
+         row(scene, kind, mode, (std::string("padded box inside, fine at primitives (kept), ") + radius).c_str(), b, n, a);
 }
 
 std::string compare_fine_nodes(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
@@ -218,11 +218,47 @@ std::string compare_fine_nodes(const SceneFrames& sc, const Vec3* v, const Trian
     const char* radius = factor == 1.0f ? "r" : "8 r";
     const VertexTriangleQueries vt{v, t, order.data(), rr, kDropIncident};
     const EdgeEdgeQueries ee{v, e, edges.sorted_prims().data(), rr, kDropIncident};
-    out += compare_fine_nodes_one<SphereShape>(sc, triangles.view(), vt, nv, "VT", "sphere", radius, repeats, ok);
-    out += compare_fine_nodes_one<CapsuleRayShape>(sc, edges.view(), ee, ne, "EE", "capsule_ray", radius, repeats, ok);
-    out += compare_fine_nodes_one<CapsuleExactShape>(sc, edges.view(), ee, ne, "EE", "capsule_exact", radius, repeats, ok);
+    out += compare_fine_nodes_one<SphereShape>(sc.name, triangles.view(), vt, nv, "VT", "sphere", radius, repeats, ok);
+    out += compare_fine_nodes_one<CapsuleRayShape>(sc.name, edges.view(), ee, ne, "EE", "capsule_ray", radius, repeats, ok);
+    out += compare_fine_nodes_one<CapsuleExactShape>(sc.name, edges.view(), ee, ne, "EE", "capsule_exact", radius, repeats, ok);
   }
   return out;
+}
+
+// The same on 3-D-spread user boxes (minkq_hr_study's recipe, where the sphere test drops up
+// to 47% of the box candidates): n cubes of half-size h = hr * r, centres uniform in [0,1]^3,
+// r such that a padded-box query meets about 8 boxes; n sphere queries at uniform points and
+// n capsule queries along cube diagonals (length 2 sqrt(3) h) in uniform directions.
+std::string compare_fine_nodes_spread(int32_t n, double hr, int repeats, bool& ok) {
+  const double r = std::cbrt(8.0 / n) / (2 * (1 + hr)), h = hr * r, len = 2 * std::sqrt(3.0) * h;
+  uint64_t state = uint64_t(hr * 1e6) + 977;
+  auto uniform = [&state] {  // splitmix64 -> [0, 1)
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
+  };
+  std::vector<Box> boxes(static_cast<size_t>(n));
+  std::vector<Vec3> points(boxes.size()), p0(boxes.size()), p1(boxes.size());
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const double c[3] = {uniform(), uniform(), uniform()};
+    boxes[i] = {{float(c[0] - h), float(c[1] - h), float(c[2] - h)}, {float(c[0] + h), float(c[1] + h), float(c[2] + h)}};
+    points[i] = {float(uniform()), float(uniform()), float(uniform())};
+    const double th = std::acos(2 * uniform() - 1), ph = 2 * 3.141592653589793 * uniform();
+    const double d[3] = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
+    const double q[3] = {uniform(), uniform(), uniform()};
+    p0[i] = {float(q[0] - 0.5 * len * d[0]), float(q[1] - 0.5 * len * d[1]), float(q[2] - 0.5 * len * d[2])};
+    p1[i] = {float(q[0] + 0.5 * len * d[0]), float(q[1] + 0.5 * len * d[1]), float(q[2] + 0.5 * len * d[2])};
+  }
+  CpuTree tree;
+  tree.build(GivenBoxes{boxes.data()}, n);
+  char name[96], radius[32];
+  std::snprintf(name, sizeof name, "3-D spread cubes, h/r = %g", hr);
+  std::snprintf(radius, sizeof radius, "%d queries", int(n));
+  const UserQueries spheres{points.data(), nullptr, float(r)}, capsules{p0.data(), p1.data(), float(r)};
+  return compare_fine_nodes_one<SphereShape>(name, tree.view(), spheres, n, "user", "sphere", radius, repeats, ok) +
+         compare_fine_nodes_one<CapsuleRayShape>(name, tree.view(), capsules, n, "user", "capsule_ray", radius, repeats, ok) +
+         compare_fine_nodes_one<CapsuleExactShape>(name, tree.view(), capsules, n, "user", "capsule_exact", radius, repeats, ok);
 }
 
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
@@ -280,6 +316,7 @@ int main(int argc, char** argv) {
       o << compare_scene(make_scene(name, scale, 2, data), repeats, ok);
     for (const RealMesh& m : real_meshes())
       if (m.name == "unisex_shirt" || m.name == "multilayer_drape") o << compare_scene(load_real_scene(m, data), repeats, ok);
+    for (const double hr : {0.01, 1.0}) o << compare_fine_nodes_spread(200000, hr, repeats, ok);
     o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
     std::ofstream f(out + "/ablation.md");
     f << o.str();

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates every benchmark table and plot of bench/results with one command.
 #
-#   bench/run.sh            full run (about 45-60 min on 2 cores): scenes, real meshes, radius
+#   bench/run.sh            full run (about 20 min on 2 cores): scenes, real meshes, radius
 #                           sweep, 1M/2M twisted sheets, stability report, h/r study, plots,
 #                           Warp/Newton CPU baselines; writes bench/results/
 #   bench/run.sh --quick    smoke run (seconds): reference scenes (2 frames, 1 repeat), quick

@@ -62,6 +62,8 @@ struct CapsuleUnitShape {
     const float t_max = minkq::next_up(len * (1.0f + 9.5367431640625e-07f));
     return {minkq::padded_segment_box(p0, p1, r), p0, u, t_max, r};
   }
+  static constexpr bool kFinerAtPrimitives = true;  // the padded box inside the tree, as the core's shapes
+  bool may_overlap(const minkq::Box& b) const { return minkq::boxes_overlap(box, b); }
   bool overlaps(const minkq::Box& b) const {
     if (!minkq::boxes_overlap(box, b)) return false;
     float t_near = 0.0f, t_far = t_max;
@@ -87,6 +89,8 @@ struct CapsuleUnitShape {
 // The core's shape through the same bench traversal (a cross-check of the C API's capsule_ray).
 struct CoreRayShape {
   minkq::CapsuleRayShape s;
+  static constexpr bool kFinerAtPrimitives = minkq::CapsuleRayShape::kFinerAtPrimitives;
+  bool may_overlap(const minkq::Box& b) const { return s.may_overlap(b); }
   bool overlaps(const minkq::Box& b) const { return s.overlaps(b); }
 };
 
