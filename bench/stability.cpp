@@ -180,8 +180,8 @@ struct Excess {
 enum class Metric { kBox, kSphere, kRay, kCapsuleExact, kLeaf };
 
 // Distance of candidate (q, p) in the mode's own metric, and the slack its stated bound allows:
-//  box            Chebyshev gap between the query's exact box and p's box; slack 2 float ulps of
-//                 the padded box's largest coordinate (lo - r and hi + r rounded, then one step out)
+//  box            Chebyshev gap between the query's exact box and p's box; slack half an ulp of
+//                 r (box_gap_within: a float difference rounded to at most r)
 //  sphere         Euclidean point-box distance; slack r 2^-17 plus the underflow allowance
 //                 sqrt(19 * 2^-149) (predicates.h: d2 error 6u + 3 * 2^-150, r2 bound + 16 * 2^-149)
 //  capsule_ray    Chebyshev distance from the segment to p's box; slack 2^-19 |d|_inf (the t range
@@ -212,7 +212,7 @@ void measure_excess(const ref::Mesh& m, bool vt, int32_t q, int32_t p, LD r, Met
     case Metric::kBox: {
       const BoxL qb = box_of({q0, q1});
       for (int k = 0; k < 3; ++k) d = std::max({d, qb.lo[k] - pb.hi[k], pb.lo[k] - qb.hi[k]});
-      slack = 2 * float_ulp(big);
+      slack = float_ulp(r) / 2;
       break;
     }
     case Metric::kSphere: {
@@ -257,13 +257,13 @@ void measure_excess(const ref::Mesh& m, bool vt, int32_t q, int32_t p, LD r, Met
 // Non-finite intermediates of the node predicates, evaluated for every query and for every
 // (query, primitive box) pair of the box candidates (a superset of every mode's).
 struct NonFinite {
-  uint64_t r2 = 0, padded_box = 0, point_box = 0, threshold = 0, segment_box = 0, ray_t = 0;
+  uint64_t r2 = 0, box_gap = 0, point_box = 0, threshold = 0, segment_box = 0, ray_t = 0;
   std::string text() const {
     std::string s;
     auto add = [&](const char* what, uint64_t n) {
       if (n) s += (s.empty() ? "" : ", ") + std::string(what) + " " + std::to_string(n);
     };
-    add("r2 bound", r2), add("padded box", padded_box), add("point-box d2", point_box), add("capsule threshold", threshold),
+    add("r2 bound", r2), add("box gap", box_gap), add("point-box d2", point_box), add("capsule threshold", threshold),
         add("segment-box g", segment_box), add("ray t", ray_t);
     return s.empty() ? "0" : s;
   }
@@ -278,23 +278,26 @@ bool finite_box(const minkq::Box& b) {
 NonFinite non_finite(const ref::Mesh& m, float r, const PairSet& vt_box, const PairSet& ee_box) {
   NonFinite nf;
   if (!std::isfinite(minkq::square_upper_bound(r))) ++nf.r2;
-  for (size_t v = 0; v < m.vertex_count(); ++v)
-    if (!finite_box(minkq::padded_segment_box(vf(m, int32_t(v)), vf(m, int32_t(v)), r))) ++nf.padded_box;
   for (size_t e = 0; e < m.edge_count(); ++e) {
     const minkq::Vec3 p0 = vf(m, m.edges[2 * e]), p1 = vf(m, m.edges[2 * e + 1]);
-    if (!finite_box(minkq::padded_segment_box(p0, p1, r))) ++nf.padded_box;
     if (!std::isfinite(minkq::capsule_exact_threshold2(p0, p1, r))) ++nf.threshold;
   }
+  // box_gap_within's six differences (query box to primitive box).
+  auto gaps_finite = [](minkq::Vec3 lo, minkq::Vec3 hi, const minkq::Box& b) {
+    return finite_box({b.lo - hi, lo - b.hi});
+  };
   for (uint64_t pr : vt_box) {
     const int32_t v = int32_t(pr >> 32), t = int32_t(pr & 0xffffffffu);
     const minkq::Box b = minkq::box_expand(minkq::box_expand(minkq::Box::of_point(vf(m, m.tris[3 * size_t(t)])), vf(m, m.tris[3 * size_t(t) + 1])),
                                            vf(m, m.tris[3 * size_t(t) + 2]));
     if (!std::isfinite(minkq::point_box_distance2(vf(m, v), b))) ++nf.point_box;
+    if (!gaps_finite(vf(m, v), vf(m, v), b)) ++nf.box_gap;
   }
   for (uint64_t pr : ee_box) {
     const int32_t e = int32_t(pr >> 32), f = int32_t(pr & 0xffffffffu);
     const minkq::Vec3 p0 = vf(m, m.edges[2 * size_t(e)]), p1 = vf(m, m.edges[2 * size_t(e) + 1]);
     const minkq::Box b = minkq::box_expand(minkq::Box::of_point(vf(m, m.edges[2 * size_t(f)])), vf(m, m.edges[2 * size_t(f) + 1]));
+    if (!gaps_finite(minkq::vmin(p0, p1), minkq::vmax(p0, p1), b)) ++nf.box_gap;
     const minkq::Vec3 d = p1 - p0, rl = b.lo - p0, rh = b.hi - p0;
     // segment_box_distance2 maps a NaN g to 0 ("may overlap"); count where that happens.
     if (!std::isfinite(minkq::segment_box_g(0.0f, d, rl, rh)) || !std::isfinite(minkq::segment_box_g(1.0f, d, rl, rh)) ||
@@ -656,12 +659,12 @@ int run(int argc, char** argv) {
   o << "Every case runs every mode on every backend and compares with the long-double oracle "
        "(core/reference). **FN** = true contacts missing (must be 0). **worst excess / slack** = the largest "
        "(distance - r) over the mode's candidates, in the mode's own metric, divided by the slack the bound stated in "
-       "core/include/minkq/predicates.h allows for that candidate: box — Chebyshev box gap, 2 float ulps; sphere — "
+       "core/include/minkq/predicates.h allows for that candidate: box — Chebyshev box gap, half an ulp of r; sphere — "
        "point-box distance, r 2^-17; capsule_ray — Chebyshev segment-box distance, 2^-19 |d|_inf + 2 ulps; "
        "capsule_exact — segment-box distance, 2^-17 (r + |d|_1) + 2^-18 (D + |d|_1); leaf_exact — primitive "
        "distance, 2^-19 S. A value <= 1 means every candidate lies within the stated bound (0: none beyond r). "
        "**beyond bound** counts candidates with a ratio > 1. **non-finite** counts node-predicate intermediates that "
-       "were Inf/NaN (every query's r^2 bound, padded boxes and capsule thresholds; every box candidate's point-box "
+       "were Inf/NaN (every query's r^2 bound and capsule thresholds; every box candidate's box gaps, point-box "
        "d^2, segment-box g and slab t values); the predicates treat them conservatively, so they may add false "
        "positives, never false negatives. **same set** compares candidate sets with the unscaled case.\n\n";
   const std::vector<std::string> groups = {"offset", "scale", "radius", "near-parallel", "stacked", "degenerate"};

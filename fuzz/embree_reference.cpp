@@ -149,7 +149,10 @@ void point_queries(RTCDevice device, BoxList* prims, const std::vector<Vec3>& po
 template <class Queries>
 std::vector<Box> padded_query_boxes(const Queries& queries, int32_t count) {
   std::vector<Box> boxes(size_t(std::max(count, 0)));
-  for (int32_t q = 0; q < count; ++q) boxes[q] = BoxShape::from(queries.geometry(q)).box;
+  for (int32_t q = 0; q < count; ++q) {
+    const QueryGeometry g = queries.geometry(q);
+    boxes[q] = box_gap_bound(vmin(g.p0, g.p1), vmax(g.p0, g.p1), g.r);  // holds every box the box test accepts
+  }
   return boxes;
 }
 

@@ -71,6 +71,36 @@ TEST_F(Predicates, sphere_test_accepts_every_box_within_r_and_none_beyond_stated
   }
 }
 
+// Chebyshev gap between two boxes (0 when they overlap).
+LD exact_box_gap(const Box& a, const Box& b) {
+  LD gap = 0;
+  for (int k = 0; k < 3; ++k)
+    gap = std::max({gap, LD(component(b.lo, k)) - component(a.hi, k), LD(component(a.lo, k)) - component(b.hi, k)});
+  return gap;
+}
+
+TEST_F(Predicates, box_test_accepts_every_box_within_r_and_none_beyond_half_an_ulp_of_r) {
+  for (int i = 0; i < 200000; ++i) {
+    const float scale = rng.log_uniform(1e-6f, 1e6f);
+    const Vec3 offset = rng.vec3(-1e5f * scale, 1e5f * scale);
+    const Box a = rng.box(offset, scale);
+    const Box b = rng.box(offset + rng.vec3(-3 * scale, 3 * scale), scale);
+    const LD gap = exact_box_gap(a, b);
+    float r = float(gap);  // a few ulps either side of the exact gap
+    for (int k = rng.integer(-3, 3); k != 0; k += (k > 0 ? -1 : 1)) r = k > 0 ? next_up(r) : next_down(r);
+    if (r < 0) r = 0;
+    const bool accepted = box_gap_within(a.lo, a.hi, r, b);
+    ASSERT_EQ(accepted, box_gap_within(b.lo, b.hi, r, a)) << "not symmetric";
+    if (gap <= LD(r)) ASSERT_TRUE(accepted) << "rejected a box within r: gap=" << double(gap) << " r=" << r;
+    if (accepted) {
+      ASSERT_LE(gap, LD(r) + (LD(next_up(r)) - LD(r)) / 2) << "r=" << r;
+      ASSERT_TRUE(boxes_overlap(box_gap_bound(a.lo, a.hi, r), b)) << "the prefilter box misses an accepted box";
+    }
+    // Exact for touching and disjoint boxes at r = 0.
+    if (r == 0.0f) ASSERT_EQ(accepted, boxes_overlap(a, b));
+  }
+}
+
 TEST_F(Predicates, capsule_ray_accepts_every_box_within_r) {
   for (int i = 0; i < 100000; ++i) {
     const float scale = rng.log_uniform(1e-5f, 1e5f);

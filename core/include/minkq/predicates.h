@@ -30,6 +30,19 @@ MINKQ_HD bool sphere_overlaps_box(Vec3 p, float r2_upper, const Box& b) {
   return point_box_distance2(p, b) <= r2_upper;
 }
 
+// The box test: per axis, the gap from box [lo, hi] to box b, computed in float, is at most r.
+// A rounded difference of floats is never pushed past r when the exact one is within it
+// (rounding is monotone and r is a float), so every box within r in every axis is accepted;
+// an accepted gap is at most r + half an ulp of r. The expressions are symmetric in the two
+// boxes (the same two differences either way round), grow no larger when b grows (an ancestor
+// box accepts whenever a box inside it does), and need no padding or outward rounding.
+// Coordinates are finite: a difference overflows only to -inf (accept) or +inf (reject),
+// both exact verdicts.
+MINKQ_HD bool box_gap_within(Vec3 lo, Vec3 hi, float r, const Box& b) {
+  return b.lo.x - hi.x <= r && lo.x - b.hi.x <= r && b.lo.y - hi.y <= r && lo.y - b.hi.y <= r &&
+         b.lo.z - hi.z <= r && lo.z - b.hi.z <= r;
+}
+
 // Box of a capsule (segment p0-p1 grown by r), rounded outward so it contains the exact one.
 MINKQ_HD Box padded_segment_box(Vec3 p0, Vec3 p1, float r) {
   const Vec3 lo = vmin(p0, p1), hi = vmax(p0, p1);
@@ -37,6 +50,11 @@ MINKQ_HD Box padded_segment_box(Vec3 p0, Vec3 p1, float r) {
   return {{next_down(lo.x - r), next_down(lo.y - r), next_down(lo.z - r)},
           {next_up(hi.x + r), next_up(hi.y + r), next_up(hi.z + r)}};
 }
+
+// A box containing every box b that box_gap_within(lo, hi, r, b) accepts (for prefilters that
+// take a box, such as Embree's): an accepted gap is below next_up(r), and padding by that with
+// outward rounding covers it.
+MINKQ_HD Box box_gap_bound(Vec3 lo, Vec3 hi, float r) { return padded_segment_box(lo, hi, next_up(r)); }
 
 // The prototype's capsule node test: the segment p0 + t*d, t in [0, 1] (d = p1 - p0), against
 // the box inflated by r in every axis (a superset of the capsule's Minkowski region).

@@ -101,31 +101,26 @@ struct EdgeEdgeQueries {
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], r};
   }
-  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f_box, f's box.
+  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box.
   template <class Shape>
-  MINKQ_HD bool accept(int32_t e, int32_t f) const {
-    return accept<Shape>(e, f, EdgeBoxes{vertices, edges}(f));
+  MINKQ_HD bool accept(int32_t e, int32_t f, const Box& /*f_box*/) const {
+    return accept<Shape>(e, f);
   }
   template <class Shape>
-  MINKQ_HD bool accept(int32_t e, int32_t f, const Box& f_box) const {
+  MINKQ_HD bool accept(int32_t e, int32_t f) const {
     const Edge a = edges[e], b = edges[f];
     if ((filters & kDropIncident) &&
         (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
       return false;
-    if (!reverse_shape<Shape>(f, f_box).overlaps(EdgeBoxes{vertices, edges}(e))) return false;
+    // The box test is symmetric (box_gap_within); the finer tests are not: Shape(f) against e's box.
+    if constexpr (!std::is_same<Shape, BoxShape>::value)
+      if (!Shape::from(geometry(f)).overlaps(EdgeBoxes{vertices, edges}(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], r);
   }
   MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
-  // Shape(f). The box mode's shape is f's box padded by r, so it comes from the box the node
-  // record already holds (the same floats: an edge box is the exact min/max of its ends).
-  template <class Shape>
-  MINKQ_HD Shape reverse_shape(int32_t f, const Box& f_box) const {
-    if constexpr (std::is_same<Shape, BoxShape>::value) return {padded_segment_box(f_box.lo, f_box.hi, r)};
-    else return Shape::from(geometry(f));
-  }
 };
 
 // User queries against a tree of user boxes: spheres (p1 == nullptr), capsules, or boxes

@@ -3,8 +3,8 @@
 // Finer modes are the coarser test AND a tighter one, so the candidate sets nest by
 // construction in float: capsule_exact <= capsule_ray <= box, sphere <= box.
 // The finer tests run only on primitive boxes: on the cloth scenes they pruned 1-4% of the
-// internal nodes the padded box visits, at 2-5x the cost of a box test (bench/results/
-// ablation.md), so inside the tree every shape uses its padded box. The candidate set is the
+// internal nodes the box test visits, at 2-5x its cost (bench/results/ablation.md), so inside
+// the tree every shape uses its box test. The candidate set is the
 // same either way: a primitive is a candidate when overlaps(its box), and may_overlap accepts
 // every box that contains one overlaps accepts.
 #pragma once
@@ -22,39 +22,35 @@ struct QueryGeometry {
   float r;
 };
 
+// The box mode: the query's own box (segment p0-p1, or the user box lo-hi with r = 0) within r
+// of b in every axis, as box_gap_within decides it: symmetric, so an EE pair needs it one way
+// only, and exact for boxes (r = 0).
 struct BoxShape {
-  Box box;
-  MINKQ_HD static BoxShape from(const QueryGeometry& q) { return {padded_segment_box(q.p0, q.p1, q.r)}; }
-  MINKQ_HD bool overlaps(const Box& b) const { return boxes_overlap(box, b); }
-  MINKQ_HD bool may_overlap(const Box& b) const { return boxes_overlap(box, b); }
+  Vec3 lo, hi;
+  float r;
+  MINKQ_HD static BoxShape from(const QueryGeometry& q) { return {vmin(q.p0, q.p1), vmax(q.p0, q.p1), q.r}; }
+  MINKQ_HD bool overlaps(const Box& b) const { return box_gap_within(lo, hi, r, b); }
+  MINKQ_HD bool may_overlap(const Box& b) const { return box_gap_within(lo, hi, r, b); }
   static constexpr bool kFinerAtPrimitives = false;  // overlaps == may_overlap
 };
 
 struct SphereShape {  // p0 is the centre; p1 is ignored
-  Box box;
-  Vec3 centre;
+  BoxShape box;       // of the centre: lo == hi == centre
   float r2_upper;
   MINKQ_HD static SphereShape from(const QueryGeometry& q) {
-    return {padded_segment_box(q.p0, q.p0, q.r), q.p0, square_upper_bound(q.r)};
+    return {BoxShape::from({q.p0, q.p0, q.r}), square_upper_bound(q.r)};
   }
-  MINKQ_HD bool overlaps(const Box& b) const {
-    return boxes_overlap(box, b) && sphere_overlaps_box(centre, r2_upper, b);
-  }
-  MINKQ_HD bool may_overlap(const Box& b) const { return boxes_overlap(box, b); }
+  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && sphere_overlaps_box(box.lo, r2_upper, b); }
+  MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
   static constexpr bool kFinerAtPrimitives = true;
 };
 
 struct CapsuleRayShape {
-  Box box;
+  BoxShape box;
   Vec3 p0, d;
-  float r;
-  MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) {
-    return {padded_segment_box(q.p0, q.p1, q.r), q.p0, q.p1 - q.p0, q.r};
-  }
-  MINKQ_HD bool overlaps(const Box& b) const {
-    return boxes_overlap(box, b) && capsule_ray_overlaps_box(p0, d, r, b);
-  }
-  MINKQ_HD bool may_overlap(const Box& b) const { return boxes_overlap(box, b); }
+  MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) { return {BoxShape::from(q), q.p0, q.p1 - q.p0}; }
+  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && capsule_ray_overlaps_box(p0, d, box.r, b); }
+  MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
   static constexpr bool kFinerAtPrimitives = true;
 };
 
@@ -68,7 +64,7 @@ struct CapsuleExactShape {
   MINKQ_HD bool overlaps(const Box& b) const {
     return ray.overlaps(b) && segment_box_distance2(ray.p0, p1, b) <= threshold2;
   }
-  MINKQ_HD bool may_overlap(const Box& b) const { return boxes_overlap(ray.box, b); }
+  MINKQ_HD bool may_overlap(const Box& b) const { return ray.box.overlaps(b); }
   static constexpr bool kFinerAtPrimitives = true;
 };
 
