@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cinttypes>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -202,16 +203,25 @@ std::string compare_fine_nodes_one(const std::string& scene, const BvhView& bvh,
          row(scene, kind, mode, (std::string("box test inside, fine at primitives (kept), ") + radius).c_str(), b, n, a);
 }
 
-std::string compare_fine_nodes(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
-                               int repeats, bool& ok) {
-  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
-  const int32_t ne = int32_t(sc.mesh.edge_count());
+// The library's two trees of a frame, and its vertices in Morton order (the VT query order).
+struct FrameTrees {
+  int32_t nv, ne;
   CpuTree triangles, edges;
-  triangles.build(TriangleBoxes{v, t}, nt);
-  edges.build(EdgeBoxes{v, e}, ne);
   std::vector<uint64_t> keys;
   std::vector<int32_t> order;
-  sort_by_morton(PointBoxes{v}, nv, keys, order);
+  FrameTrees(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e)
+      : nv(int32_t(sc.mesh.vertex_count())), ne(int32_t(sc.mesh.edge_count())) {
+    triangles.build(TriangleBoxes{v, t}, int32_t(sc.mesh.triangle_count()));
+    edges.build(EdgeBoxes{v, e}, ne);
+    sort_by_morton(PointBoxes{v}, nv, keys, order);
+  }
+};
+
+std::string compare_fine_nodes(const SceneFrames& sc, const FrameTrees& trees, const Vec3* v, const Triangle* t,
+                               const Edge* e, float r, int repeats, bool& ok) {
+  const int32_t nv = trees.nv, ne = trees.ne;
+  const CpuTree &triangles = trees.triangles, &edges = trees.edges;
+  const std::vector<int32_t>& order = trees.order;
   std::string out;
   for (const float factor : {1.0f, 8.0f}) {
     const float rr = r * factor;
@@ -227,17 +237,11 @@ std::string compare_fine_nodes(const SceneFrames& sc, const Vec3* v, const Trian
 
 // Box mode: the padded box (before) against the float gap test (kept), VT and EE. The pair
 // sets may differ at the boundary (different roundings, both conservative): counts shown.
-std::string compare_box_tests(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
-                              int repeats) {
-  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
-  const int32_t ne = int32_t(sc.mesh.edge_count());
-  CpuTree triangles, edges;
-  triangles.build(TriangleBoxes{v, t}, nt);
-  edges.build(EdgeBoxes{v, e}, ne);
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> order;
-  sort_by_morton(PointBoxes{v}, nv, keys, order);
-  const VertexTriangleQueries vt{v, t, order.data(), r, kDropIncident};
+std::string compare_box_tests(const SceneFrames& sc, const FrameTrees& trees, const Vec3* v, const Triangle* t,
+                              const Edge* e, float r, int repeats) {
+  const int32_t nv = trees.nv, ne = trees.ne;
+  const CpuTree &triangles = trees.triangles, &edges = trees.edges;
+  const VertexTriangleQueries vt{v, t, trees.order.data(), r, kDropIncident};
   const EdgeEdgeQueries ee{v, e, edges.sorted_prims().data(), r, kDropIncident};
   const Outcome vt_before = run<PaddedBoxShape>(triangles.view(), vt, nv, repeats);
   const Outcome vt_kept = run<BoxShape>(triangles.view(), vt, nv, repeats);
@@ -292,21 +296,17 @@ std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const float r = float(sc.radius_factor * sc.mean_edge);
   const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
   std::fprintf(stderr, "%s: %d V, %d T, r = %.4g\n", sc.name.c_str(), nv, nt, double(r));
-  CpuTree triangles;
-  triangles.build(TriangleBoxes{v, t}, nt);
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> order;
-  sort_by_morton(PointBoxes{v}, nv, keys, order);
-  const VertexTriangleQueries by_id{v, t, nullptr, r, kDropIncident}, by_morton{v, t, order.data(), r, kDropIncident};
-  const Outcome a = run<SphereShape>(triangles.view(), by_id, nv, repeats);
-  const Outcome b = run<SphereShape>(triangles.view(), by_morton, nv, repeats);
+  const FrameTrees trees(sc, v, t, e);
+  const VertexTriangleQueries by_id{v, t, nullptr, r, kDropIncident}, by_morton{v, t, trees.order.data(), r, kDropIncident};
+  const Outcome a = run<SphereShape>(trees.triangles.view(), by_id, nv, repeats);
+  const Outcome b = run<SphereShape>(trees.triangles.view(), by_morton, nv, repeats);
   ok &= a.pairs == b.pairs;
   std::string out = row(sc.name, "VT", "sphere", "vertex id order (before)", a, nv, a) +
                     row(sc.name, "VT", "sphere", "vertex Morton order", b, nv, a);
   out += compare_ee<BoxShape>(sc, v, e, r, "box", repeats, ok);
   out += compare_ee<CapsuleExactShape>(sc, v, e, r, "capsule_exact", repeats, ok);
-  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok) + compare_fine_nodes(sc, v, t, e, r, repeats, ok) +
-         compare_box_tests(sc, v, t, e, r, repeats);
+  return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok) + compare_fine_nodes(sc, trees, v, t, e, r, repeats, ok) +
+         compare_box_tests(sc, trees, v, t, e, r, repeats);
 }
 
 }  // namespace
@@ -343,8 +343,10 @@ int main(int argc, char** argv) {
       if (m.name == "unisex_shirt" || m.name == "multilayer_drape") o << compare_scene(load_real_scene(m, data), repeats, ok);
     for (const double hr : {0.01, 1.0}) o << compare_fine_nodes_spread(200000, hr, repeats, ok);
     o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+    std::filesystem::create_directories(out);
     std::ofstream f(out + "/ablation.md");
     f << o.str();
+    if (!f) throw std::runtime_error("cannot write " + out + "/ablation.md");
     std::fprintf(stderr, "wrote %s/ablation.md\n", out.c_str());
     if (!ok) {
       std::fprintf(stderr, "FAIL: a variant returned different pairs\n");

@@ -226,8 +226,11 @@ int run(int argc, char** argv) {
     o << "\n";
   }
   fs::create_directories(out_dir);
-  std::ofstream(out_dir + "/hr_study.md") << o.str();
-  std::ofstream(out_dir + "/hr_study.csv") << csv.str();
+  for (const auto& [name, text] : {std::pair{"/hr_study.md", o.str()}, std::pair{"/hr_study.csv", csv.str()}}) {
+    std::ofstream f(out_dir + name);
+    f << text;
+    if (!f) throw std::runtime_error("cannot write " + out_dir + name);
+  }
   std::fprintf(stderr, "wrote %s/hr_study.md and hr_study.csv\n", out_dir.c_str());
   return 0;
 }

@@ -737,6 +737,7 @@ safe with the rescaling guard, and gains nothing in exchange (its t bound |e| is
   const std::string path = out_dir + "/stability.md";
   std::ofstream f(path);
   f << o.str();
+  if (!f) throw std::runtime_error("cannot write " + path);
   std::fprintf(stderr, "wrote %s\n", path.c_str());
   return runner.false_negatives || runner.over_bound_unexplained || ray_fn_core ? 1 : 0;
 }
