@@ -62,7 +62,7 @@ struct CapsuleUnitShape {
     const float t_max = minkq::next_up(len * (1.0f + 9.5367431640625e-07f));
     return {minkq::padded_segment_box(p0, p1, r), p0, u, t_max, r};
   }
-  static constexpr bool kFinerAtPrimitives = true;  // the padded box inside the tree, as the core's shapes
+  static constexpr bool kFinerAtPrimitives = true;  // its box inside the tree, the slab test at primitives
   bool may_overlap(const minkq::Box& b) const { return minkq::boxes_overlap(box, b); }
   bool overlaps(const minkq::Box& b) const {
     if (!minkq::boxes_overlap(box, b)) return false;

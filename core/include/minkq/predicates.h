@@ -250,8 +250,8 @@ MINKQ_HD double triangle_scale(Vec3d p, Vec3d a, Vec3d b, Vec3d c) {
   return sqrt(max3(dot(a - p, a - p), dot(b - p, b - p), dot(c - p, c - p)));
 }
 MINKQ_HD double segments_scale(Vec3d p0, Vec3d p1, Vec3d q0, Vec3d q1) {
-  return sqrt(max_num(dot(p1 - p0, p1 - p0), max3(dot(q0 - p0, q0 - p0), dot(q1 - p0, q1 - p0),
-                                                 dot(q1 - q0, q1 - q0))));
+  return sqrt(max_num(dot(p1 - p0, p1 - p0),
+                      max3(dot(q0 - p0, q0 - p0), dot(q1 - p0, q1 - p0), dot(q1 - q0, q1 - q0))));
 }
 
 // Leaf acceptance: distance2 <= (r + 2^-20 * S)^2, the square taken with a relative margin of

@@ -2,11 +2,11 @@
 // applied to internal and leaf-range boxes; traversal (bvh.h) is written once for all.
 // Finer modes are the coarser test AND a tighter one, so the candidate sets nest by
 // construction in float: capsule_exact <= capsule_ray <= box, sphere <= box.
-// The finer tests run only on primitive boxes: on the cloth scenes they pruned 1-4% of the
+// The finer tests run only on primitive boxes: on the cloth scenes they pruned 0-4% of the
 // internal nodes the box test visits, at 2-5x its cost (bench/results/ablation.md), so inside
-// the tree every shape uses its box test. The candidate set is the
-// same either way: a primitive is a candidate when overlaps(its box), and may_overlap accepts
-// every box that contains one overlaps accepts.
+// the tree every shape uses its box test. The candidate set is the same either way: a
+// primitive is a candidate when overlaps(its box), and may_overlap accepts every box that
+// contains one overlaps accepts.
 #pragma once
 
 #include "minkq/predicates.h"
