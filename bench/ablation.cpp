@@ -76,20 +76,21 @@ struct EdgeEdgeOnceByIdOrder {
 // does that for every shape but the library's BoxShape).
 struct PaddedBoxShape {
   Box box;
-  static constexpr bool kFinerAtPrimitives = false;
   static PaddedBoxShape from(const QueryGeometry& q) { return {padded_segment_box(q.p0, q.p1, q.r)}; }
   bool overlaps(const Box& b) const { return boxes_overlap(box, b); }
   bool may_overlap(const Box& b) const { return boxes_overlap(box, b); }
+  // Not symmetric: the other edge's padded box against this box is the reverse test.
+  bool finer(const Box& b) const { return boxes_overlap(box, b); }
 };
 
 // The node tests before: the mode's own test at every node, not only at primitive boxes.
 template <class Shape>
 struct FineAtEveryNode {
   Shape shape;
-  static constexpr bool kFinerAtPrimitives = false;
   static FineAtEveryNode from(const QueryGeometry& q) { return {Shape::from(q)}; }
   bool overlaps(const Box& b) const { return shape.overlaps(b); }
   bool may_overlap(const Box& b) const { return shape.overlaps(b); }
+  bool finer(const Box& b) const { return shape.finer(b); }
 };
 
 struct Outcome {

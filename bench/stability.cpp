@@ -62,10 +62,10 @@ struct CapsuleUnitShape {
     const float t_max = minkq::next_up(len * (1.0f + 9.5367431640625e-07f));
     return {minkq::padded_segment_box(p0, p1, r), p0, u, t_max, r};
   }
-  static constexpr bool kFinerAtPrimitives = true;  // its box inside the tree, the slab test at primitives
+  // Its box inside the tree, the slab test at primitives (as the core's shapes).
   bool may_overlap(const minkq::Box& b) const { return minkq::boxes_overlap(box, b); }
-  bool overlaps(const minkq::Box& b) const {
-    if (!minkq::boxes_overlap(box, b)) return false;
+  bool overlaps(const minkq::Box& b) const { return may_overlap(b) && finer(b); }
+  bool finer(const minkq::Box& b) const {
     float t_near = 0.0f, t_far = t_max;
     for (int axis = 0; axis < 3; ++axis) {
       const float lo = minkq::next_down(minkq::component(b.lo, axis) - r);
@@ -89,9 +89,9 @@ struct CapsuleUnitShape {
 // The core's shape through the same bench traversal (a cross-check of the C API's capsule_ray).
 struct CoreRayShape {
   minkq::CapsuleRayShape s;
-  static constexpr bool kFinerAtPrimitives = minkq::CapsuleRayShape::kFinerAtPrimitives;
   bool may_overlap(const minkq::Box& b) const { return s.may_overlap(b); }
   bool overlaps(const minkq::Box& b) const { return s.overlaps(b); }
+  bool finer(const minkq::Box& b) const { return s.finer(b); }
 };
 
 // EE pairs (e, f), e < f, no shared vertex, from a traversal of an edge tree with a shape.

@@ -34,10 +34,9 @@ Box check_subtree(const CpuTree& tree, const std::vector<Box>& boxes, int32_t no
       for (int32_t p = first; p <= last; ++p) {
         const int32_t prim = tree.sorted_prims()[p];
         ++seen[prim];
+        EXPECT_TRUE(same_box(tree.leaf_boxes()[p], boxes[prim])) << "position " << p;
         below = box_union(below, boxes[prim]);
       }
-      for (int32_t p = first; p <= last; ++p)
-        EXPECT_TRUE(same_box(tree.leaf_boxes()[p], boxes[tree.sorted_prims()[p]])) << "position " << p;
     } else {
       EXPECT_EQ(tree.nodes()[child].parent, node << 1 | side);
       below = check_subtree(tree, boxes, child, depth + 1, seen, max_depth);

@@ -247,8 +247,9 @@ struct NoWork {
   MINKQ_HD void emit_candidate() {}
 };
 
-// The one traversal: every query shape supplies overlaps(const Box&), its test, and
-// may_overlap(const Box&), the test of internal and leaf-range boxes (see shapes.h);
+// The one traversal: every query shape supplies overlaps(const Box&), its test,
+// may_overlap(const Box&), the test of internal and leaf-range boxes, and finer(const Box&),
+// what overlaps adds to may_overlap (see shapes.h);
 // on_leaf(prim, box) is called for every primitive whose box the shape overlaps, provided
 // may_overlap accepts every ancestor box (it is monotone under box inclusion and accepts
 // wherever overlaps does: true of each shape here; tests/test_queries.cpp checks traversal
@@ -261,8 +262,8 @@ MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
   // A range's box is the union of its leaf boxes: one leaf's box is the range's own.
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    if (first == last) {
-      if (Shape::kFinerAtPrimitives && !shape.overlaps(range_box)) return;
+    if (first == last) {  // its box passed may_overlap, the box test: only the finer one is left
+      if (!shape.finer(range_box)) return;
       return on_leaf(bvh.sorted_prims[first], range_box);
     }
     for (int32_t p = first > after ? first : after + 1; p <= last; ++p) {

@@ -6,8 +6,6 @@
 #include "minkq/bvh.h"
 #include "minkq/shapes.h"
 
-#include <type_traits>
-
 namespace minkq {
 
 struct Triangle {
@@ -112,9 +110,9 @@ struct EdgeEdgeQueries {
     if ((filters & kDropIncident) &&
         (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
       return false;
-    // The box test is symmetric (box_gap_within); the finer tests are not: Shape(f) against e's box.
-    if constexpr (!std::is_same<Shape, BoxShape>::value)
-      if (!Shape::from(geometry(f)).overlaps(EdgeBoxes{vertices, edges}(e))) return false;
+    // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
+    // finer test against e's box (nothing for the box mode).
+    if (!Shape::from(geometry(f)).finer(EdgeBoxes{vertices, edges}(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;

@@ -1,6 +1,7 @@
-// Query shapes: each supplies overlaps(box), the mode's test, and may_overlap(box), the test
-// applied to internal and leaf-range boxes; traversal (bvh.h) is written once for all.
-// Finer modes are the coarser test AND a tighter one, so the candidate sets nest by
+// Query shapes: each is a box test (BoxShape, its `box`) and finer(b), the test a finer mode
+// adds to it: overlaps(b) = box.overlaps(b) && finer(b) is the mode's test, may_overlap(b) the
+// box test alone, applied to internal and leaf-range boxes; traversal (bvh.h) is written once
+// for all. Finer modes are the coarser test AND a tighter one, so the candidate sets nest by
 // construction in float: capsule_exact <= capsule_ray <= box, sphere <= box.
 // The finer tests run only on primitive boxes: on the cloth scenes they pruned 0-4% of the
 // internal nodes the box test visits, at 2-5x its cost (bench/results/ablation.md), so inside
@@ -30,8 +31,8 @@ struct BoxShape {
   float r;
   MINKQ_HD static BoxShape from(const QueryGeometry& q) { return {vmin(q.p0, q.p1), vmax(q.p0, q.p1), q.r}; }
   MINKQ_HD bool overlaps(const Box& b) const { return box_gap_within(lo, hi, r, b); }
-  MINKQ_HD bool may_overlap(const Box& b) const { return box_gap_within(lo, hi, r, b); }
-  static constexpr bool kFinerAtPrimitives = false;  // overlaps == may_overlap
+  MINKQ_HD bool may_overlap(const Box& b) const { return overlaps(b); }
+  MINKQ_HD bool finer(const Box&) const { return true; }  // the box test is the whole test
 };
 
 struct SphereShape {  // p0 is the centre; p1 is ignored
@@ -40,18 +41,18 @@ struct SphereShape {  // p0 is the centre; p1 is ignored
   MINKQ_HD static SphereShape from(const QueryGeometry& q) {
     return {BoxShape::from({q.p0, q.p0, q.r}), square_upper_bound(q.r)};
   }
-  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && sphere_overlaps_box(box.lo, r2_upper, b); }
+  MINKQ_HD bool finer(const Box& b) const { return sphere_overlaps_box(box.lo, r2_upper, b); }
+  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && finer(b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
-  static constexpr bool kFinerAtPrimitives = true;
 };
 
 struct CapsuleRayShape {
   BoxShape box;
   Vec3 p0, d;
   MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) { return {BoxShape::from(q), q.p0, q.p1 - q.p0}; }
-  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && capsule_ray_overlaps_box(p0, d, box.r, b); }
+  MINKQ_HD bool finer(const Box& b) const { return capsule_ray_overlaps_box(p0, d, box.r, b); }
+  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && finer(b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
-  static constexpr bool kFinerAtPrimitives = true;
 };
 
 struct CapsuleExactShape {
@@ -61,11 +62,11 @@ struct CapsuleExactShape {
   MINKQ_HD static CapsuleExactShape from(const QueryGeometry& q) {
     return {CapsuleRayShape::from(q), q.p1, capsule_exact_threshold2(q.p0, q.p1, q.r)};
   }
-  MINKQ_HD bool overlaps(const Box& b) const {
-    return ray.overlaps(b) && segment_box_distance2(ray.p0, p1, b) <= threshold2;
+  MINKQ_HD bool finer(const Box& b) const {
+    return ray.finer(b) && segment_box_distance2(ray.p0, p1, b) <= threshold2;
   }
+  MINKQ_HD bool overlaps(const Box& b) const { return ray.box.overlaps(b) && finer(b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return ray.box.overlaps(b); }
-  static constexpr bool kFinerAtPrimitives = true;
 };
 
 }  // namespace minkq
