@@ -14,9 +14,12 @@
 //        user boxes
 //   box test: the r-padded box, rounded outward  vs  the float gap <= r (kept; symmetric, so
 //        EE needs it one way only)
+//   trees: Morton built at the first frame and refit to the last (a simulator's refit-only
+//        steps)  vs  rebuilt at the last frame (minkq_scene_rebuild), and a binned SAH build
+//        (not kept) either way; with each tree's growth (minkq_scene_tree_growth)
 // Both variants of a kind must return the same pairs (checked), except the two box tests
 // (different roundings at the boundary: their counts are shown). Writes
-// bench/results/ablation.md; see bench/README.md.
+// bench/results/ablation.md and (the trees) bench/results/trees.md; see bench/README.md.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -27,6 +30,7 @@
 #include <sstream>
 
 #include "common.h"
+#include "backend.h"
 #include "cpu_tree.h"
 #include "minkq/queries.h"
 #include "scenes.h"
@@ -290,6 +294,170 @@ std::string compare_fine_nodes_spread(int32_t n, double hr, int repeats, bool& o
          compare_fine_nodes_one<CapsuleExactShape>(name, tree.view(), capsules, n, "user", "capsule_exact", radius, repeats, ok);
 }
 
+// A top-down binned SAH build (the tree-quality alternative of issue 8; not the library's
+// build): each range of primitives is split where the summed half areas of the two sides,
+// weighted by their counts, are least (centres binned in 32 slabs per axis; the middle when
+// the centres coincide), until a side holds at most kLeafSize primitives. Nodes in preorder,
+// leaf ranges contiguous: the library's layout, traversal and refit serve it unchanged.
+template <class Boxes>
+CpuTree build_sah(Boxes boxes, int32_t n) {
+  constexpr int kBins = 32;
+  std::vector<Box> box(static_cast<size_t>(n));
+  std::vector<Vec3> centre(box.size());
+  std::vector<int32_t> order(box.size());
+  for (int32_t i = 0; i < n; ++i) {
+    box[size_t(i)] = boxes(i);
+    centre[size_t(i)] = box_centre(box[size_t(i)]);
+    order[size_t(i)] = i;
+  }
+  auto axis_of = [](const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; };
+  // Partitions order[first..last] and returns the last position of the left side.
+  auto split = [&](int32_t first, int32_t last) {
+    Box bounds = Box::empty();
+    for (int32_t p = first; p <= last; ++p) bounds = box_expand(bounds, centre[size_t(order[size_t(p)])]);
+    double best = INFINITY;
+    int best_axis = -1, best_bin = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const float lo = axis_of(bounds.lo, axis), extent = axis_of(bounds.hi, axis) - lo;
+      if (!(extent > 0.0f)) continue;
+      Box bin_box[kBins];
+      int32_t bin_count[kBins] = {};
+      std::fill(bin_box, bin_box + kBins, Box::empty());
+      for (int32_t p = first; p <= last; ++p) {
+        const int32_t id = order[size_t(p)];
+        const int b = std::min(kBins - 1, int((axis_of(centre[size_t(id)], axis) - lo) * (kBins / extent)));
+        bin_box[b] = box_union(bin_box[b], box[size_t(id)]);
+        ++bin_count[b];
+      }
+      double right_cost[kBins] = {};  // of bins b.. kBins - 1
+      Box right = Box::empty();
+      int32_t count = 0;
+      for (int b = kBins - 1; b > 0; --b) {
+        right = box_union(right, bin_box[b]);
+        count += bin_count[b];
+        right_cost[b] = count ? count * half_area(right) : -1.0;  // -1: empty side
+      }
+      Box left = Box::empty();
+      count = 0;
+      for (int b = 0; b + 1 < kBins; ++b) {
+        left = box_union(left, bin_box[b]);
+        count += bin_count[b];
+        if (count == 0 || right_cost[b + 1] < 0.0) continue;
+        const double cost = count * half_area(left) + right_cost[b + 1];
+        if (cost < best) best = cost, best_axis = axis, best_bin = b;
+      }
+    }
+    if (best_axis < 0) return first + (last - first) / 2;
+    const float lo = axis_of(bounds.lo, best_axis), extent = axis_of(bounds.hi, best_axis) - lo;
+    int32_t* middle = std::partition(order.data() + first, order.data() + last + 1, [&](int32_t id) {
+      return std::min(kBins - 1, int((axis_of(centre[size_t(id)], best_axis) - lo) * (kBins / extent))) <= best_bin;
+    });
+    return int32_t(middle - order.data()) - 1;
+  };
+  std::vector<BvhNode> nodes;
+  if (n == 1) nodes.push_back(one_leaf_root());
+  struct Range {
+    int32_t first, last, parent_slot;
+  };
+  std::vector<Range> stack;
+  if (n > 1) stack.push_back({0, n - 1, -1});
+  while (!stack.empty()) {
+    const Range range = stack.back();
+    stack.pop_back();
+    const int32_t self = int32_t(nodes.size());
+    if (range.parent_slot >= 0) {
+      BvhNode& parent = nodes[size_t(range.parent_slot >> 1)];
+      (range.parent_slot & 1 ? parent.right : parent.left) = self;
+    }
+    const int32_t s = split(range.first, range.last);
+    BvhNode node{};
+    node.parent = range.parent_slot;
+    node.split = s;
+    node.left = ~range.first;  // leaf ranges unless a child node links itself in
+    node.right = ~range.last;
+    nodes.push_back(node);
+    // Right first: the left subtree follows its parent in memory.
+    if (range.last - s > kLeafSize) stack.push_back({s + 1, range.last, self << 1 | 1});
+    if (s - range.first + 1 > kLeafSize) stack.push_back({range.first, s, self << 1});
+  }
+  CpuTree tree;
+  tree.adopt(std::move(nodes), std::move(order), boxes);
+  return tree;
+}
+
+// Tree quality on the scenes' frame sequences (first and last frame): the library's Morton
+// build refit from the first frame (what a simulator's refit-only steps run), the same
+// rebuilt at the last frame (minkq_scene_rebuild), and the SAH build either way. Box mode,
+// the scene's radius; growth = area cost over its value at build (minkq_scene_tree_growth),
+// of the triangle tree for VT and of the edge tree for EE.
+std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
+  const auto* v0 = reinterpret_cast<const Vec3*>(sc.frames.front().data());
+  const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
+  const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
+  const auto* e = reinterpret_cast<const Edge*>(sc.mesh.edges.data());
+  const float r = float(sc.radius_factor * sc.mean_edge);
+  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
+  const int32_t ne = int32_t(sc.mesh.edge_count());
+  std::fprintf(stderr, "%s (trees): %d V, %d T, r = %.4g\n", sc.name.c_str(), nv, nt, double(r));
+  std::vector<uint64_t> keys;
+  std::vector<int32_t> order;
+  sort_by_morton(PointBoxes{v}, nv, keys, order);
+  const VertexTriangleQueries vt{v, t, order.data(), r, kDropIncident};
+  struct Variant {
+    bool sah, refit;
+    CpuTree trees[2];  // triangles, edges
+    double build_ms;
+    Outcome got[2];  // VT, EE: counts and pairs; ms from the interleaved rounds below
+  };
+  std::vector<Variant> variants;
+  for (const bool sah : {false, true})
+    for (const bool refit : {true, false}) {
+      Variant& x = variants.emplace_back();
+      x.sah = sah;
+      x.refit = refit;
+      const Vec3* at = refit ? v0 : v;
+      x.build_ms = now_ms();
+      if (sah) {
+        x.trees[0] = build_sah(TriangleBoxes{at, t}, nt);
+        x.trees[1] = build_sah(EdgeBoxes{at, e}, ne);
+      } else {
+        x.trees[0].build(TriangleBoxes{at, t}, nt);
+        x.trees[1].build(EdgeBoxes{at, e}, ne);
+      }
+      x.build_ms = now_ms() - x.build_ms;
+      if (refit) {
+        x.trees[0].refit(TriangleBoxes{v, t});
+        x.trees[1].refit(EdgeBoxes{v, e});
+      }
+    }
+  // Each variant's query once per round, round after round: load changes hit all alike.
+  auto query = [&](const Variant& x, int kind, int reps) {
+    const EdgeEdgeQueries ee{v, e, x.trees[1].sorted_prims().data(), r, kDropIncident};
+    return kind == 0 ? run<BoxShape>(x.trees[0].view(), vt, nv, reps) : run<BoxShape>(x.trees[1].view(), ee, ne, reps);
+  };
+  std::vector<std::vector<double>> times(variants.size() * 2);
+  for (int round = 0; round < 3 * repeats; ++round)
+    for (size_t i = 0; i < variants.size(); ++i)
+      for (int kind = 0; kind < 2; ++kind) times[2 * i + size_t(kind)].push_back(query(variants[i], kind, 1).ms);
+  std::string out;
+  for (size_t i = 0; i < variants.size(); ++i) {
+    Variant& x = variants[i];
+    for (int kind = 0; kind < 2; ++kind) {
+      x.got[kind] = query(x, kind, 1);
+      std::vector<double>& ts = times[2 * i + size_t(kind)];
+      std::sort(ts.begin(), ts.end());
+      x.got[kind].ms = ts[ts.size() / 2];
+      ok &= x.got[kind].pairs == variants[0].got[kind].pairs;
+      char label[200];
+      std::snprintf(label, sizeof label, "%s, %s%s: growth %.2f, build both %.1f ms", x.sah ? "SAH" : "Morton",
+                    x.refit ? "built at frame 0, refit" : "rebuilt at the last frame", !x.sah && x.refit ? " (before)" : "",
+                    growth(x.trees[kind].area_cost(), x.trees[kind].cost_at_build()), x.build_ms);
+      out += row(sc.name, kind ? "EE" : "VT", "box", label, x.got[kind], kind ? ne : nv, variants[0].got[kind]);
+    }
+  }
+  return out;
+}
+
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
   const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
@@ -317,38 +485,69 @@ int main(int argc, char** argv) {
     std::string data = MINKQ_BENCH_DATA_DIR, out = MINKQ_BENCH_RESULTS_DIR;
     int repeats = 5;
     double scale = 0;  // reference sizes
+    std::string sections = "all";  // or "traversal" (ablation.md) or "trees" (trees.md)
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--quick") repeats = 1;
       else if (a == "--out" && i + 1 < argc) out = argv[++i];
       else if (a == "--data" && i + 1 < argc) data = argv[++i];
       else if (a == "--triangles" && i + 1 < argc) scale = std::stod(argv[++i]);
+      else if (a == "--only" && i + 1 < argc && (std::string(argv[i + 1]) == "traversal" || std::string(argv[i + 1]) == "trees"))
+        sections = argv[++i];
       else {
-        std::fprintf(stderr, "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N]\n");
+        std::fprintf(stderr,
+                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--only traversal|trees]\n");
         return 2;
       }
     }
-    const double load_start = load_average();
-    std::ostringstream o;
-    o << "# Traversal ablation (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)") << ". Load average (1 min) at start "
-      << fmt(load_start, 3) << ". Last frame of each scene, r = the scene's radius, incident pairs dropped, CPU backend "
-      << "traversal on all threads; counts per query; ms = median of " << repeats << " runs after a warm-up; speed = "
-      << "'before' ms / this ms, measured in this run. Written by `minkq_ablation`" << (repeats == 1 ? " --quick" : "")
-      << ".\n\n| scene | kind | mode | variant | nodes / query | node tests / query | primitive tests / query | pairs | ms | speed |\n"
-      << "|---|---|---|---|---|---|---|---|---|---|\n";
+    const std::string table_head =
+        "| scene | kind | mode | variant | nodes / query | node tests / query | primitive tests / query | pairs | ms | "
+        "speed |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    const std::string timing = "ms = median of " + std::to_string(repeats) + " runs after a warm-up; speed = 'before' ms / "
+                               "this ms, measured in this run. Written by `minkq_ablation`" +
+                               std::string(repeats == 1 ? " --quick" : "") + ".\n\n";
     bool ok = true;
-    for (const std::string& name : {std::string("twist_target"), std::string("cloth_twist"), std::string("cloth_hanging"),
-                                    std::string("softbody_gift")})
-      o << compare_scene(make_scene(name, scale, 2, data), repeats, ok);
-    for (const RealMesh& m : real_meshes())
-      if (m.name == "unisex_shirt" || m.name == "multilayer_drape") o << compare_scene(load_real_scene(m, data), repeats, ok);
-    for (const double hr : {0.01, 1.0}) o << compare_fine_nodes_spread(200000, hr, repeats, ok);
-    o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
     std::filesystem::create_directories(out);
-    std::ofstream f(out + "/ablation.md");
-    f << o.str();
-    if (!f) throw std::runtime_error("cannot write " + out + "/ablation.md");
-    std::fprintf(stderr, "wrote %s/ablation.md\n", out.c_str());
+    auto write = [&out](const std::string& name, const std::string& text) {
+      std::ofstream f(out + "/" + name);
+      f << text;
+      if (!f) throw std::runtime_error("cannot write " + out + "/" + name);
+      std::fprintf(stderr, "wrote %s/%s\n", out.c_str(), name.c_str());
+    };
+    if (sections != "trees") {
+      std::ostringstream o;
+      o << "# Traversal ablation (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)")
+        << ". Load average (1 min) at start " << fmt(load_average(), 3) << ". Last frame of each scene, r = the scene's "
+        << "radius, incident pairs dropped, CPU backend traversal on all threads; counts per query; " << timing
+        << table_head;
+      for (const std::string& name : {std::string("twist_target"), std::string("cloth_twist"), std::string("cloth_hanging"),
+                                      std::string("softbody_gift")})
+        o << compare_scene(make_scene(name, scale, 2, data), repeats, ok);
+      for (const RealMesh& m : real_meshes())
+        if (m.name == "unisex_shirt" || m.name == "multilayer_drape") o << compare_scene(load_real_scene(m, data), repeats, ok);
+      for (const double hr : {0.01, 1.0}) o << compare_fine_nodes_spread(200000, hr, repeats, ok);
+      o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+      write("ablation.md", o.str());
+    }
+    if (sections != "traversal") {
+      std::ostringstream o;
+      o << "# Tree quality: refit, rebuild, SAH (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)")
+        << ". Load average (1 min) at start " << fmt(load_average(), 3) << ". Every procedural scene's first and last "
+        << "frame, r = the scene's radius, box mode, incident pairs dropped, CPU backend traversal on all threads; the "
+        << "pairs of every variant checked equal. 'before': the library's Morton trees built at the first frame and "
+        << "refit to the last, as a simulator's refit-only steps (and every other table) run them. 'build both' is the "
+        << "time to build the scene's two trees (the Morton build on all threads, the SAH study on one); growth = the "
+        << "tree's area cost over its value at its build (minkq_scene_tree_growth). Counts per query; the variants "
+        << "run round-robin, " << 3 * repeats << " rounds (each round one warm-up and one timed run of every query "
+        << "batch); ms = the median of the timed runs; speed = 'before' ms / this ms. Written by `minkq_ablation`"
+        << (repeats == 1 ? " --quick" : "") << ".\n\n"
+        << table_head;
+      for (const std::string& name : procedural_scene_names())
+        o << compare_tree_builds(make_scene(name, scale, 2, data), repeats, ok);
+      o << compare_tree_builds(make_scene("twist_target", scale, 2, data), repeats, ok);
+      o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+      write("trees.md", o.str());
+    }
     if (!ok) {
       std::fprintf(stderr, "FAIL: a variant returned different pairs\n");
       return 1;

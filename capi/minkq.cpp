@@ -220,6 +220,29 @@ void run_and_report(minkq_device* device, minkq::Store& store, const minkq::Quer
   }
 }
 
+// New vertex positions for a scene, validated: `verb` names the call in messages.
+minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* verb) {
+  require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+  const minkq::Strided values = checked_buffer(scene->device, vertices, 12, "vertices");
+  require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
+          std::string(verb) + " with " + std::to_string(values.count) + " vertices but the scene has " +
+              std::to_string(scene->vertex_count));
+  require_finite(*scene->device->backend, values, 3, "vertex");
+  return values;
+}
+
+// New boxes for a bvh, validated: `verb` names the call in messages.
+minkq::Strided checked_new_boxes(const minkq_bvh* bvh, minkq_buffer boxes, const char* verb) {
+  require(bvh != nullptr, Status::kInvalidArgument, "bvh is NULL");
+  const minkq::Strided values = checked_buffer(bvh->device, boxes, 24, "boxes");
+  require(size_t(values.count) == bvh->box_count, Status::kInvalidArgument,
+          std::string(verb) + " with " + std::to_string(values.count) + " boxes but the bvh has " +
+              std::to_string(bvh->box_count));
+  require_finite(*bvh->device->backend, values, 6, "box");
+  require_ordered_boxes(*bvh->device->backend, values);
+  return values;
+}
+
 }  // namespace
 
 extern "C" {
@@ -339,13 +362,23 @@ minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, siz
 
 minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices) {
   return guarded([&] {
-    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-    const minkq::Strided values = checked_buffer(scene->device, vertices, 12, "vertices");
-    require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
-            "refit with " + std::to_string(values.count) + " vertices but the scene has " +
-                std::to_string(scene->vertex_count));
-    require_finite(*scene->device->backend, values, 3, "vertex");
+    const minkq::Strided values = checked_vertices(scene, vertices, "refit");  // checks scene first
     scene->store->refit(values);
+  });
+}
+
+minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices) {
+  return guarded([&] {
+    const minkq::Strided values = checked_vertices(scene, vertices, "rebuild");  // checks scene first
+    scene->store->rebuild(values);
+  });
+}
+
+minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    require(out_growth != nullptr, Status::kInvalidArgument, "out_growth is NULL");
+    *out_growth = scene->store->tree_growth();
   });
 }
 
@@ -427,13 +460,23 @@ void minkq_bvh_release(minkq_bvh* bvh) { delete bvh; }
 
 minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes) {
   return guarded([&] {
-    require(bvh != nullptr, Status::kInvalidArgument, "bvh is NULL");
-    const minkq::Strided values = checked_buffer(bvh->device, boxes, 24, "boxes");
-    require(size_t(values.count) == bvh->box_count, Status::kInvalidArgument,
-            "refit with " + std::to_string(values.count) + " boxes but the bvh has " + std::to_string(bvh->box_count));
-    require_finite(*bvh->device->backend, values, 6, "box");
-    require_ordered_boxes(*bvh->device->backend, values);
+    const minkq::Strided values = checked_new_boxes(bvh, boxes, "refit");  // checks bvh first
     bvh->store->refit(values);
+  });
+}
+
+minkq_status minkq_bvh_rebuild(minkq_bvh* bvh, minkq_buffer boxes) {
+  return guarded([&] {
+    const minkq::Strided values = checked_new_boxes(bvh, boxes, "rebuild");  // checks bvh first
+    bvh->store->rebuild(values);
+  });
+}
+
+minkq_status minkq_bvh_tree_growth(const minkq_bvh* bvh, double* out_growth) {
+  return guarded([&] {
+    require(bvh != nullptr, Status::kInvalidArgument, "bvh is NULL");
+    require(out_growth != nullptr, Status::kInvalidArgument, "out_growth is NULL");
+    *out_growth = bvh->store->tree_growth();
   });
 }
 

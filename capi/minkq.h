@@ -27,7 +27,7 @@ extern "C" {
 
 /* ---- Versions ------------------------------------------------------------------------------ */
 #define MINKQ_VERSION_MAJOR 0
-#define MINKQ_VERSION_MINOR 1
+#define MINKQ_VERSION_MINOR 2
 #define MINKQ_VERSION_PATCH 0
 /* Bumped whenever a struct layout, enum value or function signature changes. */
 #define MINKQ_ABI_VERSION 2
@@ -117,8 +117,24 @@ typedef struct minkq_scene_desc {
 minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* desc, minkq_scene** out_scene);
 void minkq_scene_release(minkq_scene* scene);
 /* Moves the vertices (same count, any stride/memory) and refits the trees in place. On error
- * the scene keeps its previous positions. */
+ * the scene keeps its previous positions. A refit keeps the grouping of the last build: after
+ * large deformations its boxes overlap more and queries visit more nodes (see
+ * minkq_scene_tree_growth); the pairs found never change. */
 minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices);
+/* Moves the vertices like minkq_scene_refit and builds the trees afresh for the new positions
+ * (the trees minkq_scene_create builds there; topology and edge numbering are kept). Same
+ * errors as minkq_scene_refit; on error the scene keeps its positions and trees. */
+minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
+/* How far the refits since the last build have degraded the trees: their area cost now over
+ * its value right after that build, for the larger of the scene's trees; 1 after a build. The
+ * area cost (the surface areas of every node's child boxes, summed, over the root box's) is
+ * scale-free and follows the nodes a query visits. On the benchmark scenes a growth of 5.1
+ * came with 3.2x the nodes per VT query of a rebuilt tree and 1.5 with 1.3x, while below about
+ * 1.25 a rebuild gained nothing reliably (bench/results/trees.md). A rebuild costs about
+ * what the build at creation did: it pays once the queries it speeds up outweigh that. A
+ * shrinking mesh can give values below 1. A tree whose root box has no area (every element on one axis-parallel line,
+ * or at one point) costs 0: growth 1 while it stays so, infinity once it gains area. */
+minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
 size_t minkq_scene_vertex_count(const minkq_scene* scene);
 size_t minkq_scene_triangle_count(const minkq_scene* scene);
 size_t minkq_scene_edge_count(const minkq_scene* scene);
@@ -202,8 +218,13 @@ typedef struct minkq_bvh minkq_bvh;
  * INVALID_ARGUMENT ("box 3 has lo > hi"), SIZE_OVERFLOW. Release with minkq_bvh_release. */
 minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh);
 void minkq_bvh_release(minkq_bvh* bvh);
-/* New boxes (same count); refits in place. */
+/* New boxes (same count); refits in place (the tree keeps the grouping of its last build). */
 minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes);
+/* New boxes (same count); builds the tree afresh, as minkq_bvh_create would. On error the bvh
+ * keeps its boxes and tree. */
+minkq_status minkq_bvh_rebuild(minkq_bvh* bvh, minkq_buffer boxes);
+/* minkq_scene_tree_growth for a bvh. */
+minkq_status minkq_bvh_tree_growth(const minkq_bvh* bvh, double* out_growth);
 
 typedef enum minkq_shape {
   MINKQ_SHAPE_SPHERE = 0,  /* first: centres (3 floats); modes box, sphere */

@@ -1,15 +1,15 @@
 // C API fuzzer: random call sequences with random, often wrong, arguments (null pointers, NaN
 // and infinite coordinates and radii, wrong counts and strides, overflowing sizes, out-of-range
-// indices and enum values, tiny output buffers, refits with another vertex count, BVH calls),
-// under ASan, UBSan and LSan. Every buffer the harness passes is allocated to exactly the bytes
+// indices and enum values, tiny output buffers, refits and rebuilds with another vertex count,
+// tree growth, BVH calls), under ASan, UBSan and LSan. Every buffer the harness passes is allocated to exactly the bytes
 // it declares, so a read or write past it is an ASan report; buffers that declare more than
 // they hold are passed only where the declaration itself must be rejected.
 //
 // A model of the documented contract (capi/minkq.h) lists, for each call, the misuses in its
 // arguments; the call must return one of their codes (any one: the order of checks is not part
 // of the contract), or MINKQ_SUCCESS (MINKQ_ERROR_CAPACITY where the output is too small) when
-// there is none. Failed calls must leave a message, successful ones none; a failed refit must
-// leave the previous positions; successful queries must return valid, canonical, duplicate-free
+// there is none. Failed calls must leave a message, successful ones none; a failed refit or
+// rebuild must leave the previous positions; successful queries must return valid, canonical, duplicate-free
 // pairs whose count and digest match the library-owned result path.
 #include <fuzzer/FuzzedDataProvider.h>
 #include <tbb/global_control.h>
@@ -464,10 +464,22 @@ class Session {
     if (!null_scene) m.add(v.count != s->vertices, MINKQ_ERROR_INVALID_ARGUMENT, "vertex count differs");
     if (v.honest) m.add(v.non_finite, MINKQ_ERROR_NON_FINITE, "non-finite vertex");
     const uint64_t before = null_scene ? 0 : scene_state(*s);
-    const minkq_status st = minkq_scene_refit(null_scene ? nullptr : s->handle, v.desc);
-    expect("minkq_scene_refit", st, m);
+    const bool rebuild = gen_.choice(3) == 0;
+    minkq_scene* handle = null_scene ? nullptr : s->handle;
+    const minkq_status st = rebuild ? minkq_scene_rebuild(handle, v.desc) : minkq_scene_refit(handle, v.desc);
+    expect(rebuild ? "minkq_scene_rebuild" : "minkq_scene_refit", st, m);
     if (st != MINKQ_SUCCESS && !null_scene && scene_state(*s) != before)
-      failure("a failed refit changed the scene's positions");
+      failure(std::string("a failed ") + (rebuild ? "rebuild" : "refit") + " changed the scene's positions");
+    // Growth: 1 after a rebuild, never NaN or negative.
+    const bool null_out = gen_.rarely();
+    double growth = -1.0;
+    Misuse g;
+    g.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+    g.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_growth NULL");
+    const minkq_status gs = minkq_scene_tree_growth(handle, null_out ? nullptr : &growth);
+    expect("minkq_scene_tree_growth", gs, g);
+    if (gs == MINKQ_SUCCESS && (!(growth >= 0.0) || (rebuild && st == MINKQ_SUCCESS && growth != 1.0)))
+      failure("minkq_scene_tree_growth returned " + std::to_string(growth));
   }
 
   // The arguments of a scene query, with the misuses they contain.
@@ -677,9 +689,21 @@ class Session {
       m.add(v.unordered_box, MINKQ_ERROR_INVALID_ARGUMENT, "box lo > hi");
     }
     const uint64_t before = null_bvh ? 0 : bvh_state(b);
-    const minkq_status st = minkq_bvh_refit(null_bvh ? nullptr : b.handle, v.desc);
-    expect("minkq_bvh_refit", st, m);
-    if (st != MINKQ_SUCCESS && !null_bvh && bvh_state(b) != before) failure("a failed bvh refit changed its boxes");
+    const bool rebuild = gen_.choice(3) == 0;
+    minkq_bvh* handle = null_bvh ? nullptr : b.handle;
+    const minkq_status st = rebuild ? minkq_bvh_rebuild(handle, v.desc) : minkq_bvh_refit(handle, v.desc);
+    expect(rebuild ? "minkq_bvh_rebuild" : "minkq_bvh_refit", st, m);
+    if (st != MINKQ_SUCCESS && !null_bvh && bvh_state(b) != before)
+      failure(std::string("a failed bvh ") + (rebuild ? "rebuild" : "refit") + " changed its boxes");
+    const bool null_out = gen_.rarely();
+    double growth = -1.0;
+    Misuse g;
+    g.add(null_bvh, MINKQ_ERROR_INVALID_ARGUMENT, "bvh NULL");
+    g.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_growth NULL");
+    const minkq_status gs = minkq_bvh_tree_growth(handle, null_out ? nullptr : &growth);
+    expect("minkq_bvh_tree_growth", gs, g);
+    if (gs == MINKQ_SUCCESS && (!(growth >= 0.0) || (rebuild && st == MINKQ_SUCCESS && growth != 1.0)))
+      failure("minkq_bvh_tree_growth returned " + std::to_string(growth));
   }
 
   void bvh_query() {

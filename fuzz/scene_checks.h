@@ -645,14 +645,27 @@ inline void check_mesh_scene(const std::vector<minkq_device*>& devices, const Me
       report.fail("minkq_scene_refit: " + status_text(status));
     } else {
       after = check_mesh_positions(scene, s, s.moved, edges, independent, true, report, stats, "[refit]", result);
-      // A refitted tree keeps its old topology but must give the sets of a fresh build (both
-      // are also compared with the definition above, so this runs on one refit in four).
+      double growth = -1.0;
+      if (minkq_scene_tree_growth(scene, &growth) != MINKQ_SUCCESS || !(growth >= 0.0))
+        report.fail("minkq_scene_tree_growth after a refit: " + std::to_string(growth));
+      // A refitted tree keeps its old topology but must give the sets of a fresh build, and so
+      // must a scene built at the old positions and rebuilt at the new (all are compared with
+      // the definition above, so this runs on one refit in four for each).
+      const uint32_t twin = (s.variant >> 27) % 4;
       minkq_scene* fresh = nullptr;
-      if ((s.variant >> 27) % 4 == 0 && create(devices[0], s.moved, &fresh)) {
+      if (twin < 2 && create(devices[0], twin == 0 ? s.moved : s.xyz, &fresh)) {
+        const char* label = twin == 0 ? "[refit] vs fresh build" : "[refit] vs rebuild";
+        if (twin == 1) {
+          const minkq_status rebuilt =
+              minkq_scene_rebuild(fresh, {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
+          if (rebuilt != MINKQ_SUCCESS) report.fail("minkq_scene_rebuild: " + status_text(rebuilt));
+          if (minkq_scene_tree_growth(fresh, &growth) != MINKQ_SUCCESS || growth != 1.0)
+            report.fail("minkq_scene_tree_growth after a rebuild: " + std::to_string(growth) + ", not 1");
+        }
         Stats scratch;
         const MeshGeometry g(s.moved, s.tris, edges);
-        compare_sets(report, after, minkq_mesh_sets(fresh, g, s.r, ~s.variant, report, scratch, "[fresh]", nullptr),
-                     "[refit] vs fresh build", nullptr);
+        compare_sets(report, after, minkq_mesh_sets(fresh, g, s.r, ~s.variant, report, scratch, label, nullptr), label,
+                     nullptr);
         minkq_scene_release(fresh);
       }
       stats.refit_scenes++;
@@ -782,9 +795,18 @@ inline void check_box_scene(const std::vector<minkq_device*>& devices, const Box
   check_box_positions(bvh, s, s.boxes, independent, false, report, stats, "", &before);
   const bool refit = !s.moved.empty();
   if (refit) {
-    const minkq_status status = minkq_bvh_refit(bvh, {s.moved.data(), 0, s.moved.size() / 6, MINKQ_MEMORY_HOST});
-    if (status != MINKQ_SUCCESS) report.fail("minkq_bvh_refit: " + status_text(status));
-    else check_box_positions(bvh, s, s.moved, independent, true, report, stats, "[refit]", &after);
+    // Every check of the moved boxes, after a refit or (one scene in four) a rebuild.
+    const bool rebuild = (s.variant >> 29) % 4 == 0;
+    const minkq_buffer moved{s.moved.data(), 0, s.moved.size() / 6, MINKQ_MEMORY_HOST};
+    const minkq_status status = rebuild ? minkq_bvh_rebuild(bvh, moved) : minkq_bvh_refit(bvh, moved);
+    double growth = -1.0;
+    if (status != MINKQ_SUCCESS) {
+      report.fail(std::string(rebuild ? "minkq_bvh_rebuild: " : "minkq_bvh_refit: ") + status_text(status));
+    } else {
+      check_box_positions(bvh, s, s.moved, independent, true, report, stats, rebuild ? "[rebuild]" : "[refit]", &after);
+      if (minkq_bvh_tree_growth(bvh, &growth) != MINKQ_SUCCESS || !(rebuild ? growth == 1.0 : growth >= 0.0))
+        report.fail("minkq_bvh_tree_growth: " + std::to_string(growth));
+    }
   }
   for (size_t d = 1; d < devices.size(); ++d) {
     minkq_bvh* other = nullptr;

@@ -4,8 +4,10 @@
 // and depth stays within the traversal stack's bound even when all Morton codes tie.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 
+#include "backend.h"
 #include "cpu_tree.h"
 #include "minkq/queries.h"
 #include "test_util.h"
@@ -80,6 +82,44 @@ TEST(Bvh, invariants_hold_after_build_and_refit) {
     tree.refit(GivenBoxes{boxes.data()});
     check_tree(tree, boxes);
   }
+}
+
+// The area cost is the sum of node_area over the nodes, over the root's half area: 1 as a
+// growth right after a build, unchanged by exact scaling, and 0 for boxes without area.
+TEST(Bvh, area_cost_is_scale_free_and_recorded_at_build) {
+  test::Random rng(test::fresh_seed());
+  std::vector<Box> boxes = random_boxes(rng, 3000, 10.0f);
+  CpuTree tree;
+  tree.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
+  double sum = 0.0;
+  for (const BvhNode& node : tree.nodes()) sum += node_area(node);
+  const Box root = box_union(tree.nodes()[0].left_box, tree.nodes()[0].right_box);
+  const double dx = double(root.hi.x) - root.lo.x, dy = double(root.hi.y) - root.lo.y,
+               dz = double(root.hi.z) - root.lo.z;
+  EXPECT_DOUBLE_EQ(tree.area_cost(), sum / (dx * dy + dy * dz + dz * dx));
+  EXPECT_EQ(tree.cost_at_build(), tree.area_cost());
+  EXPECT_GT(tree.area_cost(), 1.0);  // the root's two children alone nearly cover the root
+  const double built = tree.area_cost();
+  for (Box& b : boxes) b = {0.125f * b.lo, 0.125f * b.hi};
+  tree.refit(GivenBoxes{boxes.data()});
+  EXPECT_EQ(tree.area_cost(), built);
+  EXPECT_EQ(growth(tree.area_cost(), tree.cost_at_build()), 1.0);
+  // Spread the boxes: the tree's grouping no longer fits, its cost grows.
+  for (Box& b : boxes) {
+    const Vec3 shift = rng.vec3(-20, 20);
+    b = {b.lo + shift, b.hi + shift};
+  }
+  tree.refit(GivenBoxes{boxes.data()});
+  EXPECT_GT(growth(tree.area_cost(), tree.cost_at_build()), 1.5);
+  // Collinear boxes have no area: cost 0, growth 1 while so, infinite once they gain area.
+  std::vector<Box> line(500);
+  for (size_t i = 0; i < line.size(); ++i) line[i] = {{float(i), 0, 0}, {float(i) + 0.5f, 0, 0}};
+  tree.build(GivenBoxes{line.data()}, int32_t(line.size()));
+  EXPECT_EQ(tree.area_cost(), 0.0);
+  EXPECT_EQ(growth(tree.area_cost(), tree.cost_at_build()), 1.0);
+  line[7].hi.y = 1.0f;
+  tree.refit(GivenBoxes{line.data()});
+  EXPECT_EQ(growth(tree.area_cost(), tree.cost_at_build()), HUGE_VAL);
 }
 
 TEST(Bvh, coincident_boxes_tie_on_morton_codes_yet_stay_shallow) {

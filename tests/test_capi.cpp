@@ -200,6 +200,29 @@ TEST_F(Fixture, failed_refit_keeps_the_previous_positions) {
   EXPECT_EQ(scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0.1f), before);
 }
 
+TEST_F(Fixture, failed_rebuild_keeps_the_previous_positions_and_growth_checks_its_arguments) {
+  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  const test::Pairs before = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);
+  std::vector<float> moved = xyz;
+  moved[7] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(minkq_scene_rebuild(scene.handle, host_buffer(moved.data(), 6)), MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(message().find("vertex 2 has a non-finite coordinate"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_rebuild(scene.handle, host_buffer(moved.data(), 5)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("rebuild with 5 vertices but the scene has 6"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_rebuild(nullptr, host_buffer(xyz.data(), 6)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("scene is NULL"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_refit(nullptr, host_buffer(xyz.data(), 6)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("scene is NULL"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_rebuild(scene.handle, host_buffer(nullptr, 6)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f), before);
+  double growth = 0.0;
+  EXPECT_EQ(minkq_scene_tree_growth(scene.handle, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("out_growth is NULL"), std::string::npos) << message();
+  EXPECT_EQ(minkq_scene_tree_growth(nullptr, &growth), MINKQ_ERROR_INVALID_ARGUMENT);
+  ASSERT_EQ(minkq_scene_tree_growth(scene.handle, &growth), MINKQ_SUCCESS);
+  EXPECT_EQ(growth, 1.0);
+}
+
 TEST(Devices, specs_versions_and_missing_cuda) {
   minkq_device* device = nullptr;
   EXPECT_EQ(minkq_device_create("gpu", &device), MINKQ_ERROR_INVALID_ARGUMENT);
@@ -263,10 +286,29 @@ TEST(UserBvh, every_shape_matches_its_definition) {
   for (Box& box : boxes) { const Vec3 shift = rng.vec3(-0.5f, 0.5f); box = {box.lo + shift, box.hi + shift}; }
   ASSERT_EQ(minkq_bvh_refit(bvh, host_buffer(boxes.data(), boxes.size())), MINKQ_SUCCESS);
   EXPECT_EQ(run(MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_EXACT), definition(CapsuleExactShape{}, true, r));
+  // Rebuild: the same pairs from a fresh tree, whose growth starts again at 1.
+  double growth = 0.0;
+  ASSERT_EQ(minkq_bvh_tree_growth(bvh, &growth), MINKQ_SUCCESS);
+  EXPECT_GT(growth, 0.0);
+  ASSERT_EQ(minkq_bvh_rebuild(bvh, host_buffer(boxes.data(), boxes.size())), MINKQ_SUCCESS) << message();
+  ASSERT_EQ(minkq_bvh_tree_growth(bvh, &growth), MINKQ_SUCCESS);
+  EXPECT_EQ(growth, 1.0);
+  EXPECT_EQ(run(MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_EXACT), definition(CapsuleExactShape{}, true, r));
+  EXPECT_EQ(run(MINKQ_SHAPE_BOX, MINKQ_MODE_BOX), definition(BoxShape{}, true, 0.0f));
   // Bad input.
   boxes[3].lo.x = boxes[3].hi.x + 1;
   EXPECT_EQ(minkq_bvh_refit(bvh, host_buffer(boxes.data(), boxes.size())), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("box 3 has lo > hi"), std::string::npos);
+  EXPECT_EQ(minkq_bvh_rebuild(bvh, host_buffer(boxes.data(), boxes.size())), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("box 3 has lo > hi"), std::string::npos);
+  EXPECT_EQ(minkq_bvh_rebuild(bvh, host_buffer(boxes.data(), boxes.size() - 1)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("rebuild with 799 boxes but the bvh has 800"), std::string::npos) << message();
+  EXPECT_EQ(minkq_bvh_tree_growth(bvh, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_bvh_tree_growth(nullptr, &growth), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("bvh is NULL"), std::string::npos);
+  EXPECT_EQ(minkq_bvh_refit(nullptr, host_buffer(boxes.data(), boxes.size())), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_bvh_rebuild(nullptr, host_buffer(boxes.data(), boxes.size())), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("bvh is NULL"), std::string::npos);
   minkq_bvh_query_desc bad{MINKQ_SHAPE_CAPSULE, MINKQ_MODE_SPHERE, 0, r, host_buffer(a.data(), a.size()),
                            host_buffer(b.data(), b.size())};
   minkq_query_info info{};

@@ -227,6 +227,31 @@ TEST_F(Cuda, refit_matches_cpu_after_moving_vertices) {
   }
 }
 
+// A rebuild on either backend builds the same tree (same pairs, same work counts through
+// compare_all_modes), and tree growth agrees up to the rounding of the device's sum.
+TEST_F(Cuda, rebuild_and_tree_growth_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  const Mesh flat = reference::twisted_sheet(40, 0.0), wrung = reference::twisted_sheet(40, 3.0);
+  ScenePtr a = make_scene(cpu.handle, flat, kBoth), b = make_scene(cuda.handle, flat, kBoth);
+  ASSERT_TRUE(a && b);
+  const float r = float(0.5 * reference::mean_edge_length(wrung));
+  const minkq_buffer moved = host_buffer(wrung.xyz.data(), wrung.vertex_count());
+  auto growth_of = [](minkq_scene* scene) {
+    double g = -1.0;
+    EXPECT_EQ(minkq_scene_tree_growth(scene, &g), MINKQ_SUCCESS) << minkq_last_error_message();
+    return g;
+  };
+  ASSERT_EQ(minkq_scene_refit(a.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  ASSERT_EQ(minkq_scene_refit(b.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  EXPECT_NEAR(growth_of(b.get()), growth_of(a.get()), 1e-12 * growth_of(a.get()));
+  EXPECT_GT(growth_of(b.get()), 1.5);
+  ASSERT_EQ(minkq_scene_rebuild(a.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  ASSERT_EQ(minkq_scene_rebuild(b.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  EXPECT_EQ(growth_of(a.get()), 1.0);
+  EXPECT_EQ(growth_of(b.get()), 1.0);
+  compare_all_modes(a.get(), b.get(), r, "wrung sheet after rebuild");
+}
+
 TEST_F(Cuda, capacity_returns_the_exact_count_and_writes_nothing_past_the_buffer) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::random_soup(3000, seed, 0.08);

@@ -217,6 +217,57 @@ TEST_F(Queries, refit_matches_a_fresh_build_and_the_oracle) {
   }
 }
 
+// A flat sheet wrung into three turns: refit keeps the flat sheet's grouping, whose boxes then
+// span the twist. Rebuilding changes no pair, and tree growth tells the two trees apart.
+double tree_growth(minkq_scene* scene) {
+  double growth = -1.0;
+  EXPECT_EQ(minkq_scene_tree_growth(scene, &growth), MINKQ_SUCCESS) << minkq_last_error_message();
+  return growth;
+}
+
+TEST_F(Queries, rebuild_changes_no_pair_and_resets_tree_growth) {
+  const Mesh flat = reference::twisted_sheet(24, 0.0);
+  Mesh wrung = reference::twisted_sheet(24, 3.0);
+  test::Random rng(seed);
+  for (float& x : wrung.xyz) x += rng.uniform(-1e-3f, 1e-3f);  // fresh positions each run
+  const float r = float(0.5 * reference::mean_edge_length(wrung));
+  test::Device device;
+  test::Scene refit(device.handle, flat, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  test::Scene rebuilt(device.handle, flat, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  EXPECT_EQ(tree_growth(refit.handle), 1.0);
+  const minkq_buffer moved = test::host_buffer(wrung.xyz.data(), wrung.xyz.size() / 3);
+  ASSERT_EQ(minkq_scene_refit(refit.handle, moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  ASSERT_EQ(minkq_scene_rebuild(rebuilt.handle, moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  const double grown = tree_growth(refit.handle);
+  EXPECT_GT(grown, 1.5);  // the flat sheet's boxes stretched over the turns
+  EXPECT_EQ(tree_growth(rebuilt.handle), 1.0);
+  test::Scene fresh(device.handle, wrung, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE}) {
+    const Pairs expected = fresh.query(MINKQ_QUERY_VT, mode, r);
+    EXPECT_EQ(refit.query(MINKQ_QUERY_VT, mode, r), expected);
+    EXPECT_EQ(rebuilt.query(MINKQ_QUERY_VT, mode, r), expected);
+  }
+  for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT}) {
+    const Pairs expected = fresh.query(MINKQ_QUERY_EE, mode, r);
+    EXPECT_EQ(refit.query(MINKQ_QUERY_EE, mode, r), expected);
+    EXPECT_EQ(rebuilt.query(MINKQ_QUERY_EE, mode, r), expected);
+  }
+  EXPECT_EQ(rebuilt.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT),
+            fresh.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT));
+  check_scene(wrung, r, true, "wrung sheet", false);
+  // Scale-free: the same motion 1024 times larger (exact in float) grows the trees alike.
+  Mesh flat_big = flat, wrung_big = wrung;
+  for (float& x : flat_big.xyz) x *= 1024.0f;
+  for (float& x : wrung_big.xyz) x *= 1024.0f;
+  test::Scene big(device.handle, flat_big, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  ASSERT_EQ(minkq_scene_refit(big.handle, test::host_buffer(wrung_big.xyz.data(), wrung_big.xyz.size() / 3)),
+            MINKQ_SUCCESS);
+  EXPECT_EQ(tree_growth(big.handle), grown);
+  // Back to the build positions: the refit tree is the built one again.
+  ASSERT_EQ(minkq_scene_refit(refit.handle, test::host_buffer(flat.xyz.data(), flat.xyz.size() / 3)), MINKQ_SUCCESS);
+  EXPECT_EQ(tree_growth(refit.handle), 1.0);
+}
+
 TEST_F(Queries, strided_vertices_give_the_same_pairs) {
   const Mesh mesh = reference::random_soup(200, seed, 1.0);
   const size_t nv = mesh.xyz.size() / 3;

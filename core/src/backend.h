@@ -2,6 +2,7 @@
 // digests) and a backend (CPU or CUDA) that owns the arrays and runs build, refit and queries.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -67,6 +68,10 @@ class Store {
   virtual ~Store() = default;
   // New positions for the same vertices (mesh stores) or boxes (box stores); refits the trees.
   virtual void refit(const Strided& values) = 0;
+  // The same, building the trees afresh (as at creation).
+  virtual void rebuild(const Strided& values) = 0;
+  // The largest of the trees' area costs now over their values at the last build (growth()).
+  virtual double tree_growth() = 0;
   // Runs a query; returns the exact pair count and writes the pairs only if they all fit.
   // With `work`, also counts the traversal's work into it (a separately compiled traversal:
   // the uncounted one carries no counters).
@@ -120,6 +125,14 @@ void with_shape(Mode mode, bool point_queries, Fn&& fn) {
       return;
   }
   fail(Status::kInternal, "unknown mode");
+}
+
+// A tree's area cost (sum of node_area over the root's half area) now over its value at its
+// last build. A tree without area (its boxes on one axis-parallel line or at one point, or no
+// nodes) costs 0: the ratio is then 1 while it stays so, and infinite once it has area.
+inline double growth(double cost_now, double cost_at_build) {
+  if (cost_at_build > 0.0) return cost_now / cost_at_build;
+  return cost_now > 0.0 ? HUGE_VAL : 1.0;
 }
 
 // Gathers strided float3 records into a packed host vector (host memory only).

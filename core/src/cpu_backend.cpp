@@ -5,6 +5,7 @@
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <type_traits>
@@ -98,12 +99,7 @@ class CpuMeshStore final : public MeshStore {
       : vertices_(gather_vec3(vertices)), triangles_(triangle_tree ? std::move(triangles) : std::vector<Triangle>()),
         edges_(std::move(edges)),
         has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
-    if (has_triangle_tree_) {
-      triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles_.data()}, int32_t(triangles_.size()));
-      std::vector<uint64_t> keys;
-      sort_by_morton(PointBoxes{vertices_.data()}, int32_t(vertices_.size()), keys, vertex_order_);
-    }
-    if (has_edge_tree_) edge_tree_.build(EdgeBoxes{vertices_.data(), edges_.data()}, int32_t(edges_.size()));
+    build_trees();
   }
 
   void copy_edges(Edge* host_out) override {
@@ -114,6 +110,17 @@ class CpuMeshStore final : public MeshStore {
     vertices_ = gather_vec3(vertices);
     if (has_triangle_tree_) triangle_tree_.refit(TriangleBoxes{vertices_.data(), triangles_.data()});
     if (has_edge_tree_) edge_tree_.refit(EdgeBoxes{vertices_.data(), edges_.data()});
+  }
+
+  void rebuild(const Strided& vertices) override {
+    vertices_ = gather_vec3(vertices);
+    build_trees();
+  }
+
+  double tree_growth() override {
+    double g = has_triangle_tree_ ? growth(triangle_tree_.area_cost(), triangle_tree_.cost_at_build()) : 0.0;
+    if (has_edge_tree_) g = std::max(g, growth(edge_tree_.area_cost(), edge_tree_.cost_at_build()));
+    return g;
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
@@ -128,6 +135,16 @@ class CpuMeshStore final : public MeshStore {
   }
 
  private:
+  // The trees the flags ask for, and the VT query order, from the current vertices.
+  void build_trees() {
+    if (has_triangle_tree_) {
+      triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles_.data()}, int32_t(triangles_.size()));
+      std::vector<uint64_t> keys;
+      sort_by_morton(PointBoxes{vertices_.data()}, int32_t(vertices_.size()), keys, vertex_order_);
+    }
+    if (has_edge_tree_) edge_tree_.build(EdgeBoxes{vertices_.data(), edges_.data()}, int32_t(edges_.size()));
+  }
+
   std::vector<Vec3> vertices_;
   std::vector<Triangle> triangles_;  // only with a triangle tree
   std::vector<Edge> edges_;
@@ -145,6 +162,11 @@ class CpuBoxStore final : public Store {
     boxes_ = gather_boxes(boxes);
     tree_.refit(GivenBoxes{boxes_.data()});
   }
+  void rebuild(const Strided& boxes) override {
+    boxes_ = gather_boxes(boxes);
+    tree_.build(GivenBoxes{boxes_.data()}, int32_t(boxes_.size()));
+  }
+  double tree_growth() override { return growth(tree_.area_cost(), tree_.cost_at_build()); }
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     const std::vector<Vec3> first = gather_vec3(request.first);
     const std::vector<Vec3> second = gather_vec3(request.second);

@@ -56,6 +56,7 @@ class CpuTree {
   template <class Boxes>
   void build(Boxes boxes, int32_t n, int32_t leaf_size = kLeafSize) {
     n_ = n;
+    cost_at_build_ = 0.0;
     nodes_.clear();
     sorted_prims_.assign(size_t(n), 0);
     leaf_boxes_.assign(size_t(n), Box{});
@@ -65,6 +66,7 @@ class CpuTree {
       nodes_.assign(1, one_leaf_root());
       arrivals_.assign(1, 0);
       refit(boxes);
+      cost_at_build_ = area_cost();
       return;
     }
     std::vector<uint64_t> keys;
@@ -84,6 +86,20 @@ class CpuTree {
         collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes_.data());
     });
     refit(boxes);
+    cost_at_build_ = area_cost();
+  }
+
+  // A tree laid out elsewhere (bench/ablation.cpp's SAH build, a study): node records with
+  // their links and splits, and the primitive at each leaf position; refit fills the boxes.
+  template <class Boxes>
+  void adopt(std::vector<BvhNode> nodes, std::vector<int32_t> sorted_prims, Boxes boxes) {
+    n_ = int32_t(sorted_prims.size());
+    nodes_ = std::move(nodes);
+    sorted_prims_ = std::move(sorted_prims);
+    leaf_boxes_.assign(size_t(n_), Box{});
+    arrivals_.assign(nodes_.size(), 0);
+    refit(boxes);
+    cost_at_build_ = area_cost();
   }
 
   template <class Boxes>
@@ -93,6 +109,19 @@ class CpuTree {
       refit_from_slot(int32_t(slot), boxes, sorted_prims_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
     });
   }
+
+  // The sum of node_area over the nodes, over the root box's half area (0 without area):
+  // summed in node order, so the same on every run.
+  double area_cost() const {
+    if (nodes_.empty()) return 0.0;
+    const double root = root_half_area(nodes_[0]);
+    if (!(root > 0.0)) return 0.0;
+    double sum = 0.0;
+    for (const BvhNode& node : nodes_) sum += node_area(node);
+    return sum / root;
+  }
+  // area_cost() right after the last build.
+  double cost_at_build() const { return cost_at_build_; }
 
   BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
   const std::vector<Box>& leaf_boxes() const { return leaf_boxes_; }
@@ -105,6 +134,7 @@ class CpuTree {
 
  private:
   int32_t n_ = 0;
+  double cost_at_build_ = 0.0;
   std::vector<BvhNode> nodes_;
   std::vector<int32_t> arrivals_;
   std::vector<int32_t> sorted_prims_;

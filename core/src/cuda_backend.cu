@@ -235,6 +235,14 @@ void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<uint64_t>& sorted_keys,
   }
 }
 
+struct NodeArea {
+  const BvhNode* nodes;
+  __host__ __device__ double operator()(int32_t i) const { return node_area(nodes[i]); }
+};
+struct DoubleSum {
+  __host__ __device__ double operator()(double a, double b) const { return a + b; }
+};
+
 // CpuTree::build step by step.
 class CudaTree {
  public:
@@ -245,6 +253,7 @@ class CudaTree {
     leaf_boxes_.ensure(size_t(n));
     zero(sorted_prims_, size_t(n));
     num_nodes_ = 0;
+    cost_at_build_ = 0.0;
     if (n == 0) return;
     if (n == 1) {
       const BvhNode root = one_leaf_root();
@@ -253,6 +262,7 @@ class CudaTree {
       arrivals_.ensure(1);
       copy(nodes_.data(), &root, sizeof(root), cudaMemcpyHostToDevice);
       refit(boxes);
+      cost_at_build_ = area_cost();
       return;
     }
     DeviceBuffer<uint64_t> sorted_keys;
@@ -278,6 +288,7 @@ class CudaTree {
     launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, karras.data(), new_index.data(), n,
            nodes_.data());
     refit(boxes);
+    cost_at_build_ = area_cost();
   }
 
   template <class Boxes>
@@ -287,11 +298,35 @@ class CudaTree {
            sorted_prims_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
   }
 
+  // CpuTree::area_cost, summed by a device reduction: equal up to rounding.
+  double area_cost() const {
+    if (num_nodes_ == 0) return 0.0;
+    BvhNode root;
+    copy(&root, nodes_.data(), sizeof(root), cudaMemcpyDeviceToHost);
+    const double root_area = root_half_area(root);
+    if (!(root_area > 0.0)) return 0.0;
+    DeviceBuffer<double> sum(1);
+    DeviceBuffer<char> temp;
+    size_t bytes = 0;
+    const thrust::counting_iterator<int32_t> ids(0);
+    for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
+      check(cub::DeviceReduce::TransformReduce(pass ? temp.data() : nullptr, bytes, ids, sum.data(), num_nodes_,
+                                               DoubleSum{}, NodeArea{nodes_.data()}, 0.0, kStream),
+            "cub::DeviceReduce::TransformReduce");
+      temp.ensure(bytes);
+    }
+    double total = 0.0;
+    copy(&total, sum.data(), sizeof(total), cudaMemcpyDeviceToHost);
+    return total / root_area;
+  }
+  double cost_at_build() const { return cost_at_build_; }
+
   BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
   const int32_t* sorted_prims() const { return sorted_prims_.data(); }
 
  private:
   int32_t n_ = 0;
+  double cost_at_build_ = 0.0;
   int32_t num_nodes_ = 0;
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> arrivals_;
@@ -490,12 +525,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
     num_edges_ = int32_t(edges.size());
     if (has_triangle_tree_) upload(triangles_, triangles.data(), triangles.size());
     upload(edges_, edges.data(), edges.size());
-    if (has_triangle_tree_) {
-      triangle_tree_.build(triangle_boxes(), num_triangles_);
-      DeviceBuffer<uint64_t> keys;
-      sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, keys, vertex_order_);
-    }
-    if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
+    build_trees();
     finish();
   }
   ~CudaMeshStore() override { cudaSetDevice(ordinal_); }
@@ -513,6 +543,20 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
     finish();
   }
 
+  void rebuild(const Strided& vertices) override {
+    use_device(ordinal_);
+    gather_to_device(vertices, vertices_);
+    build_trees();
+    finish();
+  }
+
+  double tree_growth() override {
+    use_device(ordinal_);
+    double g = has_triangle_tree_ ? growth(triangle_tree_.area_cost(), triangle_tree_.cost_at_build()) : 0.0;
+    if (has_edge_tree_) g = std::max(g, growth(edge_tree_.area_cost(), edge_tree_.cost_at_build()));
+    return g;
+  }
+
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     use_device(ordinal_);
     if (request.kind == QueryKind::kVertexTriangle) {
@@ -526,6 +570,15 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   }
 
  private:
+  // The trees the flags ask for, and the VT query order, from the current vertices.
+  void build_trees() {
+    if (has_triangle_tree_) {
+      triangle_tree_.build(triangle_boxes(), num_triangles_);
+      DeviceBuffer<uint64_t> keys;
+      sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, keys, vertex_order_);
+    }
+    if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
+  }
   TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data()}; }
   EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data()}; }
 
@@ -553,6 +606,18 @@ class CudaBoxStore final : public CudaStore<Store> {
     gather_to_device(boxes, boxes_);
     tree_.refit(GivenBoxes{boxes_.data()});
     finish();
+  }
+
+  void rebuild(const Strided& boxes) override {
+    use_device(ordinal_);
+    gather_to_device(boxes, boxes_);
+    tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
+    finish();
+  }
+
+  double tree_growth() override {
+    use_device(ordinal_);
+    return growth(tree_.area_cost(), tree_.cost_at_build());
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {

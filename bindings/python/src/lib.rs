@@ -3,7 +3,8 @@
 //! device)` that the package built from `__dlpack__` / `__cuda_array_interface__` (host or
 //! CUDA device memory, read in place). The package has already checked dtype, shape, strides,
 //! memory kind and device, says which argument is wrong, and keeps the arrays alive for the
-//! call. The extension releases the GIL around every build, refit and query, and raises the
+//! call. The extension releases the GIL around every build, refit, rebuild and query (and the
+//! tree growth, which waits for the object's lock and, on CUDA, the device), and raises the
 //! package's exceptions (minkq._errors) named after the C error codes.
 //!
 //! Every object holds its minkq handle in a Mutex: the C API lets one thread at a time use an
@@ -257,6 +258,20 @@ impl PyScene {
         py.allow_threads(|| lock(scene).refit_buffer(vertices)).map_err(|e| to_py_err(py, e))
     }
 
+    fn rebuild(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
+        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        // SAFETY: rows of 3 floats, alive in this frame.
+        let vertices = unsafe { vertices.buffer() };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).rebuild_buffer(vertices)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// The trees' area cost now over its value at the last build (minkq_scene_tree_growth).
+    fn tree_growth(&self, py: Python<'_>) -> PyResult<f64> {
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).tree_growth()).map_err(|e| to_py_err(py, e))
+    }
+
     /// Writes the edges into `out`, an (edge_count, 2) int32 array.
     fn edges_into(&self, py: Python<'_>, out: &PyAny) -> PyResult<()> {
         let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
@@ -294,7 +309,14 @@ impl PyScene {
 
     /// Runs a query with MINKQ_QUERY_STATS (pairs discarded); returns (nodes_visited,
     /// node_tests, primitive_tests, candidates).
-    fn work(&self, py: Python<'_>, kind: &str, mode: &str, radius: f32, leaf_exact: bool) -> PyResult<(u64, u64, u64, u64)> {
+    fn work(
+        &self,
+        py: Python<'_>,
+        kind: &str,
+        mode: &str,
+        radius: f32,
+        leaf_exact: bool,
+    ) -> PyResult<(u64, u64, u64, u64)> {
         let query = Query::new(parse_kind(kind)?, parse_mode(mode)?, radius)
             .with_flags(query_flags(leaf_exact, false, false) | QueryFlags::STATS);
         let scene = &self.inner;
@@ -330,6 +352,20 @@ impl PyBvh {
         let boxes = unsafe { boxes.buffer() };
         let bvh = &self.inner;
         py.allow_threads(|| lock(bvh).refit_buffer(boxes)).map_err(|e| to_py_err(py, e))
+    }
+
+    fn rebuild(&self, py: Python<'_>, boxes: &PyAny) -> PyResult<()> {
+        let boxes = Array::<f32>::get(boxes, "boxes", &[2, 3], false)?;
+        // SAFETY: as in new.
+        let boxes = unsafe { boxes.buffer() };
+        let bvh = &self.inner;
+        py.allow_threads(|| lock(bvh).rebuild_buffer(boxes)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// The tree's area cost now over its value at the last build (minkq_bvh_tree_growth).
+    fn tree_growth(&self, py: Python<'_>) -> PyResult<f64> {
+        let bvh = &self.inner;
+        py.allow_threads(|| lock(bvh).tree_growth()).map_err(|e| to_py_err(py, e))
     }
 
     /// Runs sphere ("sphere": centres (n, 3)), capsule ("capsule": segments (n, 2, 3)) or box

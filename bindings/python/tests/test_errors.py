@@ -111,6 +111,12 @@ def test_invalid_arguments(device, mesh, scene):
         minkq.Device("tpu")
     with pytest.raises(minkq.InvalidArgumentError, match="refit with 24 vertices but the scene has 25"):
         scene.refit(mesh[0][:-1])
+    with pytest.raises(minkq.InvalidArgumentError, match="^rebuild with 24 vertices but the scene has 25$"):
+        scene.rebuild(mesh[0][:-1])
+    with pytest.raises(ValueError, match=r"vertices: expected shape \(n, 3\), got \(25, 2\)"):
+        scene.rebuild(mesh[0][:, :2].copy())
+    with pytest.raises(TypeError, match="vertices: expected a float32 array, got float64"):
+        scene.rebuild(mesh[0].astype(np.float64))
 
 
 def test_non_finite_radius(scene):
@@ -128,6 +134,21 @@ def test_failed_refit_keeps_the_previous_positions(device, mesh, scene):
         scene.refit(moved)
     after = scene.query_digest("ee", "capsule_exact", 0.2)
     assert before[1] == after[1]
+
+
+def test_failed_rebuild_keeps_the_previous_positions_and_trees(device, mesh, scene):
+    scene.refit(mesh[0] * np.array([3, 1, 0.5], np.float32))  # stretched: the trees have grown
+    before = scene.query_digest("ee", "capsule_exact", 0.2)
+    growth = scene.tree_growth()
+    assert growth != 1.0
+    moved = mesh[0] * 2
+    moved[7, 0] = np.nan
+    with pytest.raises(minkq.NonFiniteError, match=r"^vertex 7 has a non-finite coordinate"):
+        scene.rebuild(moved)
+    with pytest.raises(minkq.InvalidArgumentError, match="rebuild with 26 vertices"):
+        scene.rebuild(np.concatenate([mesh[0], mesh[0][:1]]))
+    assert scene.query_digest("ee", "capsule_exact", 0.2)[1] == before[1]
+    assert scene.tree_growth() == growth
 
 
 def test_unsupported_cuda():
@@ -158,6 +179,17 @@ def test_bvh_bad_input(device):
         bvh.query("sphere", np.array([[np.inf, 0, 0]], np.float32), 0.1)
     with pytest.raises(minkq.InvalidArgumentError, match="refit with 2 boxes but the bvh has 1"):
         bvh.refit(np.zeros((2, 6), np.float32))
+    with pytest.raises(minkq.InvalidArgumentError, match="^rebuild with 2 boxes but the bvh has 1$"):
+        bvh.rebuild(np.zeros((2, 6), np.float32))
+    with pytest.raises(minkq.InvalidArgumentError, match="box 0 has lo > hi"):
+        bvh.rebuild(np.array([[[0, 0, 0], [1, -1, 1]]], np.float32))
+    with pytest.raises(minkq.NonFiniteError, match="box 0 has a non-finite coordinate"):
+        bvh.rebuild(np.array([[[0, 0, 0], [1, np.inf, 1]]], np.float32))
+    with pytest.raises(ValueError, match=r"boxes: expected shape \(n, 2, 3\)"):
+        bvh.rebuild(np.zeros((1, 3, 3), np.float32))
+    # The failed rebuilds kept the box and its tree.
+    assert bvh.query("sphere", np.array([[0.5, 0.5, 0.5]], np.float32)).tolist() == [[0, 0]]
+    assert bvh.tree_growth() == 1.0
 
 
 @pytest.mark.parametrize(

@@ -1,5 +1,5 @@
 """The package around the extension: typing files, docstring examples, zero-copy inputs, the
-GIL released during build, refit and queries, threads, and the demo's default scene."""
+GIL released during build, refit, rebuild and queries, threads, and the demo's default scene."""
 
 import doctest
 import os
@@ -19,7 +19,8 @@ def test_package_ships_type_information():
     for name in ("py.typed", "_native.pyi", "__init__.py", "_errors.py", "_api.py", "_interop.py", "newton.py"):
         assert os.path.exists(os.path.join(root, name)), name
     assert minkq.abi_version() == minkq.ABI_VERSION
-    assert minkq.version()[:2] == (0, 1)
+    # The library the package loaded is the release the package says it is.
+    assert minkq.version() == tuple(int(x) for x in minkq.__version__.split("."))
     assert set(minkq.__all__) <= set(dir(minkq))
 
 
@@ -83,7 +84,7 @@ def _longest_pause_while(work) -> tuple:
     return spent[0], longest
 
 
-def test_gil_is_released_during_build_refit_and_query(device):
+def test_gil_is_released_during_build_refit_rebuild_and_query(device):
     import demo
 
     sheets = {}
@@ -99,6 +100,7 @@ def test_gil_is_released_during_build_refit_and_query(device):
     calls = {
         "build": lambda n: lambda: minkq.Scene(device, sheet(n)[0], sheet(n)[1]),
         "refit": lambda n: lambda: sheet(n)[4].refit(sheet(n)[2]),
+        "rebuild": lambda n: lambda: sheet(n)[4].rebuild(sheet(n)[2]),
         "query": lambda n: lambda: sheet(n)[4].query("ee", "capsule_exact", sheet(n)[3],
                                                      leaf_exact=True),
     }

@@ -1,6 +1,7 @@
 """Every mode against the brute-force oracle: zero false negatives, the containment chain
 true <= leaf_exact <= capsule_exact <= capsule_ray <= box (EE) and
-true <= leaf_exact <= sphere <= box (VT), refit after moving vertices, BVH queries."""
+true <= leaf_exact <= sphere <= box (VT), refit after moving vertices, rebuild (the pairs of
+refit) and the tree growth, BVH queries."""
 
 import numpy as np
 import pytest
@@ -63,6 +64,92 @@ def test_refit_after_moving_vertices(device):
                 a = scene.query_digest(kind, mode, 0.03, leaf_exact=leaf)
                 b = fresh.query_digest(kind, mode, 0.03, leaf_exact=leaf)
                 assert np.array_equal(a[0], b[0]) and a[1] == b[1], (kind, mode, leaf)
+
+
+def flat_grid(n: int):
+    """A flat n x n grid over the unit square (z = 0), triangulated as rolled_sheet."""
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    xyz = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1).astype(np.float32)
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1))
+    v00 = (j * n + i).ravel()
+    tris = np.concatenate([np.stack([v00, v00 + 1, v00 + n + 1], 1), np.stack([v00, v00 + n + 1, v00 + n], 1)])
+    return xyz, tris.astype(np.int32)
+
+
+def rolled_and_twisted(flat: np.ndarray, twist: float) -> np.ndarray:
+    """The flat grid rolled up as rolled_sheet rolls it (layers ~0.035 apart, no jitter), each
+    row then turned about the y axis by ``twist * v`` radians."""
+    u, v = flat[:, 0].astype(np.float64), flat[:, 1].astype(np.float64)
+    angle, radius = 9.0 * u, 0.2 + 0.05 * u
+    x, z = radius * np.cos(angle), radius * np.sin(angle)
+    c, s = np.cos(twist * v), np.sin(twist * v)
+    return np.stack([c * x - s * z, v, s * x + c * z], axis=1).astype(np.float32)
+
+
+QUERIES = [(kind, mode) for kind in minkq.KINDS for mode in minkq.MODES if (kind, mode) != ("ee", "sphere")]
+
+
+def test_rebuild_gives_the_pairs_of_refit_and_resets_the_tree_growth(device):
+    flat, tris = flat_grid(16)
+    r = 0.04
+    refitted, rebuilt = minkq.Scene(device, flat, tris), minkq.Scene(device, flat, tris)
+    assert refitted.tree_growth() == 1.0  # right after the constructor
+    growths = []
+    for twist in (0.0, 2.0):
+        # Built flat, moved to a rolled sheet whose layers come within r of each other.
+        moved = rolled_and_twisted(flat, twist)
+        refitted.refit(moved)
+        rebuilt.rebuild(moved)
+        assert rebuilt.tree_growth() == 1.0
+        growth = refitted.tree_growth()
+        assert growth > 1.2, f"rolling a flat sheet up should degrade the refitted trees: {growth}"
+        growths.append(growth)
+        check_modes(rebuilt, moved, tris, r)
+        for kind, mode in QUERIES:
+            for leaf in (False, True):
+                a = refitted.query_digest(kind, mode, r, leaf_exact=leaf)
+                b = rebuilt.query_digest(kind, mode, r, leaf_exact=leaf)
+                assert len(a[0]) > 0 and np.array_equal(a[0], b[0]) and a[1] == b[1], (twist, kind, mode, leaf)
+    # Scale-free: the same meshes scaled by 1024 (exact in float32) grow alike.
+    large = minkq.Scene(device, flat * np.float32(1024), tris)
+    for twist, growth in zip((0.0, 2.0), growths):
+        large.refit(rolled_and_twisted(flat, twist) * np.float32(1024))
+        assert large.tree_growth() == pytest.approx(growth, rel=1e-12)
+    # Back to the positions of its build, the refitted scene's trees are those of a build.
+    refitted.refit(flat)
+    assert refitted.tree_growth() == 1.0
+
+
+def test_bvh_rebuild_gives_the_pairs_of_refit_and_resets_the_tree_growth(device):
+    flat, tris = flat_grid(16)
+
+    def boxes_of(xyz):
+        corners = xyz[tris]  # (m, 3 vertices, 3)
+        return np.stack([corners.min(axis=1), corners.max(axis=1)], axis=1)
+
+    refitted, rebuilt = minkq.BVH(device, boxes_of(flat)), minkq.BVH(device, boxes_of(flat))
+    assert refitted.tree_growth() == 1.0
+    moved = rolled_and_twisted(flat, 2.0)
+    refitted.refit(boxes_of(moved))
+    rebuilt.rebuild(boxes_of(moved).reshape(-1, 6))  # (n, 6) boxes are accepted too
+    assert rebuilt.tree_growth() == 1.0
+    growth = refitted.tree_growth()
+    assert growth > 1.2, growth
+    large = minkq.BVH(device, boxes_of(flat * np.float32(1024)))
+    large.refit(boxes_of(moved * np.float32(1024)))
+    assert large.tree_growth() == pytest.approx(growth, rel=1e-12)
+    segments = np.stack([moved[::7], moved[::7] + [0.05, 0, 0]], axis=1).astype(np.float32)
+    for shape, queries, mode in [
+        ("sphere", moved, "sphere"),
+        ("sphere", moved, "box"),
+        ("capsule", segments, "capsule_exact"),
+        ("capsule", segments, "capsule_ray"),
+        ("box", boxes_of(moved), "box"),
+    ]:
+        radius = 0.0 if shape == "box" else 0.03
+        a = refitted.query_digest(shape, queries, radius, mode=mode)
+        b = rebuilt.query_digest(shape, queries, radius, mode=mode)
+        assert len(a[0]) > 0 and np.array_equal(a[0], b[0]) and a[1] == b[1], (shape, mode)
 
 
 def test_without_drop_incident_every_vertex_touches_its_triangles(device):

@@ -220,6 +220,24 @@ MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* s
   }
 }
 
+// ---- Tree quality ------------------------------------------------------------------------------
+
+// Half a box's surface area, in double: the area cost below sums many of them.
+MINKQ_HD double half_area(const Box& b) {
+  const double dx = double(b.hi.x) - b.lo.x, dy = double(b.hi.y) - b.lo.y, dz = double(b.hi.z) - b.lo.z;
+  return dx * dy + dy * dz + dz * dx;
+}
+
+// One node's term of a tree's area cost: the half areas of its child boxes (the chance that a
+// query entering the node tests into each child grows with its area, the SAH's estimate).
+// Dividing the sum over all nodes by the root box's half area gives a scale-free cost.
+MINKQ_HD double node_area(const BvhNode& node) {
+  return half_area(node.left_box) + (node.right != kNoChild ? half_area(node.right_box) : 0.0);
+}
+MINKQ_HD double root_half_area(const BvhNode& root) {
+  return half_area(root.right != kNoChild ? box_union(root.left_box, root.right_box) : root.left_box);
+}
+
 // ---- Traversal ---------------------------------------------------------------------------------
 
 // Work of a traversal, counted when asked for (WorkCounts) and compiled out when not (NoWork).

@@ -9,6 +9,8 @@ use it for their per-step vertex-triangle (VT) and edge-edge (EE) broad phase::
     vt = scene.query("vt", "sphere", r, leaf_exact=True)            # (k, 2) int32 (vertex, triangle)
     ee = scene.query("ee", "capsule_exact", r)                      # (k, 2) int32 (e, f), e < f
     scene.refit(new_vertices)                                       # every step
+    if scene.tree_growth() > 2.0:                                   # after large motions:
+        scene.rebuild(new_vertices)                                 # fresh trees, same pairs
 
 Arrays of other libraries (``__dlpack__``, ``__cuda_array_interface__``: Warp, PyTorch, CuPy)
 are read in place, on the GPU for a CUDA device, and results come back in their kind.
@@ -36,7 +38,7 @@ from ._errors import (
 ABI_VERSION: int = _native.ABI_VERSION
 """The ABI version the bindings were generated against (MINKQ_ABI_VERSION)."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 __all__ = [
     "ABI_VERSION",

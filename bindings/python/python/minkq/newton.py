@@ -488,11 +488,15 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         self._scene = _api.Scene(self.minkq_device, self.vertex_positions, triangles, edges, vt=vt, ee=ee, drop_incident=True)
 
     def rebuild(self, new_pos=None):
-        """Rebuilds both trees from ``new_pos`` (or the current ``vertex_positions``)."""
+        """Rebuilds both trees from ``new_pos`` (or the current ``vertex_positions``) in place:
+        the scene keeps its topology and buffers (``Scene.rebuild``)."""
         self._not_capturing("rebuild")
         if new_pos is not None:
             self.vertex_positions = new_pos
-        self._build_scene()
+        if self._scene is not None:
+            self._scene.rebuild(self.vertex_positions)
+        else:
+            self._build_scene()
 
     def refit(self, new_pos=None):
         """Refits both trees to ``new_pos`` (or the current ``vertex_positions``), read in place

@@ -343,7 +343,8 @@ impl Bvh {
         Ok(Bvh { raw, len: boxes.len(), _device: Arc::clone(&device.handle) })
     }
 
-    /// New boxes (same count); refits in place.
+    /// New boxes (same count); refits in place. The tree keeps the grouping of its last build
+    /// ([`Bvh::tree_growth`] measures how much that costs, [`Bvh::rebuild`] resets it).
     ///
     /// ```
     /// # use minkq::*;
@@ -373,6 +374,71 @@ impl Bvh {
     pub fn refit_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
         // SAFETY: a live BVH; the buffer's constructor promised readable records.
         check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), boxes.raw()) })
+    }
+
+    /// New boxes (same count); builds the tree afresh, as [`Bvh::new`] would. The pairs are the
+    /// same as after a refit; only the speed of later queries differs (see
+    /// [`Bvh::tree_growth`]). Same errors as [`Bvh::refit`]; on error the BVH keeps its boxes
+    /// and tree.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let mut boxes = vec![Aabb::new([0.0; 3], [1.0; 3]), Aabb::new([2.0; 3], [3.0; 3])];
+    /// let mut bvh = Bvh::new(&Device::cpu()?, &boxes)?;
+    /// boxes.swap(0, 1);
+    /// bvh.rebuild(&boxes)?;
+    /// assert_eq!(bvh.tree_growth()?, 1.0);
+    /// let mut pairs = Vec::new();
+    /// bvh.query_vec(&BvhQuery::spheres(&[[2.5; 3]], Mode::Sphere, 0.0), &mut pairs)?;
+    /// assert_eq!(pairs, vec![[0, 0]]);
+    /// let err = bvh.rebuild(&boxes[..1]).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("rebuild with 1 boxes but the bvh has 2".into()));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn rebuild(&mut self, boxes: &[Aabb]) -> Result<()> {
+        self.rebuild_buffer(Buffer::from_slice(boxes))
+    }
+
+    /// [`Bvh::rebuild`] from a [`Buffer`] of boxes, host or (on a CUDA device) device memory.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let mut bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
+    /// bvh.rebuild_buffer(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
+    /// let err = bvh.rebuild_buffer(Buffer::from_slice(&[Aabb::new([3.0; 3], [2.0; 3])])).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("box 0 has lo > hi".into()));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn rebuild_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
+        // SAFETY: a live BVH; the buffer's constructor promised readable records.
+        check(unsafe { sys::minkq_bvh_rebuild(self.raw.as_ptr(), boxes.raw()) })
+    }
+
+    /// How much the refits since the last build (creation or [`Bvh::rebuild`]) have degraded
+    /// the tree: its area cost now over its value right after that build, as
+    /// [`Scene::tree_growth`](crate::Scene::tree_growth). 1 after a build; infinity once a
+    /// tree built without area (boxes on one line parallel to an axis, or at one point) gains
+    /// any.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// // Unit boxes along a diagonal, then each moved to the mirror position.
+    /// let boxes: Vec<Aabb> = (0..16).map(|i| Aabb::new([i as f32; 3], [i as f32 + 1.0; 3])).collect();
+    /// let mut bvh = Bvh::new(&Device::cpu()?, &boxes)?;
+    /// assert_eq!(bvh.tree_growth()?, 1.0);
+    /// let mixed: Vec<Aabb> =
+    ///     (0..16).map(|i| if i % 2 == 0 { boxes[i] } else { boxes[15 - i] }).collect();
+    /// bvh.refit(&mixed)?;
+    /// assert!(bvh.tree_growth()? > 1.5);
+    /// bvh.rebuild(&mixed)?;
+    /// assert_eq!(bvh.tree_growth()?, 1.0);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn tree_growth(&self) -> Result<f64> {
+        let mut growth = 0.0;
+        // SAFETY: a live BVH; `growth` is a writable double.
+        check(unsafe { sys::minkq_bvh_tree_growth(self.raw.as_ptr(), &mut growth) })?;
+        Ok(growth)
     }
 
     /// The number of boxes.

@@ -33,8 +33,20 @@
 //! }
 //! scene.refit(&vertices)?;
 //! assert!(scene.query(&Query::ee(Mode::CapsuleExact, r), &mut pairs)?.is_empty());
+//! // Once large motions have degraded the refitted trees, build them afresh (same pairs).
+//! if scene.tree_growth()? > 2.0 {
+//!     scene.rebuild(&vertices)?;
+//! }
 //! # Ok::<(), minkq::Error>(())
 //! ```
+//!
+//! # Refit and rebuild
+//! [`Scene::refit`] moves the vertices and updates the trees' boxes in place, keeping the
+//! grouping of the last build: cheap, but after large deformations the boxes overlap more and
+//! queries visit more nodes. [`Scene::tree_growth`] estimates that slowdown (the trees' area
+//! cost over its value at the last build: 1 after a build), and [`Scene::rebuild`] moves the
+//! vertices and builds the trees afresh. Both give the same pairs; [`Bvh`] has the same three
+//! calls.
 //!
 //! # Threads
 //! The C API allows different objects to be used from different threads at once, but one
@@ -47,12 +59,13 @@
 //! # Device memory and strided arrays
 //! Besides slices, scenes and BVHs take [`Buffer`]s: records at any byte stride, in host
 //! memory or, on a CUDA device, in device memory read in place ([`Scene::from_buffers`],
-//! [`Scene::refit_buffer`], [`Scene::query_to`] with a [`PairsOut`], and the same on
-//! [`Bvh`]). A buffer over a raw pointer is built with the `unsafe`
-//! [`Buffer::from_raw_parts`]; every call taking it is safe. The C API has no stream argument:
-//! on a CUDA device the library works on the calling thread's per-thread default stream and
-//! synchronises it before each call returns, so inputs must be ready (or ordered before that
-//! stream) when a call is made, and outputs are ready for every stream when it returns.
+//! [`Scene::refit_buffer`], [`Scene::rebuild_buffer`], [`Scene::query_to`] with a
+//! [`PairsOut`], and the same on [`Bvh`]). A buffer over a raw pointer is built with the
+//! `unsafe` [`Buffer::from_raw_parts`]; every call taking it is safe. The C API has no stream
+//! argument: on a CUDA device the library works on the calling thread's per-thread default
+//! stream and synchronises it before each call returns, so inputs must be ready (or ordered
+//! before that stream) when a call is made, and outputs are ready for every stream when it
+//! returns.
 //!
 //! # Linking
 //! `minkq-sys` links `libminkq.so` from `MINKQ_LIB_DIR` (the CMake build's `capi/` folder) or
