@@ -14,9 +14,10 @@
 //        user boxes
 //   box test: the r-padded box, rounded outward  vs  the float gap <= r (kept; symmetric, so
 //        EE needs it one way only)
-//   trees: Morton built at the first frame and refit to the last (a simulator's refit-only
-//        steps)  vs  rebuilt at the last frame (minkq_scene_rebuild), and a binned SAH build
-//        (not kept) either way; with each tree's growth (minkq_scene_tree_growth)
+//   trees: Morton codes over cells stretched per axis (before)  vs  cubic cells (kept); each
+//        built at the first frame and refit to the last (a simulator's refit-only steps) and
+//        rebuilt at the last frame (minkq_scene_rebuild), and a binned SAH build (not kept)
+//        either way; with each tree's growth (minkq_scene_tree_growth)
 // Both variants of a kind must return the same pairs (checked), except the two box tests
 // (different roundings at the boundary: their counts are shown). Writes
 // bench/results/ablation.md and (the trees) bench/results/trees.md; see bench/README.md.
@@ -403,26 +404,29 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
   std::vector<int32_t> order;
   sort_by_morton(PointBoxes{v}, nv, keys, order);
   const VertexTriangleQueries vt{v, t, order.data(), r, kDropIncident};
+  enum Build { kPerAxis, kCubes, kSah };
   struct Variant {
-    bool sah, refit;
+    Build build;
+    bool refit;
     CpuTree trees[2];  // triangles, edges
     double build_ms;
     Outcome got[2];  // VT, EE: counts and pairs; ms from the interleaved rounds below
   };
   std::vector<Variant> variants;
-  for (const bool sah : {false, true})
+  for (const Build build : {kPerAxis, kCubes, kSah})
     for (const bool refit : {true, false}) {
       Variant& x = variants.emplace_back();
-      x.sah = sah;
+      x.build = build;
       x.refit = refit;
       const Vec3* at = refit ? v0 : v;
       x.build_ms = now_ms();
-      if (sah) {
+      if (build == kSah) {
         x.trees[0] = build_sah(TriangleBoxes{at, t}, nt);
         x.trees[1] = build_sah(EdgeBoxes{at, e}, ne);
       } else {
-        x.trees[0].build(TriangleBoxes{at, t}, nt);
-        x.trees[1].build(EdgeBoxes{at, e}, ne);
+        const MortonCells cells = build == kCubes ? MortonCells::kCubes : MortonCells::kPerAxis;
+        x.trees[0].build(TriangleBoxes{at, t}, nt, kLeafSize, cells);
+        x.trees[1].build(EdgeBoxes{at, e}, ne, kLeafSize, cells);
       }
       x.build_ms = now_ms() - x.build_ms;
       if (refit) {
@@ -449,8 +453,10 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
       x.got[kind].ms = ts[ts.size() / 2];
       ok &= x.got[kind].pairs == variants[0].got[kind].pairs;
       char label[200];
-      std::snprintf(label, sizeof label, "%s, %s%s: growth %.2f, build both %.1f ms", x.sah ? "SAH" : "Morton",
-                    x.refit ? "built at frame 0, refit" : "rebuilt at the last frame", !x.sah && x.refit ? " (before)" : "",
+      const char* builds[3] = {"Morton, cells per axis", "Morton, cubic cells", "SAH"};
+      const char* marks[3][2] = {{"", " (before)"}, {"", " (kept)"}, {"", ""}};  // [build][refit]
+      std::snprintf(label, sizeof label, "%s, %s%s: growth %.2f, build both %.1f ms", builds[x.build],
+                    x.refit ? "built at frame 0, refit" : "rebuilt at the last frame", marks[x.build][x.refit],
                     growth(x.trees[kind].area_cost(), x.trees[kind].cost_at_build()), x.build_ms);
       out += row(sc.name, kind ? "EE" : "VT", "box", label, x.got[kind], kind ? ne : nv, variants[0].got[kind]);
     }
@@ -534,8 +540,9 @@ int main(int argc, char** argv) {
       o << "# Tree quality: refit, rebuild, SAH (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)")
         << ". Load average (1 min) at start " << fmt(load_average(), 3) << ". Every procedural scene's first and last "
         << "frame, r = the scene's radius, box mode, incident pairs dropped, CPU backend traversal on all threads; the "
-        << "pairs of every variant checked equal. 'before': the library's Morton trees built at the first frame and "
-        << "refit to the last, as a simulator's refit-only steps (and every other table) run them. 'build both' is the "
+        << "pairs of every variant checked equal. 'before': Morton trees over cells stretched per axis (the usual LBVH "
+        << "frame, the library's until this table), built at the first frame and refit to the last, as a simulator's "
+        << "refit-only steps run them; 'kept': the same over cubic cells (the library's). 'build both' is the "
         << "time to build the scene's two trees (the Morton build on all threads, the SAH study on one); growth = the "
         << "tree's area cost over its value at its build (minkq_scene_tree_growth). Counts per query; the variants "
         << "run round-robin, " << 3 * repeats << " rounds (each round one warm-up and one timed run of every query "

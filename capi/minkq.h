@@ -125,15 +125,17 @@ minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices);
  * (the trees minkq_scene_create builds there; topology and edge numbering are kept). Same
  * errors as minkq_scene_refit; on error the scene keeps its positions and trees. */
 minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
-/* How far the refits since the last build have degraded the trees: their area cost now over
+/* How far the refits since the last build have stretched the trees: their area cost now over
  * its value right after that build, for the larger of the scene's trees; 1 after a build. The
  * area cost (the surface areas of every node's child boxes, summed, over the root box's) is
- * scale-free and follows the nodes a query visits. On the benchmark scenes a growth of 5.1
- * came with 3.2x the nodes per VT query of a rebuilt tree and 1.5 with 1.3x, while below about
- * 1.25 a rebuild gained nothing reliably (bench/results/trees.md). A rebuild costs about
- * what the build at creation did: it pays once the queries it speeds up outweigh that. A
- * shrinking mesh can give values below 1. A tree whose root box has no area (every element on one axis-parallel line,
- * or at one point) costs 0: growth 1 while it stays so, infinity once it gains area. */
+ * scale-free and grows with the nodes a query visits. It sees boxes that stretch, not a mesh
+ * that folds or flattens into new neighbours: on the benchmark scenes a sheet wrung by three
+ * turns after its build read 2.1, and a rebuild cut its nodes per VT query 1.6x, while a cloth
+ * pressed flat read 0.72 and a rebuild still cut them 1.5x (bench/results/trees.md). Rebuild
+ * when it passes about 1.5, and every so many steps when the mesh changes shape a lot; a
+ * rebuild costs about what the build at creation did (several refits). A tree whose root box
+ * has no area (every element on one axis-parallel line, or at one point) costs 0: growth 1
+ * while it stays so, infinity once it gains area. */
 minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
 size_t minkq_scene_vertex_count(const minkq_scene* scene);
 size_t minkq_scene_triangle_count(const minkq_scene* scene);

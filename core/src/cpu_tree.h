@@ -25,7 +25,8 @@ void parallel_for_each(int64_t n, Fn&& fn) {
 // Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id (as CUB's
 // stable radix sort of the CUDA backend), with the sorted keys.
 template <class Boxes>
-void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
+void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::vector<int32_t>& ids,
+                    MortonCells cells = MortonCells::kCubes) {
   keys.assign(size_t(n), 0);
   ids.assign(size_t(n), 0);
   if (n == 0) return;
@@ -36,7 +37,7 @@ void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::ve
         return acc;
       },
       [](Box a, Box b) { return box_union(a, b); });
-  const MortonFrame frame = morton_frame(centre_bounds);
+  const MortonFrame frame = morton_frame(centre_bounds, cells);
   std::vector<std::pair<uint64_t, int32_t>> keyed(static_cast<size_t>(n));
   parallel_for_each(n, [&](int64_t i) { keyed[i] = {morton_code(frame, box_centre(boxes(int32_t(i)))), int32_t(i)}; });
   tbb::parallel_sort(keyed.begin(), keyed.end());
@@ -52,9 +53,10 @@ class CpuTree {
   // Primitive at each sorted leaf position.
   const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
-  // leaf_size: primitives per leaf range at most (1 to kLeafSize; other sizes for studies).
+  // leaf_size: primitives per leaf range at most (1 to kLeafSize; other sizes, and other
+  // Morton cells, for studies).
   template <class Boxes>
-  void build(Boxes boxes, int32_t n, int32_t leaf_size = kLeafSize) {
+  void build(Boxes boxes, int32_t n, int32_t leaf_size = kLeafSize, MortonCells cells = MortonCells::kCubes) {
     n_ = n;
     cost_at_build_ = 0.0;
     nodes_.clear();
@@ -70,7 +72,7 @@ class CpuTree {
       return;
     }
     std::vector<uint64_t> keys;
-    sort_by_morton(boxes, n, keys, sorted_prims_);
+    sort_by_morton(boxes, n, keys, sorted_prims_, cells);
     std::vector<KarrasNode> karras(size_t(n - 1));
     parallel_for_each(n - 1, [&](int64_t i) { karras[i] = karras_node(int32_t(i), keys.data(), n); });
     std::vector<int32_t> new_index(size_t(n - 1));

@@ -53,21 +53,30 @@ MINKQ_HD uint64_t spread_bits_21(uint32_t v) {  // 21 bits -> every third bit of
 }
 
 MINKQ_HD uint32_t quantize_21(float value, float lo, float scale) {
-  const float q = (value - lo) * scale;  // scale = 2^21 / extent, 0 for a flat axis
+  const float q = (value - lo) * scale;  // scale = 2^21 / extent (see morton_frame)
   if (!(q > 0.0f)) return 0u;
   if (q >= 2097151.0f) return 2097151u;
   return uint32_t(q);
 }
+
+// The shape of the cells a Morton code orders. Cubes (the library's): a query's radius is the
+// same in every axis, so each axis is split as often as its extent warrants. Per axis (the
+// usual LBVH frame, for studies): every axis stretched to the full 21 bits, which splits a
+// thin axis as often as the longest one; on a wrung sheet (1.5 long, 0.4 across) its refit
+// tree visited 2.4x the nodes per VT query of the cubes' (bench/results/trees.md).
+enum class MortonCells { kCubes, kPerAxis };
 
 // 63-bit Morton code of a box's centre within the bounds of all centres.
 struct MortonFrame {
   Vec3 lo;
   Vec3 scale;
 };
-MINKQ_HD MortonFrame morton_frame(const Box& centre_bounds) {
+MINKQ_HD MortonFrame morton_frame(const Box& centre_bounds, MortonCells cells = MortonCells::kCubes) {
   const Vec3 extent = centre_bounds.hi - centre_bounds.lo;
-  auto scale_of = [](float e) { return e > 0.0f ? 2097152.0f / e : 0.0f; };
-  return {centre_bounds.lo, {scale_of(extent.x), scale_of(extent.y), scale_of(extent.z)}};
+  auto scale_of = [](float e) { return e > 0.0f ? 2097152.0f / e : 0.0f; };  // 0: a flat axis
+  if (cells == MortonCells::kPerAxis) return {centre_bounds.lo, {scale_of(extent.x), scale_of(extent.y), scale_of(extent.z)}};
+  const float scale = scale_of(max_num(max_num(extent.x, extent.y), extent.z));
+  return {centre_bounds.lo, {scale, scale, scale}};
 }
 MINKQ_HD Vec3 box_centre(const Box& b) { return 0.5f * (b.lo + b.hi); }
 MINKQ_HD uint64_t morton_code(const MortonFrame& f, Vec3 c) {

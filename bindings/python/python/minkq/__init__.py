@@ -9,7 +9,7 @@ use it for their per-step vertex-triangle (VT) and edge-edge (EE) broad phase::
     vt = scene.query("vt", "sphere", r, leaf_exact=True)            # (k, 2) int32 (vertex, triangle)
     ee = scene.query("ee", "capsule_exact", r)                      # (k, 2) int32 (e, f), e < f
     scene.refit(new_vertices)                                       # every step
-    if scene.tree_growth() > 2.0:                                   # after large motions:
+    if scene.tree_growth() > 1.5:                                   # after large motions:
         scene.rebuild(new_vertices)                                 # fresh trees, same pairs
 
 Arrays of other libraries (``__dlpack__``, ``__cuda_array_interface__``: Warp, PyTorch, CuPy)

@@ -338,9 +338,9 @@ class Scene(_SizedQueries):
         """Moves the vertices like :meth:`refit` and builds the trees afresh for the new
         positions: the trees the constructor would build there, with the same triangles, edges
         and edge numbering. The pairs are those of a refit; only the speed of later queries
-        differs. Worth it once large motions have raised :meth:`tree_growth` (above about 1.5 on
-        the benchmark scenes). Same errors as :meth:`refit`; on error the scene keeps its
-        positions and trees.
+        differs. Worth it once large motions have raised :meth:`tree_growth` (above about 1.5),
+        and every so many steps when the mesh changes shape a lot. Same errors as
+        :meth:`refit`; on error the scene keeps its positions and trees.
 
         >>> import numpy as np, minkq
         >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
@@ -356,12 +356,14 @@ class Scene(_SizedQueries):
         self._like = _like(args.last)
 
     def tree_growth(self) -> float:
-        """How much the refits since the last build (the constructor or :meth:`rebuild`) have
-        degraded the trees: their area cost (a scale-free estimate of the nodes a query visits)
-        now over its value right after that build, the larger of the scene's two trees. 1.0
-        after a build; the nodes a query visits grow with it (growth 5.1 came with 3.2x the
-        nodes of a rebuilt tree on the benchmarks' wrung cloth); it may also fall below 1. A tree whose elements all lie on one line parallel to an axis
-        (or at one point) has no area: 1.0 while it stays so, ``inf`` once it has any.
+        """How far the refits since the last build (the constructor or :meth:`rebuild`) have
+        stretched the trees: their area cost (scale-free; it grows with the nodes a query
+        visits) now over its value right after that build, the larger of the scene's two trees.
+        1.0 after a build. It sees boxes that stretch, not a mesh folding or flattening into new
+        neighbours: a sheet wrung three turns read 2.1 (a rebuild cut its nodes per VT query
+        1.6x), a cloth pressed flat 0.72 (a rebuild still cut them 1.5x; the C header and
+        ``bench/results/trees.md``). A tree whose elements all lie on one line parallel to an
+        axis (or at one point) has no area: 1.0 while it stays so, ``inf`` once it has any.
 
         >>> import numpy as np, minkq
         >>> u, v = np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9))

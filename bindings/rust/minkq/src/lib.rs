@@ -34,7 +34,7 @@
 //! scene.refit(&vertices)?;
 //! assert!(scene.query(&Query::ee(Mode::CapsuleExact, r), &mut pairs)?.is_empty());
 //! // Once large motions have degraded the refitted trees, build them afresh (same pairs).
-//! if scene.tree_growth()? > 2.0 {
+//! if scene.tree_growth()? > 1.5 {
 //!     scene.rebuild(&vertices)?;
 //! }
 //! # Ok::<(), minkq::Error>(())
@@ -43,9 +43,10 @@
 //! # Refit and rebuild
 //! [`Scene::refit`] moves the vertices and updates the trees' boxes in place, keeping the
 //! grouping of the last build: cheap, but after large deformations the boxes overlap more and
-//! queries visit more nodes. [`Scene::tree_growth`] estimates that slowdown (the trees' area
-//! cost over its value at the last build: 1 after a build), and [`Scene::rebuild`] moves the
-//! vertices and builds the trees afresh. Both give the same pairs; [`Bvh`] has the same three
+//! queries visit more nodes. [`Scene::tree_growth`] tracks how far refits have stretched the
+//! trees (their area cost over its value at the last build: 1 after a build; it misses a mesh
+//! folding into new neighbours), and [`Scene::rebuild`] moves the vertices and builds the
+//! trees afresh. Both give the same pairs; [`Bvh`] has the same three
 //! calls.
 //!
 //! # Threads

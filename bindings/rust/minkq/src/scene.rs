@@ -295,8 +295,8 @@ impl Scene {
     /// the new positions: the trees [`Scene::new`] would build there, with the same topology
     /// and edge numbering. The pairs are the same as after a refit; only the speed of later
     /// queries differs. Worth it once large motions have raised [`Scene::tree_growth`] (above
-    /// about 1.5 on the benchmark scenes). Same errors as [`Scene::refit`]; on error the scene
-    /// keeps its positions and trees.
+    /// about 1.5), and every so many steps when the mesh changes shape a lot. Same errors as
+    /// [`Scene::refit`]; on error the scene keeps its positions and trees.
     ///
     /// ```
     /// # use minkq::*;
@@ -341,12 +341,14 @@ impl Scene {
         check(unsafe { sys::minkq_scene_rebuild(self.raw.as_ptr(), vertices.raw()) })
     }
 
-    /// How much the refits since the last build (creation or [`Scene::rebuild`]) have degraded
-    /// the trees: their area cost (a scale-free estimate of the nodes a query visits) now over
-    /// its value right after that build, the larger of the scene's trees. 1 after a build; the
-    /// nodes a query visits grow with it (growth 5.1 came with 3.2x the nodes of a rebuilt tree
-    /// on the benchmarks' wrung cloth); it may also fall below 1. A tree whose elements all lie on one line parallel to an axis (or at one point)
-    /// has no area: 1 while it stays so, infinity once it has any.
+    /// How far the refits since the last build (creation or [`Scene::rebuild`]) have stretched
+    /// the trees: their area cost (scale-free; it grows with the nodes a query visits) now over
+    /// its value right after that build, the larger of the scene's trees. 1 after a build. It
+    /// sees boxes that stretch, not a mesh folding or flattening into new neighbours: a sheet
+    /// wrung three turns read 2.1 (a rebuild cut its nodes per VT query 1.6x), a cloth pressed
+    /// flat 0.72 (a rebuild still cut them 1.5x; `minkq_scene_tree_growth` in `minkq.h`). A tree
+    /// whose elements all lie on one line parallel to an axis (or at one point) has no area: 1
+    /// while it stays so, infinity once it has any.
     ///
     /// ```
     /// # use minkq::*;
