@@ -470,16 +470,23 @@ class Session {
     expect(rebuild ? "minkq_scene_rebuild" : "minkq_scene_refit", st, m);
     if (st != MINKQ_SUCCESS && !null_scene && scene_state(*s) != before)
       failure(std::string("a failed ") + (rebuild ? "rebuild" : "refit") + " changed the scene's positions");
-    // Growth: 1 after a rebuild, never NaN or negative.
+    check_tree_growth("minkq_scene_tree_growth", minkq_scene_tree_growth, handle, rebuild && st == MINKQ_SUCCESS);
+  }
+
+  // A tree-growth call on `handle` (NULL: a misuse), its out pointer sometimes NULL too: never
+  // NaN or negative, and exactly 1 right after a successful rebuild.
+  template <class Handle>
+  void check_tree_growth(const char* call, minkq_status (*growth_of)(const Handle*, double*), const Handle* handle,
+                         bool rebuilt) {
     const bool null_out = gen_.rarely();
     double growth = -1.0;
-    Misuse g;
-    g.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
-    g.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_growth NULL");
-    const minkq_status gs = minkq_scene_tree_growth(handle, null_out ? nullptr : &growth);
-    expect("minkq_scene_tree_growth", gs, g);
-    if (gs == MINKQ_SUCCESS && (!(growth >= 0.0) || (rebuild && st == MINKQ_SUCCESS && growth != 1.0)))
-      failure("minkq_scene_tree_growth returned " + std::to_string(growth));
+    Misuse m;
+    m.add(handle == nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "handle NULL");
+    m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_growth NULL");
+    const minkq_status status = growth_of(handle, null_out ? nullptr : &growth);
+    expect(call, status, m);
+    if (status == MINKQ_SUCCESS && (!(growth >= 0.0) || (rebuilt && growth != 1.0)))
+      failure(std::string(call) + " returned " + std::to_string(growth));
   }
 
   // The arguments of a scene query, with the misuses they contain.
@@ -695,15 +702,7 @@ class Session {
     expect(rebuild ? "minkq_bvh_rebuild" : "minkq_bvh_refit", st, m);
     if (st != MINKQ_SUCCESS && !null_bvh && bvh_state(b) != before)
       failure(std::string("a failed bvh ") + (rebuild ? "rebuild" : "refit") + " changed its boxes");
-    const bool null_out = gen_.rarely();
-    double growth = -1.0;
-    Misuse g;
-    g.add(null_bvh, MINKQ_ERROR_INVALID_ARGUMENT, "bvh NULL");
-    g.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_growth NULL");
-    const minkq_status gs = minkq_bvh_tree_growth(handle, null_out ? nullptr : &growth);
-    expect("minkq_bvh_tree_growth", gs, g);
-    if (gs == MINKQ_SUCCESS && (!(growth >= 0.0) || (rebuild && st == MINKQ_SUCCESS && growth != 1.0)))
-      failure("minkq_bvh_tree_growth returned " + std::to_string(growth));
+    check_tree_growth("minkq_bvh_tree_growth", minkq_bvh_tree_growth, handle, rebuild && st == MINKQ_SUCCESS);
   }
 
   void bvh_query() {

@@ -124,6 +124,19 @@ impl Rng {
     }
 }
 
+/// The two triangles of every cell of an n x n vertex grid (vertex j * n + i).
+fn grid_triangles(n: i32) -> Vec<[i32; 3]> {
+    let mut triangles = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let v00 = j * n + i;
+            triangles.push([v00, v00 + 1, v00 + n + 1]);
+            triangles.push([v00, v00 + n + 1, v00 + n]);
+        }
+    }
+    triangles
+}
+
 /// A crumpled n x n sheet folded over itself, so that it comes close to itself in many places.
 fn crumpled_sheet(n: i32, seed: u64) -> Mesh {
     let mut rng = Rng(seed);
@@ -140,15 +153,7 @@ fn crumpled_sheet(n: i32, seed: u64) -> Mesh {
             ]);
         }
     }
-    let mut triangles = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let v00 = j * n + i;
-            triangles.push([v00, v00 + 1, v00 + n + 1]);
-            triangles.push([v00, v00 + n + 1, v00 + n]);
-        }
-    }
-    Mesh { vertices, triangles }
+    Mesh { vertices, triangles: grid_triangles(n) }
 }
 
 fn pairs_of(scene: &Scene, query: Query) -> Pairs {
@@ -240,19 +245,11 @@ fn refit_after_moving_vertices_equals_a_fresh_build() {
     }
 }
 
-/// A flat n x n grid over the unit square (z = 0), triangulated as `crumpled_sheet`.
+/// A flat n x n grid over the unit square (z = 0), triangulated by `grid_triangles`.
 fn flat_grid(n: i32) -> Mesh {
     let step = 1.0 / (n - 1) as f32;
     let vertices = (0..n * n).map(|k| [(k % n) as f32 * step, (k / n) as f32 * step, 0.0]).collect();
-    let mut triangles = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let v00 = j * n + i;
-            triangles.push([v00, v00 + 1, v00 + n + 1]);
-            triangles.push([v00, v00 + n + 1, v00 + n]);
-        }
-    }
-    Mesh { vertices, triangles }
+    Mesh { vertices, triangles: grid_triangles(n) }
 }
 
 /// The flat grid's vertices (x = u, y = v) rolled up about the y axis as `crumpled_sheet`
