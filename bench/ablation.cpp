@@ -27,6 +27,8 @@
 #include <cinttypes>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <fstream>
 #include <sstream>
 
@@ -35,6 +37,7 @@
 #include "cpu_tree.h"
 #include "minkq/queries.h"
 #include "scenes.h"
+#include "wide_bvh.h"
 
 namespace ref = minkq::reference;
 using namespace minkq;
@@ -104,9 +107,10 @@ struct Outcome {
   std::vector<uint64_t> pairs;  // sorted (first << 32 | second)
 };
 
-// Runs every query in blocks of 256 on all threads, counting work; times `repeats` runs.
-template <class Shape, class Queries>
-Outcome run(const BvhView& bvh, const Queries& queries, int32_t n, int repeats) {
+// Runs query_one(i, emit, work) for i < n in blocks of 256 on all threads, counting work;
+// times `repeats` runs.
+template <class QueryOne>
+Outcome run_each(int32_t n, int repeats, const QueryOne& query_one) {
   Outcome out;
   const int32_t blocks = (n + 255) / 256;
   std::vector<std::vector<uint64_t>> parts(static_cast<size_t>(blocks));
@@ -116,7 +120,7 @@ Outcome run(const BvhView& bvh, const Queries& queries, int32_t n, int repeats) 
       parts[size_t(b)].clear();
       work[size_t(b)] = WorkCounts{};
       auto emit = [&](int32_t x, int32_t y) { parts[size_t(b)].push_back(uint64_t(uint32_t(x)) << 32 | uint32_t(y)); };
-      for (int32_t i = b * 256; i < std::min(n, (b + 1) * 256); ++i) run_query<Shape>(bvh, queries, i, emit, work[size_t(b)]);
+      for (int32_t i = b * 256; i < std::min(n, (b + 1) * 256); ++i) query_one(i, emit, work[size_t(b)]);
     });
   };
   std::vector<double> times;
@@ -132,6 +136,12 @@ Outcome run(const BvhView& bvh, const Queries& queries, int32_t n, int repeats) 
   for (const auto& p : parts) out.pairs.insert(out.pairs.end(), p.begin(), p.end());
   std::sort(out.pairs.begin(), out.pairs.end());
   return out;
+}
+
+// The library's traversal: run_query over a binary tree.
+template <class Shape, class Queries>
+Outcome run(const BvhView& bvh, const Queries& queries, int32_t n, int repeats) {
+  return run_each(n, repeats, [&](int32_t i, auto& emit, WorkCounts& work) { run_query<Shape>(bvh, queries, i, emit, work); });
 }
 
 std::string row(const std::string& scene, const char* kind, const char* mode, const char* variant, const Outcome& o,
@@ -386,24 +396,43 @@ CpuTree build_sah(Boxes boxes, int32_t n) {
   return tree;
 }
 
+// A scene's first and last frame in the core's types, its radius, and its vertices at the
+// last frame in Morton order (the VT query order); announces the scene on stderr.
+struct FirstAndLast {
+  const Vec3 *v0, *v;
+  const Triangle* t;
+  const Edge* e;
+  float r;
+  int32_t nv, nt, ne;
+  std::vector<uint64_t> keys;
+  std::vector<int32_t> order;
+  FirstAndLast(const SceneFrames& sc, const char* study)
+      : v0(reinterpret_cast<const Vec3*>(sc.frames.front().data())),
+        v(reinterpret_cast<const Vec3*>(sc.frames.back().data())),
+        t(reinterpret_cast<const Triangle*>(sc.mesh.tris.data())),
+        e(reinterpret_cast<const Edge*>(sc.mesh.edges.data())),
+        r(float(sc.radius_factor * sc.mean_edge)),
+        nv(int32_t(sc.mesh.vertex_count())),
+        nt(int32_t(sc.mesh.triangle_count())),
+        ne(int32_t(sc.mesh.edge_count())) {
+    std::fprintf(stderr, "%s (%s): %d V, %d T, r = %.4g\n", sc.name.c_str(), study, nv, nt, double(r));
+    sort_by_morton(PointBoxes{v}, nv, keys, order);
+  }
+};
+
 // Tree quality on the scenes' frame sequences (first and last frame): the library's Morton
 // build refit from the first frame (what a simulator's refit-only steps run), the same
 // rebuilt at the last frame (minkq_scene_rebuild), and the SAH build either way. Box mode,
 // the scene's radius; growth = area cost over its value at build (minkq_scene_tree_growth),
 // of the triangle tree for VT and of the edge tree for EE.
 std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
-  const auto* v0 = reinterpret_cast<const Vec3*>(sc.frames.front().data());
-  const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
-  const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
-  const auto* e = reinterpret_cast<const Edge*>(sc.mesh.edges.data());
-  const float r = float(sc.radius_factor * sc.mean_edge);
-  const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
-  const int32_t ne = int32_t(sc.mesh.edge_count());
-  std::fprintf(stderr, "%s (trees): %d V, %d T, r = %.4g\n", sc.name.c_str(), nv, nt, double(r));
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> order;
-  sort_by_morton(PointBoxes{v}, nv, keys, order);
-  const VertexTriangleQueries vt{v, t, order.data(), r, kDropIncident};
+  const FirstAndLast frames(sc, "trees");
+  const Vec3 *v0 = frames.v0, *v = frames.v;
+  const Triangle* t = frames.t;
+  const Edge* e = frames.e;
+  const float r = frames.r;
+  const int32_t nv = frames.nv, nt = frames.nt, ne = frames.ne;
+  const VertexTriangleQueries vt{v, t, frames.order.data(), r, kDropIncident};
   enum Build { kPerAxis, kCubes, kSah };
   struct Variant {
     Build build;
@@ -464,6 +493,244 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
   return out;
 }
 
+// One mode over a wide tree's pair (triangles, edges): kind 0 = VT sphere, 1 = EE box,
+// 2 = EE capsule_exact.
+template <int W, bool kLanes>
+Outcome run_wide(const WideTree<W> (&trees)[2], const VertexTriangleQueries& vt, const EdgeEdgeQueries& ee, int kind,
+                 int32_t nv, int32_t ne, int reps) {
+  auto go = [&](auto shape, const WideTree<W>& tree, const auto& queries, int32_t n) {
+    using Shape = decltype(shape);
+    return run_each(n, reps, [&](int32_t i, auto& emit, WorkCounts& work) {
+      run_query_wide<W, kLanes, Shape>(tree, queries, i, emit, work);
+    });
+  };
+  if (kind == 0) return go(SphereShape{}, trees[0], vt, nv);
+  if (kind == 1) return go(BoxShape{}, trees[1], ee, ne);
+  return go(CapsuleExactShape{}, trees[1], ee, ne);
+}
+
+// Wide nodes (issue 8's untried lever; bench/wide_bvh.h, not the library's tree). Each
+// scene's two binary trees are built at the first frame with leaf ranges of 16 (the
+// library's), 4 or 1, collapsed there to 4- and 8-ary nodes, and refit to the last frame (the
+// wide nodes take the refit boxes), as a simulator's refit-only steps run them. VT sphere, EE
+// box and EE capsule_exact at the scene's radius; the pairs of every variant checked equal to
+// the binary tree's; variants timed round-robin as in compare_tree_builds.
+// Also appends to `bytes_read` a summary row per mode: node-record bytes read per query by the
+// binary tree and by the leaf-16 wide trees (nodes / query x record size).
+std::string compare_wide(const SceneFrames& sc, int repeats, bool& ok, std::string& bytes_read) {
+  const FirstAndLast frames(sc, "wide");
+  const Vec3 *v0 = frames.v0, *v = frames.v;
+  const Triangle* t = frames.t;
+  const Edge* e = frames.e;
+  const float r = frames.r;
+  const int32_t nv = frames.nv, nt = frames.nt, ne = frames.ne;
+  const VertexTriangleQueries vt{v, t, frames.order.data(), r, kDropIncident};
+  struct Trees {
+    CpuTree binary[2];  // triangles, edges
+    WideTree<4> wide4[2], wide4q[2];  // float child boxes, 8-bit quantized child boxes
+    WideTree<8> wide8[2], wide8q[2];
+  };
+  const int32_t leaf_sizes[3] = {kLeafSize, 4, 1};
+  std::vector<std::unique_ptr<Trees>> trees;
+  for (const int32_t leaf : leaf_sizes) {
+    Trees& x = *trees.emplace_back(std::make_unique<Trees>());
+    x.binary[0].build(TriangleBoxes{v0, t}, nt, leaf);
+    x.binary[1].build(EdgeBoxes{v0, e}, ne, leaf);
+    for (int k = 0; k < 2; ++k) {
+      x.wide4[k].collapse(x.binary[k]);
+      x.wide8[k].collapse(x.binary[k]);
+      x.wide4q[k].collapse(x.binary[k]);
+      x.wide8q[k].collapse(x.binary[k]);
+    }
+    x.binary[0].refit(TriangleBoxes{v, t});
+    x.binary[1].refit(EdgeBoxes{v, e});
+    for (int k = 0; k < 2; ++k) {
+      x.wide4[k].fill(x.binary[k]);
+      x.wide8[k].fill(x.binary[k]);
+      x.wide4q[k].fill(x.binary[k], true);
+      x.wide8q[k].fill(x.binary[k], true);
+    }
+  }
+  struct Variant {
+    std::string label;
+    size_t record_bytes;
+    std::function<Outcome(int kind, int reps)> query;
+    Outcome got[3] = {};
+  };
+  std::vector<Variant> variants;
+  auto bytes_label = [&](const std::string& what, size_t node_bytes) {
+    char b[64];
+    std::snprintf(b, sizeof b, ": %.1f B of nodes / triangle", double(node_bytes) / nt);
+    return what + b;
+  };
+  {
+    const Trees& x = *trees[0];
+    Variant& binary = variants.emplace_back();
+    binary.record_bytes = sizeof(BvhNode);
+    binary.label = bytes_label("binary, leaf 16 (kept)", 64 * (x.binary[0].nodes().size() + x.binary[1].nodes().size()));
+    binary.query = [&x, &vt, v, e, r, nv, ne](int kind, int reps) {
+      const EdgeEdgeQueries ee{v, e, x.binary[1].sorted_prims().data(), r, kDropIncident};
+      if (kind == 0) return run<SphereShape>(x.binary[0].view(), vt, nv, reps);
+      if (kind == 1) return run<BoxShape>(x.binary[1].view(), ee, ne, reps);
+      return run<CapsuleExactShape>(x.binary[1].view(), ee, ne, reps);
+    };
+  }
+  // Quantized records (see WideTree::fill) would hold a float origin, 3 exponent bytes, a pad
+  // byte and 8-bit planes instead of float boxes: 72 B per 4-wide node, 128 B per 8-wide.
+  auto add_wide = [&](int width, size_t leaf_index, bool lanes, bool quantized) {
+    const Trees& x = *trees[leaf_index];
+    const size_t count = width == 4 ? x.wide4[0].nodes().size() + x.wide4[1].nodes().size()
+                                    : x.wide8[0].nodes().size() + x.wide8[1].nodes().size();
+    const size_t record = quantized ? (width == 4 ? 72 : 128) : (width == 4 ? sizeof(WideNode<4>) : sizeof(WideNode<8>));
+    const std::string what = std::to_string(width) + "-wide, leaf " + std::to_string(leaf_sizes[leaf_index]) +
+                             (quantized ? ", 8-bit child boxes" : "") +
+                             (lanes ? ", tested in 4-float lanes" : ", tested one by one");
+    Variant& wide = variants.emplace_back();
+    wide.record_bytes = record;
+    wide.label = bytes_label(what, count * record);
+    wide.query = [&x, &vt, v, e, r, nv, ne, width, lanes, quantized](int kind, int reps) {
+      const EdgeEdgeQueries ee{v, e, x.binary[1].sorted_prims().data(), r, kDropIncident};
+      if (width == 8) return run_wide<8, true>(quantized ? x.wide8q : x.wide8, vt, ee, kind, nv, ne, reps);
+      return lanes ? run_wide<4, true>(quantized ? x.wide4q : x.wide4, vt, ee, kind, nv, ne, reps)
+                   : run_wide<4, false>(x.wide4, vt, ee, kind, nv, ne, reps);
+    };
+  };
+  add_wide(4, 0, false, false);
+  add_wide(4, 0, true, false);
+  add_wide(4, 1, true, false);
+  add_wide(4, 2, true, false);
+  add_wide(8, 0, true, false);
+  add_wide(8, 1, true, false);
+  add_wide(8, 2, true, false);
+  add_wide(4, 0, true, true);
+  add_wide(4, 1, true, true);
+  add_wide(8, 0, true, true);
+  std::vector<std::vector<double>> times(variants.size() * 3);
+  for (int round = 0; round < 3 * repeats; ++round)
+    for (size_t i = 0; i < variants.size(); ++i)
+      for (int kind = 0; kind < 3; ++kind) times[3 * i + size_t(kind)].push_back(variants[i].query(kind, 1).ms);
+  std::string out;
+  const char* kinds[3] = {"VT", "EE", "EE"};
+  const char* modes[3] = {"sphere", "box", "capsule_exact"};
+  for (int kind = 0; kind < 3; ++kind)
+    for (size_t i = 0; i < variants.size(); ++i) {
+      Variant& x = variants[i];
+      x.got[kind] = x.query(kind, 1);
+      std::vector<double>& ts = times[3 * i + size_t(kind)];
+      std::sort(ts.begin(), ts.end());
+      x.got[kind].ms = ts[ts.size() / 2];
+      ok &= x.got[kind].pairs == variants[0].got[kind].pairs;
+      out += row(sc.name, kinds[kind], modes[kind], x.label.c_str(), x.got[kind], kind ? ne : nv, variants[0].got[kind]);
+    }
+  // Binary, then the leaf-16 wide trees: 4-wide float, 4-wide 8-bit, 8-wide float, 8-wide 8-bit.
+  const size_t summarized[5] = {0, 2, 8, 5, 10};
+  for (int kind = 0; kind < 3; ++kind) {
+    bytes_read += "| " + sc.name + " | " + kinds[kind] + " | " + modes[kind] + " |";
+    const double base = double(variants[0].got[kind].work.nodes_visited) * sizeof(BvhNode);
+    for (const size_t i : summarized) {
+      const double b = double(variants[i].got[kind].work.nodes_visited) * double(variants[i].record_bytes);
+      bytes_read += " " + fmt(b / (kind ? ne : nv), 4) + (i ? " (" + fmt(b / base, 3) + "x)" : "") + " |";
+    }
+    bytes_read += " " + fmt(variants[0].got[kind].ms / variants[8].got[kind].ms, 3) + "x |\n";
+  }
+  return out;
+}
+
+// Rebuild policies end to end, through the C API as a simulator calls it: a scene created at
+// frame 0, then per step minkq_scene_refit or minkq_scene_rebuild to the next frame, the
+// growth read back (minkq_scene_tree_growth), and the VT and EE queries (box mode, incident
+// pairs dropped, into reused results). Every policy's pairs are checked equal step by step
+// (digests) and its work counted in a separate, untimed STATS pass; the policies' whole
+// sequences run round-robin, `rounds` times; ms = median over rounds of the sequence's sum.
+struct Policy {
+  const char* label;
+  int every;         // rebuild every `every` steps (0: not by count)
+  double threshold;  // rebuild when the growth read after the last step exceeds it (0: never)
+};
+constexpr Policy kPolicies[] = {{"refit every step (the default)", 0, 0.0},
+                                {"rebuild every step", 1, 0.0},
+                                {"rebuild every 5th step", 5, 0.0},
+                                {"rebuild when growth > 1.5 (minkq.h's advice)", 0, 1.5},
+                                {"rebuild when growth > 1.2", 0, 1.2}};
+
+struct PolicyRun {
+  double update_ms = 0, query_ms = 0, growth_max = 1.0;
+  int rebuilds = 0;
+  uint64_t vt_nodes = 0, ee_nodes = 0;
+  std::vector<uint64_t> digests;  // VT, EE per step (counted runs only)
+};
+
+PolicyRun run_policy(minkq_device* device, const SceneFrames& sc, const Policy& policy, float r, bool counted) {
+  PolicyRun run;
+  Scene scene = create_scene(device, sc.frames[0], sc.mesh.tris);
+  Result vt = new_result(), ee = new_result();
+  double growth = 1.0;
+  for (size_t k = 1; k < sc.frames.size(); ++k) {
+    const minkq_buffer vb{sc.frames[k].data(), 12, sc.frames[k].size() / 3, MINKQ_MEMORY_HOST};
+    const int step = int(k);
+    const bool rebuild = (policy.every > 0 && step % policy.every == 0) || (policy.threshold > 0 && growth > policy.threshold);
+    double start = now_ms();
+    check(rebuild ? minkq_scene_rebuild(scene.get(), vb) : minkq_scene_refit(scene.get(), vb), "minkq_scene_refit/rebuild");
+    check(minkq_scene_tree_growth(scene.get(), &growth), "minkq_scene_tree_growth");
+    run.update_ms += now_ms() - start;
+    run.rebuilds += rebuild ? 1 : 0;
+    run.growth_max = std::max(run.growth_max, growth);
+    const minkq_query_desc qvt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, r}, qee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, r};
+    start = now_ms();
+    check(minkq_scene_query_result(scene.get(), &qvt, vt.get()), "minkq_scene_query_result");
+    check(minkq_scene_query_result(scene.get(), &qee, ee.get()), "minkq_scene_query_result");
+    run.query_ms += now_ms() - start;
+    if (!counted) continue;
+    const uint32_t stats = MINKQ_QUERY_STATS | MINKQ_QUERY_DIGEST;
+    const minkq_query_desc cvt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, stats, r}, cee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, stats, r};
+    check(minkq_scene_query_result(scene.get(), &cvt, vt.get()), "minkq_scene_query_result");
+    run.vt_nodes += minkq_result_stats(vt.get()).nodes_visited;
+    run.digests.push_back(minkq_result_digest(vt.get()));
+    check(minkq_scene_query_result(scene.get(), &cee, ee.get()), "minkq_scene_query_result");
+    run.ee_nodes += minkq_result_stats(ee.get()).nodes_visited;
+    run.digests.push_back(minkq_result_digest(ee.get()));
+  }
+  return run;
+}
+
+std::string compare_policies(const SceneFrames& sc, int rounds, bool& ok) {
+  const float r = float(sc.radius_factor * sc.mean_edge);
+  const int32_t nv = int32_t(sc.mesh.vertex_count()), ne = int32_t(sc.mesh.edge_count());
+  const int steps = int(sc.frames.size()) - 1;
+  std::fprintf(stderr, "%s (policies): %d V, %d T, %d steps, r = %.4g\n", sc.name.c_str(), nv,
+               int(sc.mesh.triangle_count()), steps, double(r));
+  Device device = open_device("cpu");
+  const size_t n = std::size(kPolicies);
+  std::vector<PolicyRun> counted(n);
+  for (size_t i = 0; i < n; ++i) {
+    counted[i] = run_policy(device.get(), sc, kPolicies[i], r, true);
+    ok &= counted[i].digests == counted[0].digests;
+  }
+  std::vector<std::vector<double>> update(n), query(n), total(n);
+  for (int round = 0; round < rounds; ++round)
+    for (size_t i = 0; i < n; ++i) {
+      const PolicyRun run = run_policy(device.get(), sc, kPolicies[i], r, false);
+      update[i].push_back(run.update_ms);
+      query[i].push_back(run.query_ms);
+      total[i].push_back(run.update_ms + run.query_ms);
+    }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::string out;
+  const double base = median(total[0]);
+  for (size_t i = 0; i < n; ++i) {
+    const PolicyRun& c = counted[i];
+    const double t = median(total[i]);
+    out += "| " + sc.name + " | " + std::to_string(steps) + " | " + kPolicies[i].label + " | " + std::to_string(c.rebuilds) +
+           " | " + fmt(c.growth_max, 3) + " | " + fmt(double(c.vt_nodes) / (double(nv) * steps), 4) + " | " +
+           fmt(double(c.ee_nodes) / (double(ne) * steps), 4) + " | " + fmt(median(update[i]), 4) + " | " +
+           fmt(median(query[i]), 4) + " | " + fmt(t, 4) + " | " + fmt(base / t, 3) + "x |\n";
+  }
+  return out;
+}
+
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
   const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
@@ -491,18 +758,20 @@ int main(int argc, char** argv) {
     std::string data = MINKQ_BENCH_DATA_DIR, out = MINKQ_BENCH_RESULTS_DIR;
     int repeats = 5;
     double scale = 0;  // reference sizes
-    std::string sections = "all";  // or "traversal" (ablation.md) or "trees" (trees.md)
+    std::string sections = "all";  // or "traversal" (ablation.md), "trees" (trees.md), "wide" (wide.md), "policies" (policies.md)
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--quick") repeats = 1;
       else if (a == "--out" && i + 1 < argc) out = argv[++i];
       else if (a == "--data" && i + 1 < argc) data = argv[++i];
       else if (a == "--triangles" && i + 1 < argc) scale = std::stod(argv[++i]);
-      else if (a == "--only" && i + 1 < argc && (std::string(argv[i + 1]) == "traversal" || std::string(argv[i + 1]) == "trees"))
+      else if (a == "--only" && i + 1 < argc &&
+               (std::string(argv[i + 1]) == "traversal" || std::string(argv[i + 1]) == "trees" ||
+                std::string(argv[i + 1]) == "wide" || std::string(argv[i + 1]) == "policies"))
         sections = argv[++i];
       else {
         std::fprintf(stderr,
-                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--only traversal|trees]\n");
+                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--only traversal|trees|wide|policies]\n");
         return 2;
       }
     }
@@ -520,7 +789,7 @@ int main(int argc, char** argv) {
       if (!f) throw std::runtime_error("cannot write " + out + "/" + name);
       std::fprintf(stderr, "wrote %s/%s\n", out.c_str(), name.c_str());
     };
-    if (sections != "trees") {
+    if (sections == "all" || sections == "traversal") {
       std::ostringstream o;
       o << "# Traversal ablation (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)")
         << ". Load average (1 min) at start " << fmt(load_average(), 3) << ". Last frame of each scene, r = the scene's "
@@ -535,7 +804,7 @@ int main(int argc, char** argv) {
       o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
       write("ablation.md", o.str());
     }
-    if (sections != "traversal") {
+    if (sections == "all" || sections == "trees") {
       std::ostringstream o;
       o << "# Tree quality: refit, rebuild, SAH (issue 8)\n\nMachine: " << machine_line("cpu (core traversal, TBB)")
         << ". Load average (1 min) at start " << fmt(load_average(), 3) << ". Every procedural scene's first and last "
@@ -554,6 +823,60 @@ int main(int argc, char** argv) {
       o << compare_tree_builds(make_scene("twist_target", scale, 2, data), repeats, ok);
       o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
       write("trees.md", o.str());
+    }
+    if (sections == "all" || sections == "wide") {
+      std::ostringstream o;
+      o << "# Wide nodes: 4- and 8-ary trees collapsed from the binary one (issue 8)\n\nMachine: "
+        << machine_line("cpu (core traversal, TBB)") << ". Load average (1 min) at start " << fmt(load_average(), 3)
+        << ". A study (bench/wide_bvh.h), not the library's tree. Every procedural scene and the twisted sheet; each "
+        << "scene's binary trees built at its first frame (leaf ranges of 16, the library's, or of 4 or 1), collapsed "
+        << "there to W-ary nodes (the child with the largest box area opened until W children; child boxes stored "
+        << "by axis, " << sizeof(WideNode<4>) << " B per 4-wide node, " << sizeof(WideNode<8>) << " B per 8-wide), "
+        << "and refit to the last frame, as a simulator's refit-only steps run them; leaf ranges, leaf order and leaf "
+        << "scans unchanged. r = the scene's radius, incident pairs dropped, CPU traversal on all threads; the pairs of "
+        << "every variant checked equal to the binary tree's. nodes = node records read (a wide record is two or four "
+        << "64-byte lines); node tests = child and leaf boxes tested (a 4-lane test counts its non-empty lanes). "
+        << "'4-float lanes': the box test (box_gap_within) on 4 children at once with GCC vector extensions (SSE2 "
+        << "here; the same float operations as the scalar test, so the same answers). Counts per query; variants run "
+        << "round-robin, " << 3 * repeats << " rounds; ms = median of the timed runs; speed = the binary tree's ms / this "
+        << "ms. Written by `minkq_ablation --only wide`" << (repeats == 1 ? " --quick" : "") << ".\n\n"
+        << table_head;
+      std::string bytes_read;
+      for (const std::string& name : procedural_scene_names())
+        o << compare_wide(make_scene(name, scale, 2, data), repeats, ok, bytes_read);
+      o << compare_wide(make_scene("twist_target", scale, 2, data), repeats, ok, bytes_read);
+      o << "\n## Node-record bytes read per query\n\nFrom the table above: nodes / query x record size (binary 64 B; "
+        << "4-wide float " << sizeof(WideNode<4>) << " B, 8-bit 72 B; 8-wide float " << sizeof(WideNode<8>)
+        << " B, 8-bit 128 B), leaf ranges of 16; in brackets the ratio to the binary tree. Leaf boxes scanned (24 B "
+        << "each) come on top and are the same for all. A GPU traversal is bound by these dependent reads; the CPU "
+        << "speed of the 4-wide 8-bit tree (its boxes stored decoded, so not its real cost) is the last column.\n\n"
+        << "| scene | kind | mode | binary | 4-wide | 4-wide 8-bit | 8-wide | 8-wide 8-bit | CPU speed, 4-wide 8-bit |\n"
+        << "|---|---|---|---|---|---|---|---|---|\n"
+        << bytes_read;
+      o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+      write("wide.md", o.str());
+    }
+    if (sections == "all" || sections == "policies") {
+      constexpr int kFrames = 21;
+      std::ostringstream o;
+      o << "# Rebuild policies end to end (issue 8)\n\nMachine: " << machine_line("cpu") << ". Load average (1 min) at "
+        << "start " << fmt(load_average(), 3) << ". Every procedural scene and the twisted sheet over " << kFrames
+        << " frames of its motion: the scene created at frame 0 (not timed), then per step the update to the next frame "
+        << "(minkq_scene_refit, or minkq_scene_rebuild where the policy says, then minkq_scene_tree_growth) and the VT "
+        << "and EE queries (box mode, r = the scene's radius, incident pairs dropped, into reused results), through "
+        << "the C API on the CPU device (all threads). A growth policy reads the growth after each step and rebuilds at "
+        << "the next. Every policy's pairs checked equal at every step (digests); nodes per query from a separate "
+        << "untimed MINKQ_QUERY_STATS pass, averaged over the steps; growth max = the largest growth read. The policies' "
+        << "whole sequences run round-robin, " << repeats << " rounds; ms = median over the rounds of the sequence's "
+        << "sum; speed = 'refit every step' total / this total. Written by `minkq_ablation --only policies`"
+        << (repeats == 1 ? " --quick" : "") << ".\n\n"
+        << "| scene | steps | policy | rebuilds | growth max | VT nodes / query | EE nodes / query | update ms | query ms | "
+           "total ms | speed |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+      for (const std::string& name : procedural_scene_names())
+        o << compare_policies(make_scene(name, scale, kFrames, data), repeats, ok);
+      o << compare_policies(make_scene("twist_target", scale, kFrames, data), repeats, ok);
+      o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+      write("policies.md", o.str());
     }
     if (!ok) {
       std::fprintf(stderr, "FAIL: a variant returned different pairs\n");

@@ -162,6 +162,16 @@ void gather_to_device(const Strided& values, DeviceBuffer<T>& dst) {
          reinterpret_cast<float*>(dst.data()));
 }
 
+// A CUB device algorithm, call(storage, bytes): called once without storage to size its
+// temporary storage (grown in `temp`, kept by the caller for reuse), then to run.
+template <class CubCall>
+void run_cub(DeviceBuffer<char>& temp, const char* what, const CubCall& call) {
+  size_t bytes = 0;
+  check(call(nullptr, bytes), what);
+  temp.ensure(bytes > 0 ? bytes : 1);  // a null storage pointer would only size again
+  check(call(temp.data(), bytes), what);
+}
+
 // ---- Tree ---------------------------------------------------------------------------------
 
 struct BoxUnion {
@@ -213,26 +223,21 @@ void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<uint64_t>& sorted_keys,
   // Bounds of the centres: min/max are exact, so the reduction order does not matter.
   DeviceBuffer<Box> centre_bounds(1);
   DeviceBuffer<char> temp;
-  size_t bytes = 0;
   const thrust::counting_iterator<int32_t> ids(0);
-  for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
-    check(cub::DeviceReduce::TransformReduce(pass ? temp.data() : nullptr, bytes, ids, centre_bounds.data(), n,
-                                             BoxUnion{}, CentreBox<Boxes>{boxes}, Box::empty(), kStream),
-          "cub::DeviceReduce::TransformReduce");
-    temp.ensure(bytes);
-  }
+  run_cub(temp, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
+    return cub::DeviceReduce::TransformReduce(storage, bytes, ids, centre_bounds.data(), n, BoxUnion{},
+                                              CentreBox<Boxes>{boxes}, Box::empty(), kStream);
+  });
   DeviceBuffer<uint64_t> keys(n);
   DeviceBuffer<int32_t> order(n);
   launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, centre_bounds.data(), keys.data(),
          order.data());
   // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in
   // the CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
-  for (int pass = 0; pass < 2; ++pass) {
-    check(cub::DeviceRadixSort::SortPairs(pass ? temp.data() : nullptr, bytes, keys.data(), sorted_keys.data(),
-                                          order.data(), sorted_ids.data(), n, 0, 63, kStream),
-          "cub::DeviceRadixSort::SortPairs");
-    temp.ensure(bytes);
-  }
+  run_cub(temp, "cub::DeviceRadixSort::SortPairs", [&](void* storage, size_t& bytes) {
+    return cub::DeviceRadixSort::SortPairs(storage, bytes, keys.data(), sorted_keys.data(), order.data(),
+                                           sorted_ids.data(), n, 0, 63, kStream);
+  });
 }
 
 struct NodeArea {
@@ -271,13 +276,9 @@ class CudaTree {
     DeviceBuffer<int32_t> kept(size_t(n - 1)), new_index(size_t(n - 1));
     launch("karras_kernel launch", karras_kernel, n - 1, kThreads, sorted_keys.data(), n, karras.data(), kept.data());
     DeviceBuffer<char> temp;
-    size_t bytes = 0;
-    for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
-      check(cub::DeviceScan::ExclusiveSum(pass ? temp.data() : nullptr, bytes, kept.data(), new_index.data(), n - 1,
-                                          kStream),
-            "cub::DeviceScan::ExclusiveSum");
-      temp.ensure(bytes);
-    }
+    run_cub(temp, "cub::DeviceScan::ExclusiveSum", [&](void* storage, size_t& bytes) {
+      return cub::DeviceScan::ExclusiveSum(storage, bytes, kept.data(), new_index.data(), n - 1, kStream);
+    });
     int32_t last_index = 0, last_kept = 0;
     copy(&last_index, new_index.data() + (n - 2), sizeof(int32_t), cudaMemcpyDeviceToHost);
     copy(&last_kept, kept.data() + (n - 2), sizeof(int32_t), cudaMemcpyDeviceToHost);
@@ -307,14 +308,11 @@ class CudaTree {
     if (!(root_area > 0.0)) return 0.0;
     DeviceBuffer<double> sum(1);
     DeviceBuffer<char> temp;
-    size_t bytes = 0;
     const thrust::counting_iterator<int32_t> ids(0);
-    for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
-      check(cub::DeviceReduce::TransformReduce(pass ? temp.data() : nullptr, bytes, ids, sum.data(), num_nodes_,
-                                               DoubleSum{}, NodeArea{nodes_.data()}, 0.0, kStream),
-            "cub::DeviceReduce::TransformReduce");
-      temp.ensure(bytes);
-    }
+    run_cub(temp, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
+      return cub::DeviceReduce::TransformReduce(storage, bytes, ids, sum.data(), num_nodes_, DoubleSum{},
+                                                NodeArea{nodes_.data()}, 0.0, kStream);
+    });
     double total = 0.0;
     copy(&total, sum.data(), sizeof(total), cudaMemcpyDeviceToHost);
     return total / root_area;
@@ -440,13 +438,9 @@ void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWorkspace& 
   ws.sorted_keys.ensure(size_t(n));
   launch("pack_pairs_kernel launch", pack_pairs_kernel, n, kThreads, pairs, n, ws.keys.data());
   const int end_bit = 32 + bit_width(uint64_t(num_queries));  // query ids are < num_queries
-  size_t bytes = 0;
-  for (int pass = 0; pass < 2; ++pass) {  // pass 0 sizes the temporary storage
-    check(cub::DeviceRadixSort::SortKeys(pass ? ws.temp.data() : nullptr, bytes, ws.keys.data(), ws.sorted_keys.data(),
-                                         n, 0, end_bit, kStream),
-          "cub::DeviceRadixSort::SortKeys");
-    ws.temp.ensure(bytes);
-  }
+  run_cub(ws.temp, "cub::DeviceRadixSort::SortKeys", [&](void* storage, size_t& bytes) {
+    return cub::DeviceRadixSort::SortKeys(storage, bytes, ws.keys.data(), ws.sorted_keys.data(), n, 0, end_bit, kStream);
+  });
   launch("unpack_pairs_kernel launch", unpack_pairs_kernel, n, kThreads, ws.sorted_keys.data(), n, pairs);
 }
 

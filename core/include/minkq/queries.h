@@ -135,18 +135,29 @@ struct UserQueries {
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
 
+// The leaf filter of query element q: each primitive the traversal reaches is counted, kept
+// or dropped by the source's accept, and emitted as the source's pair.
+template <class Shape, class Queries, class Emit, class Work>
+struct LeafFilter {
+  const Queries& queries;
+  int32_t q;
+  Emit& emit;
+  Work& work;
+  MINKQ_HD void operator()(int32_t prim, const Box& prim_box) const {
+    work.test_primitive();
+    if (!queries.template accept<Shape>(q, prim, prim_box)) return;
+    work.emit_candidate();
+    const Pair pair = queries.pair(q, prim);
+    emit(pair.first, pair.second);
+  }
+};
+
 // Query i of the batch: emit(first, second) for each pair it finds; work counts (or not).
 template <class Shape, class Queries, class Emit, class Work>
 MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target.q));
-  auto on_leaf = [&](int32_t prim, const Box& prim_box) {
-    work.test_primitive();
-    if (!queries.template accept<Shape>(target.q, prim, prim_box)) return;
-    work.emit_candidate();
-    const Pair pair = queries.pair(target.q, prim);
-    emit(pair.first, pair.second);
-  };
+  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, target.q, emit, work};
   traverse(bvh, shape, target.after, on_leaf, work);
 }
 
