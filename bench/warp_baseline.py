@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Warp 1.19 and Newton 1.8 baselines on the CPU, on the scenes minkq_bench exported (--export).
+"""Warp 1.19 and Newton 1.8 baselines, on the scenes minkq_bench exported (--export).
 
 For each exported scene (its last frame, the same float coordinates and radius minkq used) it
-runs, on Warp's CPU device, with every tree built at the scene's first frame and refit to the
+runs, on Warp's CPU device (or --device cuda:0, beside minkq's cuda rows), with every tree built at the scene's first frame and refit to the
 last (as minkq_bench treats minkq and Embree: a simulator's refit-only steps):
   - VT: per vertex bvh_query_aabb (r-padded box) and bvh_query_sphere over a wp.Bvh of
         triangle boxes; incident triangles dropped; candidates counted and a float
@@ -18,6 +18,9 @@ wp.synchronize() around each launch. Warp's CPU kernels run on one thread, so mi
 beside it from a --threads 1 run of minkq_bench (its rows.csv), along with the oracle's counts.
 
 usage: warp_baseline.py EXPORT_DIR MINKQ_ROWS_CSV OUT_MD [--repeats N] [--only SUBSTR,...] [--minkq-threads N]
+                        [--device cpu|cuda:0]
+  --device: Warp's device for every array, launch and Newton model (default cpu); minkq's rows
+            are then taken from the rows.csv backend of the same kind (cpu or cuda).
 """
 import csv
 import glob
@@ -78,6 +81,12 @@ def main():
         i = args.index("--only")
         only = args[i + 1].split(",")
         del args[i : i + 2]
+    device = "cpu"
+    if "--device" in args:
+        i = args.index("--device")
+        device = args[i + 1]
+        del args[i : i + 2]
+    backend = "cpu" if device == "cpu" else "cuda"
     if len(args) != 3:
         print(__doc__)
         return 2
@@ -88,16 +97,19 @@ def main():
     if os.path.exists(rows_csv):
         with open(rows_csv) as f:
             for row in csv.DictReader(f):
+                if row.get("backend", "cpu") != backend:
+                    continue
                 minkq[(row["suite"] + "__" + row["scene"], row["kind"], row["mode"], int(row["frame"]))] = row
     try:
         import warp as wp
 
         wp.config.quiet = True
         wp.init()
+        wp.get_device(device)  # an unknown device (no GPU) fails here, reported below
         from newton._src.geometry.kernels import triangle_closest_point
     except Exception:
         with open(out_md, "w") as f:
-            f.write("# Warp / Newton baselines\n\nWarp could not be initialised on the CPU:\n\n```\n" + traceback.format_exc() + "```\n")
+            f.write("# Warp / Newton baselines\n\nWarp could not be initialised (device " + device + "):\n\n```\n" + traceback.format_exc() + "```\n")
         print("warp init failed; wrote", out_md)
         return 1
 
@@ -225,7 +237,7 @@ def main():
         lo[i] = l
         hi[i] = h
 
-    dev = "cpu"
+    dev = device
     results = []
     paths = sorted(glob.glob(os.path.join(export_dir, "*.mkqb")))
     if only:
@@ -319,10 +331,13 @@ def main():
     except OSError:
         pass
     load = open("/proc/loadavg").read().split()[0] if os.path.exists("/proc/loadavg") else "?"
-    o = ["# Warp 1.19 / Newton 1.8 baselines on the CPU\n"]
+    where = "the CPU" if dev == "cpu" else f"the GPU ({wp.get_device(dev).name})"
+    o = [f"# Warp 1.19 / Newton 1.8 baselines on {where}\n"]
     o.append(f"Machine: {cpu}, {os.cpu_count()} CPUs, Python {platform.python_version()}, Warp {wp.config.version}, "
-             f"Newton {getattr(__import__('newton'), '__version__', '?')}; load average at write {load}. Warp's CPU kernels run on "
-             f"one thread; minkq's columns come from a `minkq_bench` run on {minkq_threads} thread(s) on the same exported scenes. Last frame of "
+             f"Newton {getattr(__import__('newton'), '__version__', '?')}; load average at write {load}. "
+             + (f"Warp's CPU kernels run on one thread; minkq's columns come from a `minkq_bench` run on {minkq_threads} thread(s)"
+                if dev == "cpu" else f"Warp on {dev}; minkq's columns are its cuda rows (output copied to host memory)")
+             + " on the same exported scenes. Last frame of "
              f"each scene, every tree (minkq's, Warp's, Newton's) built at its first frame and refit; medians of {repeats} repeats after a warm-up launch; times in ms.\n")
     o.append("Warp kernels count candidates (incident pairs dropped, EE pairs once with f > e) and contacts with a float "
              "distance test (Newton's `triangle_closest_point`, `wp.closest_point_edge_edge` with epsilon 0); minkq's "
