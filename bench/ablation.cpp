@@ -89,6 +89,7 @@ struct PaddedBoxShape {
   bool may_overlap(const Box& b) const { return boxes_overlap(box, b); }
   // Not symmetric: the other edge's padded box against this box is the reverse test.
   bool finer(const Box& b) const { return boxes_overlap(box, b); }
+  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
 };
 
 // The node tests before: the mode's own test at every node, not only at primitive boxes.
@@ -99,6 +100,19 @@ struct FineAtEveryNode {
   bool overlaps(const Box& b) const { return shape.overlaps(b); }
   bool may_overlap(const Box& b) const { return shape.overlaps(b); }
   bool finer(const Box& b) const { return shape.finer(b); }
+  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
+};
+
+// The leaf scan before: each leaf box tested alone (may_overlap box by box), against four at a
+// time in vector lanes (may_overlap_group; kept). Same tests, same pairs.
+template <class Shape>
+struct LeafBoxByBox {
+  Shape shape;
+  static LeafBoxByBox from(const QueryGeometry& q) { return {Shape::from(q)}; }
+  bool overlaps(const Box& b) const { return shape.overlaps(b); }
+  bool may_overlap(const Box& b) const { return shape.may_overlap(b); }
+  bool finer(const Box& b) const { return shape.finer(b); }
+  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(shape, g, lanes); }
 };
 
 struct Outcome {
@@ -247,6 +261,31 @@ std::string compare_fine_nodes(const SceneFrames& sc, const FrameTrees& trees, c
     out += compare_fine_nodes_one<SphereShape>(sc.name, triangles.view(), vt, nv, "VT", "sphere", radius, repeats, ok);
     out += compare_fine_nodes_one<CapsuleRayShape>(sc.name, edges.view(), ee, ne, "EE", "capsule_ray", radius, repeats, ok);
     out += compare_fine_nodes_one<CapsuleExactShape>(sc.name, edges.view(), ee, ne, "EE", "capsule_exact", radius, repeats, ok);
+  }
+  return out;
+}
+
+// Leaf scans box by box (before) or four boxes at a time in vector lanes (kept): VT sphere, EE
+// box and EE capsule_exact on the library's trees; the pairs must not change.
+std::string compare_leaf_lanes(const SceneFrames& sc, const FrameTrees& trees, const Vec3* v, const Triangle* t,
+                               const Edge* e, float r, int repeats, bool& ok) {
+  const int32_t nv = trees.nv, ne = trees.ne;
+  const VertexTriangleQueries vt{v, t, trees.order.data(), r, kDropIncident};
+  const EdgeEdgeQueries ee{v, e, trees.edges.sorted_prims().data(), r, kDropIncident};
+  const BvhView tri = trees.triangles.view(), edge = trees.edges.view();
+  const Outcome got[6] = {run<LeafBoxByBox<SphereShape>>(tri, vt, nv, repeats), run<SphereShape>(tri, vt, nv, repeats),
+                          run<LeafBoxByBox<BoxShape>>(edge, ee, ne, repeats), run<BoxShape>(edge, ee, ne, repeats),
+                          run<LeafBoxByBox<CapsuleExactShape>>(edge, ee, ne, repeats),
+                          run<CapsuleExactShape>(edge, ee, ne, repeats)};
+  const char* kinds[3] = {"VT", "EE", "EE"};
+  const char* modes[3] = {"sphere", "box", "capsule_exact"};
+  std::string out;
+  for (int k = 0; k < 3; ++k) {
+    ok &= got[2 * k].pairs == got[2 * k + 1].pairs;
+    const int32_t n = k ? ne : nv;
+    out += row(sc.name, kinds[k], modes[k], "leaf boxes tested one by one (before)", got[2 * k], n, got[2 * k]) +
+           row(sc.name, kinds[k], modes[k], "leaf boxes tested four at a time, vector lanes (kept)", got[2 * k + 1], n,
+               got[2 * k]);
   }
   return out;
 }
@@ -748,7 +787,7 @@ std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   out += compare_ee<BoxShape>(sc, v, e, r, "box", repeats, ok);
   out += compare_ee<CapsuleExactShape>(sc, v, e, r, "capsule_exact", repeats, ok);
   return out + compare_leaf_sizes(sc, v, t, e, r, repeats, ok) + compare_fine_nodes(sc, trees, v, t, e, r, repeats, ok) +
-         compare_box_tests(sc, trees, v, t, e, r, repeats);
+         compare_box_tests(sc, trees, v, t, e, r, repeats) + compare_leaf_lanes(sc, trees, v, t, e, r, repeats, ok);
 }
 
 }  // namespace

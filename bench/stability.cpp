@@ -65,6 +65,9 @@ struct CapsuleUnitShape {
   // Its box inside the tree, the slab test at primitives (as the core's shapes).
   bool may_overlap(const minkq::Box& b) const { return minkq::boxes_overlap(box, b); }
   bool overlaps(const minkq::Box& b) const { return may_overlap(b) && finer(b); }
+  unsigned may_overlap_group(const minkq::BoxGroup& g, unsigned lanes) const {
+    return minkq::may_overlap_each(*this, g, lanes);
+  }
   bool finer(const minkq::Box& b) const {
     float t_near = 0.0f, t_far = t_max;
     for (int axis = 0; axis < 3; ++axis) {
@@ -90,6 +93,7 @@ struct CapsuleUnitShape {
 struct CoreRayShape {
   minkq::CapsuleRayShape s;
   bool may_overlap(const minkq::Box& b) const { return s.may_overlap(b); }
+  unsigned may_overlap_group(const minkq::BoxGroup& g, unsigned lanes) const { return s.may_overlap_group(g, lanes); }
   bool overlaps(const minkq::Box& b) const { return s.overlaps(b); }
   bool finer(const minkq::Box& b) const { return s.finer(b); }
 };

@@ -22,9 +22,10 @@ namespace minkq::bench {
 
 template <int W>
 struct WideNode {
-  float lo[3][W], hi[3][W];  // child boxes by axis; empty slots hold +inf / -inf (fail every test)
-  int32_t child[W];          // >= 0: wide node; < 0 (not kNoChild): ~first of a leaf range; kNoChild: empty
-  int32_t last[W];           // last sorted leaf position under the child (-1 in empty slots)
+  BoxGroup boxes[W / 4];  // child k's box: lane k % 4 of group k / 4; empty slots +inf / -inf (fail every test)
+  int32_t child[W];       // >= 0: wide node; < 0 (not kNoChild): ~first of a leaf range; kNoChild: empty
+  int32_t last[W];        // last sorted leaf position under the child (-1 in empty slots)
+  Box box(int k) const { return group_box(boxes[k / 4], k % 4); }
 };
 static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256, "two or four 64-byte lines");
 
@@ -125,20 +126,17 @@ class WideTree {
             hi[a] = std::max(hi[a], qhi >= 255.0 ? top[a] : next_up(float(origin[a] + qhi * step)));
           }
         }
-        for (int a = 0; a < 3; ++a) {
-          nodes_[i].lo[a][k] = lo[a];
-          nodes_[i].hi[a][k] = hi[a];
-        }
+        set_group_box(nodes_[i].boxes[k / 4], k % 4, {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}});
       }
     }
-    leaf_boxes_ = binary.leaf_boxes().data();
+    leaf_groups_ = binary.leaf_groups();
     sorted_prims_ = binary.sorted_prims().data();
   }
   // Whether child boxes are grown (quantized): a one-primitive leaf then needs its exact box.
   bool quantized() const { return quantized_; }
 
   const std::vector<WideNode<W>>& nodes() const { return nodes_; }
-  const Box* leaf_boxes() const { return leaf_boxes_; }
+  const BoxGroup* leaf_groups() const { return leaf_groups_; }
   const int32_t* sorted_prims() const { return sorted_prims_; }
   int32_t size() const { return n_; }
 
@@ -147,7 +145,7 @@ class WideTree {
   bool quantized_ = false;
   std::vector<WideNode<W>> nodes_;
   std::vector<int32_t> source_;  // binary child slot of each wide child, -1 for empty slots
-  const Box* leaf_boxes_ = nullptr;
+  const BoxGroup* leaf_groups_ = nullptr;
   const int32_t* sorted_prims_ = nullptr;
 };
 
@@ -157,45 +155,26 @@ inline const BoxShape& box_test(const SphereShape& s) { return s.box; }
 inline const BoxShape& box_test(const CapsuleRayShape& s) { return s.box; }
 inline const BoxShape& box_test(const CapsuleExactShape& s) { return s.ray.box; }
 
-// Bit k set when child k passes box_gap_within (the library's box test), W lanes at a time:
-// the same float subtractions and comparisons as the scalar test, so the same answers.
+// Bit k set where child k passes the box test (BoxShape::overlaps_group: 4-float lanes).
 template <int W>
 inline unsigned box_test_lanes(const WideNode<W>& node, const BoxShape& q) {
-  typedef float Lanes __attribute__((vector_size(16)));
-  typedef int32_t Masks __attribute__((vector_size(16)));
   unsigned bits = 0;
-  for (int g = 0; g < W; g += 4) {
-    Lanes lx, ly, lz, hx, hy, hz;
-    std::memcpy(&lx, &node.lo[0][g], 16);
-    std::memcpy(&ly, &node.lo[1][g], 16);
-    std::memcpy(&lz, &node.lo[2][g], 16);
-    std::memcpy(&hx, &node.hi[0][g], 16);
-    std::memcpy(&hy, &node.hi[1][g], 16);
-    std::memcpy(&hz, &node.hi[2][g], 16);
-    const Masks pass = (lx - q.hi.x <= q.r) & (q.lo.x - hx <= q.r) & (ly - q.hi.y <= q.r) & (q.lo.y - hy <= q.r) &
-                       (lz - q.hi.z <= q.r) & (q.lo.z - hz <= q.r);
-    for (int k = 0; k < 4; ++k) bits |= unsigned(pass[k] != 0) << (g + k);
-  }
+  for (int g = 0; g < W / 4; ++g) bits |= q.overlaps_group(node.boxes[g], 0xfu) << (4 * g);
   return bits;
 }
 
-// traverse() of bvh.h over wide nodes; kLanes: the vector test above, else the shape's scalar
-// may_overlap child by child. Work counts: nodes_visited = wide records read, node_tests =
-// non-empty child boxes past `after` (tested) plus leaf boxes scanned.
+// traverse() of bvh.h over wide nodes; kLanes: the child boxes tested 4 at a time, else the
+// shape's may_overlap child by child. Leaf ranges are visited as the library does (bvh.h).
+// Work counts: nodes_visited = wide records read, node_tests = non-empty child boxes past
+// `after` (tested) plus leaf boxes scanned.
 template <int W, bool kLanes, class Shape, class OnLeaf, class Work>
 void traverse_wide(const WideTree<W>& tree, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
   if (tree.size() < 2 || after >= tree.size() - 1) return;
   const WideNode<W>* nodes = tree.nodes().data();
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    if (first == last && !tree.quantized()) {  // the child's box is the primitive's, and passed
-      if (!shape.finer(range_box)) return;
-      return on_leaf(tree.sorted_prims()[first], range_box);
-    }
-    for (int32_t p = first > after ? first : after + 1; p <= last; ++p) {
-      const Box box = tree.leaf_boxes()[p];
-      work.test_node();
-      if (shape.overlaps(box)) on_leaf(tree.sorted_prims()[p], box);
-    }
+    if (tree.quantized())  // a child box holds its primitive's only grown: test the exact one
+      return scan_leaves(tree.leaf_groups(), tree.sorted_prims(), shape, first, last, after, on_leaf, work);
+    visit_leaf_range(tree.leaf_groups(), tree.sorted_prims(), shape, first, last, after, range_box, on_leaf, work);
   };
   int32_t stack[kTraversalStack * W];  // each level pushes at most W - 1 siblings
   int sp = 0;
@@ -214,8 +193,7 @@ void traverse_wide(const WideTree<W>& tree, const Shape& shape, int32_t after, O
       for (int k = 0; k < W; ++k) {
         if (n.child[k] == kNoChild || n.last[k] <= after) continue;
         work.test_node();
-        const Box b{{n.lo[0][k], n.lo[1][k], n.lo[2][k]}, {n.hi[0][k], n.hi[1][k], n.hi[2][k]}};
-        if (shape.may_overlap(b)) hits |= 1u << k;
+        if (shape.may_overlap(n.box(k))) hits |= 1u << k;
       }
     }
     int32_t next = -1;
@@ -223,8 +201,7 @@ void traverse_wide(const WideTree<W>& tree, const Shape& shape, int32_t after, O
       if (!(hits >> k & 1u)) continue;
       const int32_t c = n.child[k];
       if (c < 0) {
-        const Box b{{n.lo[0][k], n.lo[1][k], n.lo[2][k]}, {n.hi[0][k], n.hi[1][k], n.hi[2][k]}};
-        visit_range(~c, n.last[k], b);
+        visit_range(~c, n.last[k], n.box(k));
       } else {
         if (next >= 0) stack[sp++] = next;
         next = c;

@@ -36,7 +36,7 @@ Box check_subtree(const CpuTree& tree, const std::vector<Box>& boxes, int32_t no
       for (int32_t p = first; p <= last; ++p) {
         const int32_t prim = tree.sorted_prims()[p];
         ++seen[prim];
-        EXPECT_TRUE(same_box(tree.leaf_boxes()[p], boxes[prim])) << "position " << p;
+        EXPECT_TRUE(same_box(tree.leaf_box(p), boxes[prim])) << "position " << p;
         below = box_union(below, boxes[prim]);
       }
     } else {
@@ -141,6 +141,52 @@ TEST(Bvh, build_is_deterministic) {
   b.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
   ASSERT_EQ(a.nodes().size(), b.nodes().size());
   EXPECT_EQ(std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size() * sizeof(BvhNode)), 0);
+}
+
+// The leaf scan tests four boxes at a time (vector lanes on the host): for every range of a
+// short sorted sequence, aligned to the groups of four or not, and every `after`, it must
+// report exactly the positions whose box passes the shape's own test, in order, counting one
+// node test per position scanned. Boxes meet the query at exactly r now and then (ties).
+TEST(Bvh, leaf_scan_four_at_a_time_matches_the_test_box_by_box) {
+  test::Random rng(test::fresh_seed());
+  const int32_t n = 23;
+  std::vector<Box> boxes = random_boxes(rng, n, 1.0f);
+  std::vector<BoxGroup> groups(static_cast<size_t>(box_group_count(n)));
+  std::vector<int32_t> prims(static_cast<size_t>(n));
+  for (int32_t p = 0; p < n; ++p) {
+    set_group_box(groups[size_t(p >> 2)], p & 3, boxes[size_t(p)]);
+    prims[size_t(p)] = 100 + p;
+  }
+  for (int trial = 0; trial < 50; ++trial) {
+    const Vec3 c = rng.vec3(-1.0f, 1.0f);
+    const float r = rng.uniform(0.0f, 0.5f);
+    const Box& tie = boxes[size_t(rng.integer(0, n - 1))];
+    const BoxShape shape = trial % 5 == 0 ? BoxShape{{tie.hi.x + r, c.y, c.z}, {tie.hi.x + r, c.y, c.z}, r}
+                                          : BoxShape::from({c, c, r});
+    for (int32_t first = 0; first < n; ++first)
+      for (int32_t last = first; last < n; ++last)
+        for (int32_t after = first - 2; after <= last; ++after) {
+          std::vector<int32_t> got, want;
+          auto on_leaf = [&](int32_t prim, const Box& box) {
+            got.push_back(prim);
+            EXPECT_TRUE(same_box(box, boxes[size_t(prim - 100)]));
+          };
+          WorkCounts work;
+          scan_leaves(groups.data(), prims.data(), shape, first, last, after, on_leaf, work);
+          for (int32_t p = std::max(first, after + 1); p <= last; ++p)
+            if (shape.overlaps(boxes[size_t(p)])) want.push_back(100 + p);
+          ASSERT_EQ(got, want) << "range " << first << ".." << last << " after " << after;
+          EXPECT_EQ(work.node_tests, uint64_t(std::max(0, last - std::max(first, after + 1) + 1)));
+        }
+    // The lane test itself, for every lane mask.
+    for (size_t g = 0; g < groups.size(); ++g)
+      for (unsigned lanes = 0; lanes < 16; ++lanes) {
+        unsigned want = 0;
+        for (int k = 0; k < 4; ++k)
+          if ((lanes >> k & 1u) && shape.overlaps(group_box(groups[g], k))) want |= 1u << k;
+        ASSERT_EQ(shape.overlaps_group(groups[g], lanes), want) << "group " << g << " lanes " << lanes;
+      }
+  }
 }
 
 }  // namespace

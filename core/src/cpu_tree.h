@@ -61,7 +61,7 @@ class CpuTree {
     cost_at_build_ = 0.0;
     nodes_.clear();
     sorted_prims_.assign(size_t(n), 0);
-    leaf_boxes_.assign(size_t(n), Box{});
+    leaf_groups_.assign(size_t(box_group_count(n)), BoxGroup{});
     arrivals_.clear();
     if (n == 0) return;
     if (n == 1) {
@@ -98,7 +98,7 @@ class CpuTree {
     n_ = int32_t(sorted_prims.size());
     nodes_ = std::move(nodes);
     sorted_prims_ = std::move(sorted_prims);
-    leaf_boxes_.assign(size_t(n_), Box{});
+    leaf_groups_.assign(size_t(box_group_count(n_)), BoxGroup{});
     arrivals_.assign(nodes_.size(), 0);
     refit(boxes);
     cost_at_build_ = area_cost();
@@ -108,7 +108,7 @@ class CpuTree {
   void refit(Boxes boxes) {
     std::fill(arrivals_.begin(), arrivals_.end(), 0);
     parallel_for_each(int64_t(nodes_.size()) * 2, [&](int64_t slot) {
-      refit_from_slot(int32_t(slot), boxes, sorted_prims_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
+      refit_from_slot(int32_t(slot), boxes, sorted_prims_.data(), leaf_groups_.data(), nodes_.data(), arrivals_.data());
     });
   }
 
@@ -125,13 +125,16 @@ class CpuTree {
   // area_cost() right after the last build.
   double cost_at_build() const { return cost_at_build_; }
 
-  BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
-  const std::vector<Box>& leaf_boxes() const { return leaf_boxes_; }
+  BvhView view() const { return {nodes_.data(), leaf_groups_.data(), sorted_prims_.data(), n_}; }
+  // The box of the primitive at sorted position p, and all of them in groups of four.
+  Box leaf_box(int32_t p) const { return group_box(leaf_groups_[size_t(p >> 2)], p & 3); }
+  const BoxGroup* leaf_groups() const { return leaf_groups_.data(); }
   int32_t size() const { return n_; }
   // Bytes held: node records with their refit counters, and per primitive its id and box in
-  // leaf order.
+  // leaf order (boxes in groups of four: up to three unused lanes).
   size_t bytes() const {
-    return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) + size_t(n_) * (sizeof(int32_t) + sizeof(Box));
+    return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) + size_t(n_) * sizeof(int32_t) +
+           leaf_groups_.size() * sizeof(BoxGroup);
   }
 
  private:
@@ -140,7 +143,7 @@ class CpuTree {
   std::vector<BvhNode> nodes_;
   std::vector<int32_t> arrivals_;
   std::vector<int32_t> sorted_prims_;
-  std::vector<Box> leaf_boxes_;  // box of the primitive at each sorted position
+  std::vector<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
 };
 
 }  // namespace minkq

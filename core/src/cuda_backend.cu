@@ -207,10 +207,10 @@ __global__ void collapse_kernel(const KarrasNode* karras, const int32_t* new_ind
 }
 
 template <class Boxes>
-__global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, Box* leaf_boxes,
+__global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
                              BvhNode* nodes, int32_t* arrivals) {
   const int64_t slot = global_index();
-  if (slot < 2 * int64_t(num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_boxes, nodes, arrivals);
+  if (slot < 2 * int64_t(num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes, arrivals);
 }
 
 // Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id: cpu_tree.h's
@@ -255,7 +255,7 @@ class CudaTree {
   void build(Boxes boxes, int32_t n) {
     n_ = n;
     sorted_prims_.ensure(size_t(n));
-    leaf_boxes_.ensure(size_t(n));
+    leaf_groups_.ensure(size_t(box_group_count(n)));
     zero(sorted_prims_, size_t(n));
     num_nodes_ = 0;
     cost_at_build_ = 0.0;
@@ -296,7 +296,7 @@ class CudaTree {
   void refit(Boxes boxes) {
     zero(arrivals_, size_t(num_nodes_));
     launch("refit_kernel launch", refit_kernel<Boxes>, int64_t(num_nodes_) * 2, kThreads, boxes, num_nodes_,
-           sorted_prims_.data(), leaf_boxes_.data(), nodes_.data(), arrivals_.data());
+           sorted_prims_.data(), leaf_groups_.data(), nodes_.data(), arrivals_.data());
   }
 
   // CpuTree::area_cost, summed by a device reduction: equal up to rounding.
@@ -319,7 +319,7 @@ class CudaTree {
   }
   double cost_at_build() const { return cost_at_build_; }
 
-  BvhView view() const { return {nodes_.data(), leaf_boxes_.data(), sorted_prims_.data(), n_}; }
+  BvhView view() const { return {nodes_.data(), leaf_groups_.data(), sorted_prims_.data(), n_}; }
   const int32_t* sorted_prims() const { return sorted_prims_.data(); }
 
  private:
@@ -329,7 +329,7 @@ class CudaTree {
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
-  DeviceBuffer<Box> leaf_boxes_;        // box of the primitive at each sorted position
+  DeviceBuffer<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
 };
 
 // ---- Queries --------------------------------------------------------------------------------

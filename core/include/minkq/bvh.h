@@ -35,7 +35,7 @@ constexpr int64_t kMaxPrimitives = INT32_MAX - 1;
 
 struct BvhView {
   const BvhNode* nodes;
-  const Box* leaf_boxes;        // the box of the primitive at each sorted position
+  const BoxGroup* leaf_groups;  // the box of the primitive at sorted position p: lane p % 4 of group p / 4
   const int32_t* sorted_prims;  // the primitive at each sorted position
   int32_t num_prims;
 };
@@ -199,11 +199,11 @@ MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
 
 // Refit from child slot `slot` = (node << 1) | side (a thread per slot, 2 per node; a slot
 // holding an internal node or no child returns at once): a leaf range writes its primitives'
-// boxes in leaf order and merges them into the node's child box. The second of two children
-// to arrive at a node (counters zeroed before the pass) merges both boxes and climbs on.
-// Unions are exact.
+// boxes in leaf order (into their group lanes: two ranges may share a group, never a lane) and
+// merges them into the node's child box. The second of two children to arrive at a node
+// (counters zeroed before the pass) merges both boxes and climbs on. Unions are exact.
 template <class Boxes>
-MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* sorted_prims, Box* leaf_boxes,
+MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
                               BvhNode* nodes, int32_t* arrivals) {
   const BvhNode& parent = nodes[slot >> 1];
   const int32_t child = (slot & 1) ? parent.right : parent.left;
@@ -212,7 +212,7 @@ MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* s
   Box box = Box::empty();
   for (int32_t q = first; q <= last; ++q) {
     const Box b = boxes(sorted_prims[q]);
-    leaf_boxes[q] = b;
+    set_group_box(leaf_groups[q >> 2], q & 3, b);
     box = box_union(box, b);
   }
   store_child_box(nodes, slot, box);
@@ -274,9 +274,42 @@ struct NoWork {
   MINKQ_HD void emit_candidate() {}
 };
 
+// Leaf positions max(first, after + 1)..last, a group of four at a time: on_leaf(prim, box) for
+// each whose box passes may_overlap (four at once: may_overlap_group) and finer, that is overlaps.
+template <class Shape, class OnLeaf, class Work>
+MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape, int32_t first,
+                          int32_t last, int32_t after, OnLeaf& on_leaf, Work& work) {
+  for (int64_t p = first > after ? first : after + 1; p <= last; p = (p | 3) + 1) {
+    const int64_t base = p & ~int64_t(3);
+    const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
+    const BoxGroup& group = leaf_groups[base >> 2];
+    unsigned hits = shape.may_overlap_group(group, (2u << to) - (1u << from));  // lanes from..to
+    for (int k = from; k <= to; ++k) work.test_node();
+    for (; hits != 0; hits &= hits - 1u) {
+      const int k = lowest_bit(hits);
+      const Box box = group_box(group, k);
+      if (shape.finer(box)) on_leaf(sorted_prims[base + k], box);
+    }
+  }
+}
+
+// A leaf range whose box passed may_overlap. One leaf: its box is the range's and passed the
+// box test; only the finer one is left.
+template <class Shape, class OnLeaf, class Work>
+MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape,
+                               int32_t first, int32_t last, int32_t after, const Box& range_box, OnLeaf& on_leaf,
+                               Work& work) {
+  if (first == last) {
+    if (shape.finer(range_box)) on_leaf(sorted_prims[first], range_box);
+    return;
+  }
+  scan_leaves(leaf_groups, sorted_prims, shape, first, last, after, on_leaf, work);
+}
+
 // The one traversal: every query shape supplies overlaps(const Box&), its test,
-// may_overlap(const Box&), the test of internal and leaf-range boxes, and finer(const Box&),
-// what overlaps adds to may_overlap (see shapes.h);
+// may_overlap(const Box&), the test of internal and leaf-range boxes, may_overlap_group, the
+// same on a group of four leaf boxes, and finer(const Box&), what overlaps adds to may_overlap
+// (see shapes.h);
 // on_leaf(prim, box) is called for every primitive whose box the shape overlaps, provided
 // may_overlap accepts every ancestor box (it is monotone under box inclusion and accepts
 // wherever overlaps does: true of each shape here; tests/test_queries.cpp checks traversal
@@ -287,17 +320,8 @@ struct NoWork {
 template <class Shape, class OnLeaf, class Work>
 MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
-  // A range's box is the union of its leaf boxes: one leaf's box is the range's own.
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    if (first == last) {  // its box passed may_overlap, the box test: only the finer one is left
-      if (!shape.finer(range_box)) return;
-      return on_leaf(bvh.sorted_prims[first], range_box);
-    }
-    for (int32_t p = first > after ? first : after + 1; p <= last; ++p) {
-      const Box box = bvh.leaf_boxes[p];
-      work.test_node();
-      if (shape.overlaps(box)) on_leaf(bvh.sorted_prims[p], box);
-    }
+    visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, first, last, after, range_box, on_leaf, work);
   };
   int32_t stack[kTraversalStack];
   int sp = 0;

@@ -57,6 +57,30 @@ struct Box {
   MINKQ_HD static Box of_point(Vec3 p) { return {p, p}; }
 };
 
+// Four boxes by axis, 96 B (the bytes of four Box): leaf scans test a group's four boxes at once
+// (shapes.h). Lane k holds lo[axis][k], hi[axis][k].
+struct BoxGroup {
+  float lo[3][4];
+  float hi[3][4];
+};
+static_assert(sizeof(BoxGroup) == 96, "a group holds four boxes and nothing else");
+MINKQ_HD int64_t box_group_count(int64_t boxes) { return (boxes + 3) / 4; }
+MINKQ_HD Box group_box(const BoxGroup& g, int k) {
+  return {{g.lo[0][k], g.lo[1][k], g.lo[2][k]}, {g.hi[0][k], g.hi[1][k], g.hi[2][k]}};
+}
+MINKQ_HD void set_group_box(BoxGroup& g, int k, const Box& b) {
+  g.lo[0][k] = b.lo.x, g.lo[1][k] = b.lo.y, g.lo[2][k] = b.lo.z;
+  g.hi[0][k] = b.hi.x, g.hi[1][k] = b.hi.y, g.hi[2][k] = b.hi.z;
+}
+// Index of the lowest set bit of a non-zero mask.
+MINKQ_HD int lowest_bit(unsigned mask) {
+#if defined(__CUDA_ARCH__)
+  return __ffs(int(mask)) - 1;
+#else
+  return __builtin_ctz(mask);
+#endif
+}
+
 // Union and overlap are exact in float (min, max and comparisons do not round), so node
 // bounds built from exact primitive boxes need no outward rounding.
 MINKQ_HD Box box_union(Box a, Box b) { return {vmin(a.lo, b.lo), vmax(a.hi, b.hi)}; }
