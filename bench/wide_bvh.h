@@ -1,6 +1,6 @@
 // A study of issue 8's "wide BVH" lever (bench only, not the library's tree): the binary tree
-// of CpuTree collapsed into W-ary nodes (W = 4 or 8), each holding its children's boxes as
-// structure-of-arrays so one vector compare per axis tests all W at once. Leaf ranges, the
+// of CpuTree collapsed into W-ary nodes (W = 4 or 8), each holding its children's boxes in
+// groups of four (BoxGroup) so a vector compare per axis tests four at once. Leaf ranges, the
 // sorted leaf order and the leaf boxes stay the binary tree's, so the leaf scan, the EE
 // "after" pruning and the pairs are unchanged; only the internal levels differ.
 //
@@ -149,17 +149,12 @@ class WideTree {
   const int32_t* sorted_prims_ = nullptr;
 };
 
-// The box test every shape applies inside the tree (shapes.h: may_overlap).
-inline const BoxShape& box_test(const BoxShape& s) { return s; }
-inline const BoxShape& box_test(const SphereShape& s) { return s.box; }
-inline const BoxShape& box_test(const CapsuleRayShape& s) { return s.box; }
-inline const BoxShape& box_test(const CapsuleExactShape& s) { return s.ray.box; }
-
-// Bit k set where child k passes the box test (BoxShape::overlaps_group: 4-float lanes).
-template <int W>
-inline unsigned box_test_lanes(const WideNode<W>& node, const BoxShape& q) {
+// Bit k set where child k passes the shape's box test, four children at a time
+// (may_overlap_group: 4-float lanes on the host).
+template <int W, class Shape>
+inline unsigned box_test_lanes(const WideNode<W>& node, const Shape& shape) {
   unsigned bits = 0;
-  for (int g = 0; g < W / 4; ++g) bits |= q.overlaps_group(node.boxes[g], 0xfu) << (4 * g);
+  for (int g = 0; g < W / 4; ++g) bits |= shape.may_overlap_group(node.boxes[g], 0xfu) << (4 * g);
   return bits;
 }
 
@@ -184,7 +179,7 @@ void traverse_wide(const WideTree<W>& tree, const Shape& shape, int32_t after, O
     work.visit_node();
     unsigned hits = 0;
     if constexpr (kLanes) {
-      hits = box_test_lanes(n, box_test(shape));
+      hits = box_test_lanes(n, shape);
       for (int k = 0; k < W; ++k) {
         if (n.child[k] == kNoChild || n.last[k] <= after) hits &= ~(1u << k);
         else work.test_node();
