@@ -6,6 +6,7 @@
 #   here:    bash bench/device/pack.sh                   # .carry/kit: Debian packages, ../shared
 #   device:  run(carry=[".carry/kit"], timeout_s=600,
 #                command="bash bench/device/gpu_session.sh setup build test bench")
+#   (should that outrun a call's 10 minutes, split it: "setup build test", then "bench" at once)
 #   then Warp / Newton on the same GPU, per ../shared/tools/warp-for-device.sh (three calls; the
 #   third one ends with: bash bench/device/gpu_session.sh warp)
 #
