@@ -146,7 +146,8 @@ TEST(Bvh, build_is_deterministic) {
 // The leaf scan tests four boxes at a time (vector lanes on the host): for every range of a
 // short sorted sequence, aligned to the groups of four or not, and every `after`, it must
 // report exactly the positions whose box passes the shape's own test, in order, counting one
-// node test per position scanned. Boxes meet the query at exactly r now and then (ties).
+// node test per position scanned. Every fifth query point sits r beyond a box's face (a tie up
+// to rounding).
 TEST(Bvh, leaf_scan_four_at_a_time_matches_the_test_box_by_box) {
   test::Random rng(test::fresh_seed());
   const int32_t n = 23;
