@@ -92,34 +92,36 @@ struct PaddedBoxShape {
   unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
 };
 
-// The node tests before: the mode's own test at every node, not only at primitive boxes.
-template <class Shape>
-struct FineAtEveryNode {
+// A shape whose box tests run box by box: at leaf groups one box at a time (may_overlap_each)
+// instead of four at once, and, with kFineAtEveryNode, the mode's own test (overlaps) at every
+// node instead of only at primitive boxes. Same pairs as Shape.
+template <class Shape, bool kFineAtEveryNode>
+struct BoxByBox {
   Shape shape;
-  static FineAtEveryNode from(const QueryGeometry& q) { return {Shape::from(q)}; }
+  static BoxByBox from(const QueryGeometry& q) { return {Shape::from(q)}; }
   bool overlaps(const Box& b) const { return shape.overlaps(b); }
-  bool may_overlap(const Box& b) const { return shape.overlaps(b); }
+  bool may_overlap(const Box& b) const { return kFineAtEveryNode ? shape.overlaps(b) : shape.may_overlap(b); }
   bool finer(const Box& b) const { return shape.finer(b); }
   unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
 };
-
-// The leaf scan before: each leaf box tested alone (may_overlap box by box), against four at a
-// time in vector lanes (may_overlap_group; kept). Same tests, same pairs.
+// The node tests before: the mode's own test at every node, not only at primitive boxes.
 template <class Shape>
-struct LeafBoxByBox {
-  Shape shape;
-  static LeafBoxByBox from(const QueryGeometry& q) { return {Shape::from(q)}; }
-  bool overlaps(const Box& b) const { return shape.overlaps(b); }
-  bool may_overlap(const Box& b) const { return shape.may_overlap(b); }
-  bool finer(const Box& b) const { return shape.finer(b); }
-  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(shape, g, lanes); }
-};
+using FineAtEveryNode = BoxByBox<Shape, true>;
+// The leaf scan before: each leaf box tested alone, against four at a time in vector lanes
+// (may_overlap_group; kept).
+template <class Shape>
+using LeafBoxByBox = BoxByBox<Shape, false>;
 
 struct Outcome {
   WorkCounts work;
   double ms = 0;
   std::vector<uint64_t> pairs;  // sorted (first << 32 | second)
 };
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
 
 // Runs query_one(i, emit, work) for i < n in blocks of 256 on all threads, counting work;
 // times `repeats` runs.
@@ -144,12 +146,29 @@ Outcome run_each(int32_t n, int repeats, const QueryOne& query_one) {
     once();
     times.push_back(now_ms() - start);
   }
-  std::sort(times.begin(), times.end());
-  out.ms = times[times.size() / 2];
+  out.ms = median(times);
   for (const auto& w : work) out.work.add(w);
   for (const auto& p : parts) out.pairs.insert(out.pairs.end(), p.begin(), p.end());
   std::sort(out.pairs.begin(), out.pairs.end());
   return out;
+}
+
+// query(variant, kind, repeats) for every variant and kind, timed round-robin: `rounds`
+// rounds of one (warmed-up) run of each, so load changes hit all alike; then one more run of
+// each for its counts and pairs, given the median time of its rounds. Returns [variant][kind].
+template <class Query>
+std::vector<std::vector<Outcome>> round_robin(size_t variants, int kinds, int rounds, const Query& query) {
+  std::vector<std::vector<std::vector<double>>> times(variants, std::vector<std::vector<double>>(size_t(kinds)));
+  for (int round = 0; round < rounds; ++round)
+    for (size_t i = 0; i < variants; ++i)
+      for (int kind = 0; kind < kinds; ++kind) times[i][size_t(kind)].push_back(query(i, kind, 1).ms);
+  std::vector<std::vector<Outcome>> got(variants, std::vector<Outcome>(size_t(kinds)));
+  for (size_t i = 0; i < variants; ++i)
+    for (int kind = 0; kind < kinds; ++kind) {
+      got[i][size_t(kind)] = query(i, kind, 1);
+      got[i][size_t(kind)].ms = median(times[i][size_t(kind)]);
+    }
+  return got;
 }
 
 // The library's traversal: run_query over a binary tree.
@@ -478,7 +497,6 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
     bool refit;
     CpuTree trees[2];  // triangles, edges
     double build_ms;
-    Outcome got[2];  // VT, EE: counts and pairs; ms from the interleaved rounds below
   };
   std::vector<Variant> variants;
   for (const Build build : {kPerAxis, kCubes, kSah})
@@ -502,31 +520,23 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
         x.trees[1].refit(EdgeBoxes{v, e});
       }
     }
-  // Each variant's query once per round, round after round: load changes hit all alike.
-  auto query = [&](const Variant& x, int kind, int reps) {
+  const std::vector<std::vector<Outcome>> got = round_robin(variants.size(), 2, 3 * repeats, [&](size_t i, int kind, int reps) {
+    const Variant& x = variants[i];
     const EdgeEdgeQueries ee{v, e, x.trees[1].sorted_prims().data(), r, kDropIncident};
     return kind == 0 ? run<BoxShape>(x.trees[0].view(), vt, nv, reps) : run<BoxShape>(x.trees[1].view(), ee, ne, reps);
-  };
-  std::vector<std::vector<double>> times(variants.size() * 2);
-  for (int round = 0; round < 3 * repeats; ++round)
-    for (size_t i = 0; i < variants.size(); ++i)
-      for (int kind = 0; kind < 2; ++kind) times[2 * i + size_t(kind)].push_back(query(variants[i], kind, 1).ms);
+  });
   std::string out;
   for (size_t i = 0; i < variants.size(); ++i) {
-    Variant& x = variants[i];
+    const Variant& x = variants[i];
     for (int kind = 0; kind < 2; ++kind) {
-      x.got[kind] = query(x, kind, 1);
-      std::vector<double>& ts = times[2 * i + size_t(kind)];
-      std::sort(ts.begin(), ts.end());
-      x.got[kind].ms = ts[ts.size() / 2];
-      ok &= x.got[kind].pairs == variants[0].got[kind].pairs;
+      ok &= got[i][size_t(kind)].pairs == got[0][size_t(kind)].pairs;
       char label[200];
       const char* builds[3] = {"Morton, cells per axis", "Morton, cubic cells", "SAH"};
       const char* marks[3][2] = {{"", " (before)"}, {"", " (kept)"}, {"", ""}};  // [build][refit]
       std::snprintf(label, sizeof label, "%s, %s%s: growth %.2f, build both %.1f ms", builds[x.build],
                     x.refit ? "built at frame 0, refit" : "rebuilt at the last frame", marks[x.build][x.refit],
                     growth(x.trees[kind].area_cost(), x.trees[kind].cost_at_build()), x.build_ms);
-      out += row(sc.name, kind ? "EE" : "VT", "box", label, x.got[kind], kind ? ne : nv, variants[0].got[kind]);
+      out += row(sc.name, kind ? "EE" : "VT", "box", label, got[i][size_t(kind)], kind ? ne : nv, got[0][size_t(kind)]);
     }
   }
   return out;
@@ -553,7 +563,7 @@ Outcome run_wide(const WideTree<W> (&trees)[2], const VertexTriangleQueries& vt,
 // library's), 4 or 1, collapsed there to 4- and 8-ary nodes, and refit to the last frame (the
 // wide nodes take the refit boxes), as a simulator's refit-only steps run them. VT sphere, EE
 // box and EE capsule_exact at the scene's radius; the pairs of every variant checked equal to
-// the binary tree's; variants timed round-robin as in compare_tree_builds.
+// the binary tree's; variants timed round-robin (round_robin).
 // Also appends to `bytes_read` a summary row per mode: node-record bytes read per query by the
 // binary tree and by the leaf-16 wide trees (nodes / query x record size).
 std::string compare_wide(const SceneFrames& sc, int repeats, bool& ok, std::string& bytes_read) {
@@ -594,7 +604,6 @@ std::string compare_wide(const SceneFrames& sc, int repeats, bool& ok, std::stri
     std::string label;
     size_t record_bytes;
     std::function<Outcome(int kind, int reps)> query;
-    Outcome got[3] = {};
   };
   std::vector<Variant> variants;
   auto bytes_label = [&](const std::string& what, size_t node_bytes) {
@@ -644,33 +653,27 @@ std::string compare_wide(const SceneFrames& sc, int repeats, bool& ok, std::stri
   add_wide(4, 0, true, true);
   add_wide(4, 1, true, true);
   add_wide(8, 0, true, true);
-  std::vector<std::vector<double>> times(variants.size() * 3);
-  for (int round = 0; round < 3 * repeats; ++round)
-    for (size_t i = 0; i < variants.size(); ++i)
-      for (int kind = 0; kind < 3; ++kind) times[3 * i + size_t(kind)].push_back(variants[i].query(kind, 1).ms);
+  const std::vector<std::vector<Outcome>> got = round_robin(
+      variants.size(), 3, 3 * repeats, [&](size_t i, int kind, int reps) { return variants[i].query(kind, reps); });
   std::string out;
   const char* kinds[3] = {"VT", "EE", "EE"};
   const char* modes[3] = {"sphere", "box", "capsule_exact"};
   for (int kind = 0; kind < 3; ++kind)
     for (size_t i = 0; i < variants.size(); ++i) {
-      Variant& x = variants[i];
-      x.got[kind] = x.query(kind, 1);
-      std::vector<double>& ts = times[3 * i + size_t(kind)];
-      std::sort(ts.begin(), ts.end());
-      x.got[kind].ms = ts[ts.size() / 2];
-      ok &= x.got[kind].pairs == variants[0].got[kind].pairs;
-      out += row(sc.name, kinds[kind], modes[kind], x.label.c_str(), x.got[kind], kind ? ne : nv, variants[0].got[kind]);
+      const Outcome& o = got[i][size_t(kind)];
+      ok &= o.pairs == got[0][size_t(kind)].pairs;
+      out += row(sc.name, kinds[kind], modes[kind], variants[i].label.c_str(), o, kind ? ne : nv, got[0][size_t(kind)]);
     }
   // Binary, then the leaf-16 wide trees: 4-wide float, 4-wide 8-bit, 8-wide float, 8-wide 8-bit.
   const size_t summarized[5] = {0, 2, 8, 5, 10};
   for (int kind = 0; kind < 3; ++kind) {
     bytes_read += "| " + sc.name + " | " + kinds[kind] + " | " + modes[kind] + " |";
-    const double base = double(variants[0].got[kind].work.nodes_visited) * sizeof(BvhNode);
+    const double base = double(got[0][size_t(kind)].work.nodes_visited) * sizeof(BvhNode);
     for (const size_t i : summarized) {
-      const double b = double(variants[i].got[kind].work.nodes_visited) * double(variants[i].record_bytes);
+      const double b = double(got[i][size_t(kind)].work.nodes_visited) * double(variants[i].record_bytes);
       bytes_read += " " + fmt(b / (kind ? ne : nv), 4) + (i ? " (" + fmt(b / base, 3) + "x)" : "") + " |";
     }
-    bytes_read += " " + fmt(variants[0].got[kind].ms / variants[8].got[kind].ms, 3) + "x |\n";
+    bytes_read += " " + fmt(got[0][size_t(kind)].ms / got[8][size_t(kind)].ms, 3) + "x |\n";
   }
   return out;
 }
@@ -753,10 +756,6 @@ std::string compare_policies(const SceneFrames& sc, int rounds, bool& ok) {
       query[i].push_back(run.query_ms);
       total[i].push_back(run.update_ms + run.query_ms);
     }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
   std::string out;
   const double base = median(total[0]);
   for (size_t i = 0; i < n; ++i) {

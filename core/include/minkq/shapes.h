@@ -24,6 +24,18 @@ struct QueryGeometry {
   float r;
 };
 
+// may_overlap box by box over the lanes asked for: BoxShape's lane test in CUDA code, and
+// shapes without a lane test (bench studies).
+template <class Shape>
+MINKQ_HD unsigned may_overlap_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
+  unsigned bits = 0;
+  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
+    const int k = lowest_bit(rest);
+    bits |= unsigned(shape.may_overlap(group_box(g, k))) << k;
+  }
+  return bits;
+}
+
 // The box mode: the query's own box (segment p0-p1, or the user box lo-hi with r = 0) within r
 // of b in every axis, as box_gap_within decides it: symmetric, so an EE pair needs it one way
 // only, and exact for boxes (r = 0).
@@ -39,12 +51,7 @@ struct BoxShape {
   // no more than it tests). The same float subtractions and comparisons either way.
   MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
 #if defined(__CUDACC__)
-    unsigned bits = 0;
-    for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
-      const int k = lowest_bit(rest);
-      bits |= unsigned(overlaps(group_box(g, k))) << k;
-    }
-    return bits;
+    return may_overlap_each(*this, g, lanes);  // may_overlap is overlaps here
 #else
     typedef float Lanes __attribute__((vector_size(16)));
     typedef int32_t Masks __attribute__((vector_size(16)));
@@ -59,17 +66,6 @@ struct BoxShape {
   }
   MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return overlaps_group(g, lanes); }
 };
-
-// may_overlap box by box over the lanes asked for, for shapes without a lane test (studies).
-template <class Shape>
-MINKQ_HD unsigned may_overlap_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
-  unsigned bits = 0;
-  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
-    const int k = lowest_bit(rest);
-    bits |= unsigned(shape.may_overlap(group_box(g, k))) << k;
-  }
-  return bits;
-}
 
 struct SphereShape {  // p0 is the centre; p1 is ignored
   BoxShape box;       // of the centre: lo == hi == centre
