@@ -769,6 +769,110 @@ std::string compare_policies(const SceneFrames& sc, int rounds, bool& ok) {
   return out;
 }
 
+// ---- Contacts: the node test and the leaf screen under the leaf distance test ---------------
+
+// The sources' incident-pair and reverse finer tests without their leaf test.
+template <class Queries>
+Queries without_leaf_test(Queries q) {
+  q.filters &= ~kLeafExact;
+  return q;
+}
+
+// EE's leaf test before the separation screen: the full distance alone.
+struct EdgeEdgeUnscreened {
+  EdgeEdgeQueries candidates;  // without_leaf_test of the library's source
+  static constexpr bool kOncePerPair = true;
+  QueryTarget target(int32_t i) const { return candidates.target(i); }
+  QueryGeometry geometry(int32_t e) const { return candidates.geometry(e); }
+  template <class Shape>
+  bool accept(int32_t e, int32_t f, const Box&) const {
+    if (!candidates.accept<Shape>(e, f)) return false;
+    const Edge lo = candidates.edges[e < f ? e : f], hi = candidates.edges[e < f ? f : e];
+    const Vec3* x = candidates.vertices;
+    return segment_segment_distance_within(x[lo.v[0]], x[lo.v[1]], x[hi.v[0]], x[hi.v[1]], candidates.r);
+  }
+  Pair pair(int32_t e, int32_t f) const { return candidates.pair(e, f); }
+};
+
+// EE's screen tried for VT (not kept): point p against triangle abc along v = 3 (p - the
+// centroid), where the triangle's projection ends at max_k v.x_k, so the gap is
+// min_k v.(p - x_k) / |v|; "apart" beyond r + 2^-18 T, T = max_k |p - x_k|_1 >= S (the bound
+// argument of predicates.h's segments_apart).
+bool point_triangle_apart(Vec3 p, Vec3 a, Vec3 b, Vec3 c, float r) {
+  const Vec3d pd = to_double(p);
+  const Vec3d pa = pd - to_double(a), pb = pd - to_double(b), pc = pd - to_double(c);
+  const Vec3d v = pa + pb + pc;
+  const double vv = dot(v, v);
+  if (!(vv > 0.0)) return false;  // p at the centroid: no axis
+  const double gap = min_num(dot(v, pa), min_num(dot(v, pb), dot(v, pc))) / std::sqrt(vv);
+  return gap > double(r) + 0x1p-18 * max3(abs_sum(pa), abs_sum(pb), abs_sum(pc));
+}
+struct VertexTriangleScreened {
+  VertexTriangleQueries candidates;  // without_leaf_test of the library's source
+  static constexpr bool kOncePerPair = false;
+  QueryTarget target(int32_t i) const { return candidates.target(i); }
+  QueryGeometry geometry(int32_t v) const { return candidates.geometry(v); }
+  template <class Shape>
+  bool accept(int32_t v, int32_t t, const Box&) const {
+    if (!candidates.accept<Shape>(v, t)) return false;
+    const Triangle tri = candidates.triangles[t];
+    const Vec3 *x = candidates.vertices, p = x[v], a = x[tri.v[0]], b = x[tri.v[1]], c = x[tri.v[2]];
+    return !point_triangle_apart(p, a, b, c, candidates.r) && point_triangle_within(p, a, b, c, candidates.r);
+  }
+  Pair pair(int32_t v, int32_t t) const { return candidates.pair(v, t); }
+};
+
+// Contacts (MINKQ_QUERY_LEAF_EXACT) four ways on the library's trees at the last frame: the
+// finer node mode (sphere for VT, capsule_exact for EE: the benchmark's leaf_exact before) or
+// the box test, each with the full distance test alone or behind the separation screen (EE:
+// the library's; VT: the study's). The four must return the same pairs; they run round-robin.
+std::string compare_contacts(const SceneFrames& sc, int repeats, bool& ok) {
+  const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
+  const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
+  const auto* e = reinterpret_cast<const Edge*>(sc.mesh.edges.data());
+  const float r = float(sc.radius_factor * sc.mean_edge);
+  std::fprintf(stderr, "%s (contacts): %zu V, %zu T, r = %.4g\n", sc.name.c_str(), sc.mesh.vertex_count(),
+               sc.mesh.triangle_count(), double(r));
+  const FrameTrees trees(sc, v, t, e);
+  const uint32_t filters = kDropIncident | kLeafExact;
+  const VertexTriangleQueries vt{v, t, trees.order.data(), r, filters};
+  const EdgeEdgeQueries ee{v, e, trees.edges.sorted_prims().data(), r, filters};
+  const VertexTriangleScreened vt_screened{without_leaf_test(vt)};
+  const EdgeEdgeUnscreened ee_full{without_leaf_test(ee)};
+  const BvhView tri = trees.triangles.view(), edge = trees.edges.view();
+  // [kind][variant]; variants: finer + full, box + full, box + screen, finer + screen.
+  static const char* const labels[2][4] = {
+      {"finer node test, full distance test (before)", "box node test, full distance test (kept)",
+       "box node test, separation screen first", "finer node test, separation screen first"},
+      {"finer node test, full distance test (before)", "box node test, full distance test",
+       "box node test, separation screen first (kept)", "finer node test, separation screen first"}};
+  const auto got = round_robin(4, 2, 3 * repeats, [&](size_t variant, int kind, int reps) {
+    if (kind == 0) {
+      switch (variant) {
+        case 0: return run<SphereShape>(tri, vt, trees.nv, reps);
+        case 1: return run<BoxShape>(tri, vt, trees.nv, reps);
+        case 2: return run<BoxShape>(tri, vt_screened, trees.nv, reps);
+        default: return run<SphereShape>(tri, vt_screened, trees.nv, reps);
+      }
+    }
+    switch (variant) {
+      case 0: return run<CapsuleExactShape>(edge, ee_full, trees.ne, reps);
+      case 1: return run<BoxShape>(edge, ee_full, trees.ne, reps);
+      case 2: return run<BoxShape>(edge, ee, trees.ne, reps);
+      default: return run<CapsuleExactShape>(edge, ee, trees.ne, reps);
+    }
+  });
+  std::string out;
+  for (int kind = 0; kind < 2; ++kind)
+    for (size_t i = 0; i < 4; ++i) {
+      ok &= got[i][size_t(kind)].pairs == got[0][size_t(kind)].pairs;
+      const bool box = i == 1 || i == 2;
+      out += row(sc.name, kind ? "EE" : "VT", box ? "box" : kind ? "capsule_exact" : "sphere", labels[kind][i],
+                 got[i][size_t(kind)], kind ? trees.ne : trees.nv, got[0][size_t(kind)]);
+    }
+  return out;
+}
+
 std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
   const auto* v = reinterpret_cast<const Vec3*>(sc.frames.back().data());
   const auto* t = reinterpret_cast<const Triangle*>(sc.mesh.tris.data());
@@ -796,7 +900,7 @@ int main(int argc, char** argv) {
     std::string data = MINKQ_BENCH_DATA_DIR, out = MINKQ_BENCH_RESULTS_DIR;
     int repeats = 5;
     double scale = 0;  // reference sizes
-    std::string sections = "all";  // or "traversal" (ablation.md), "trees" (trees.md), "wide" (wide.md), "policies" (policies.md)
+    std::string sections = "all";  // or "traversal" (ablation.md), "trees" (trees.md), "wide" (wide.md), "policies" (policies.md), "contacts" (contacts.md)
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--quick") repeats = 1;
@@ -805,11 +909,12 @@ int main(int argc, char** argv) {
       else if (a == "--triangles" && i + 1 < argc) scale = std::stod(argv[++i]);
       else if (a == "--only" && i + 1 < argc &&
                (std::string(argv[i + 1]) == "traversal" || std::string(argv[i + 1]) == "trees" ||
-                std::string(argv[i + 1]) == "wide" || std::string(argv[i + 1]) == "policies"))
+                std::string(argv[i + 1]) == "wide" || std::string(argv[i + 1]) == "policies" ||
+                std::string(argv[i + 1]) == "contacts"))
         sections = argv[++i];
       else {
         std::fprintf(stderr,
-                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--only traversal|trees|wide|policies]\n");
+                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--only traversal|trees|wide|policies|contacts]\n");
         return 2;
       }
     }
@@ -915,6 +1020,28 @@ int main(int argc, char** argv) {
       o << compare_policies(make_scene("twist_target", scale, kFrames, data), repeats, ok);
       o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
       write("policies.md", o.str());
+    }
+    if (sections == "all" || sections == "contacts") {
+      std::ostringstream o;
+      o << "# Contacts: node test and leaf screen under the leaf distance test (issue 8)\n\nMachine: "
+        << machine_line("cpu (core traversal, TBB)") << ". Load average (1 min) at start " << fmt(load_average(), 3)
+        << ". Contacts are the output of MINKQ_QUERY_LEAF_EXACT: every pair within r by the double-precision distance "
+        << "test at the leaves. Four ways to them on the library's trees at each scene's last frame (r = the scene's "
+        << "radius, incident pairs dropped, all threads): the finer node mode (sphere for VT, capsule_exact for EE) or "
+        << "the box test in the tree and at the primitive boxes, and at the leaves the full distance test alone or behind "
+        << "the separation screen (the gap along the axis joining the two elements' centres: predicates.h's "
+        << "segments_apart for EE, the same idea for VT in ablation.cpp). All four "
+        << "return the same pairs (checked). Counts per query; the variants run round-robin, " << 3 * repeats
+        << " rounds; ms = the median; speed = 'before' ms / this ms, in the same run. Written by `minkq_ablation --only "
+        << "contacts`" << (repeats == 1 ? " --quick" : "") << ".\n\n"
+        << table_head;
+      for (const std::string& name : procedural_scene_names()) o << compare_contacts(make_scene(name, scale, 2, data), repeats, ok);
+      o << compare_contacts(make_scene("twist_target", scale, 2, data), repeats, ok);
+      for (const RealMesh& m : real_meshes())
+        if (m.name == "unisex_shirt" || m.name == "multilayer_drape" || m.name == "rod-twist3036")
+          o << compare_contacts(load_real_scene(m, data), repeats, ok);
+      o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+      write("contacts.md", o.str());
     }
     if (!ok) {
       std::fprintf(stderr, "FAIL: a variant returned different pairs\n");

@@ -4,7 +4,7 @@
 //    with the radius padded by 2^-20 relative (16 ulp) and the pairs are decided in the
 //    callback with an exact test: minkq's own leaf predicate (point_triangle_within from
 //    core/include/minkq/predicates.h, double precision with the stated 2^-20 S slack), so the
-//    pair set is the one minkq's sphere + leaf_exact mode returns;
+//    pair set is the one minkq's leaf_exact query returns;
 //  - RTCPointQuery fields are set by name; scene build quality MEDIUM (HIGH's spatial splits may
 //    call back twice for one primitive); geometry quality REFIT so moved vertices refit;
 //  - the vertex buffer carries one float of padding; after moving vertices the geometry and

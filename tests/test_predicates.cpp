@@ -218,6 +218,52 @@ TEST_F(Predicates, segment_segment_distance_is_within_stated_bound) {
   }
 }
 
+// The EE separation screen only settles pairs the full distance test rejects: every pair it
+// calls apart lies beyond r + 2^-19 S (so no contact is lost, whatever the full test does),
+// and the screened test returns exactly the full test's verdict. Radii are drawn just below
+// the true distance too, where a screen with too thin a margin would fire wrongly.
+TEST_F(Predicates, segment_screen_settles_only_pairs_the_distance_test_rejects) {
+  int apart = 0;
+  const int cases = 300000;
+  for (int i = 0; i < cases; ++i) {
+    const float scale = rng.log_uniform(1e-5f, 1e5f);
+    const Vec3 origin = rng.vec3(-1e4f * scale, 1e4f * scale);
+    Vec3 p0 = origin + rng.vec3(-scale, scale), p1 = origin + rng.vec3(-scale, scale);
+    Vec3 q0 = origin + rng.vec3(-scale, scale), q1 = origin + rng.vec3(-scale, scale);
+    const Vec3 shift = rng.vec3(-3 * scale, 3 * scale);
+    switch (rng.integer(0, 7)) {
+      case 0: q0 = p0 + shift; q1 = p1 + shift; break;                     // parallel, side by side
+      case 1: q0 = p1 + rng.uniform(0.0f, 0.5f) * (p1 - p0); q1 = q0 + 0.7f * (p1 - p0); break;  // collinear, apart
+      case 2: p1 = p0; break;                                               // a point
+      case 3: p1 = p0; q1 = q0; break;                                      // two points
+      case 4: q0 = p0 + 0.5f * (p1 - p0) + shift; q1 = q0; break;           // a point beside the middle
+      default: break;
+    }
+    const LD truth = reference_segment_segment(p0, p1, q0, q1);
+    const double S = segments_scale(to_double(p0), to_double(p1), to_double(q0), to_double(q1));
+    float r = 0.0f;
+    switch (rng.integer(0, 3)) {
+      case 0: r = float(truth); break;
+      case 1: r = float(truth * (1 - std::ldexp(LD(1), -rng.integer(8, 30)))); break;
+      case 2: r = float(truth) * rng.uniform(0.0f, 1.0f); break;
+      default: r = rng.uniform(0.0f, 2.0f) * scale; break;
+    }
+    const bool full = segment_segment_distance_within(p0, p1, q0, q1, r);
+    if (segments_apart(p0, p1, q0, q1, r)) {
+      ++apart;
+      ASSERT_GT(truth, LD(r) + std::ldexp(LD(S), -19)) << "i=" << i << " r=" << r << " S=" << S;
+      ASSERT_FALSE(full) << "i=" << i;
+    }
+    ASSERT_EQ(segment_segment_within(p0, p1, q0, q1, r), full) << "i=" << i;
+  }
+  EXPECT_GT(apart, cases / 10);  // the screen does settle pairs
+  // Side by side at distance 5: apart at r = 4.99, never at r = 5 (the distance itself).
+  const Vec3 a{0, 0, 0}, b{1, 0, 0}, c{0, 5, 0}, d{1, 5, 0};
+  EXPECT_TRUE(segments_apart(a, b, c, d, 4.99f));
+  EXPECT_FALSE(segments_apart(a, b, c, d, 5.0f));
+  EXPECT_FALSE(segments_apart(a, b, a, b, 0.0f));  // coinciding centres: no axis
+}
+
 TEST(PredicateEdgeCases, outward_rounding_helpers_step_one_ulp) {
   EXPECT_LT(next_down(1.0f), 1.0f);
   EXPECT_GT(next_up(1.0f), 1.0f);
