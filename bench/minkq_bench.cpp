@@ -388,7 +388,9 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
       if (c.work) row.work = c.work();
       if (c.backend == "cpu" && c.mode && vt && (c.mode->flags & MINKQ_QUERY_LEAF_EXACT)) leaf_vt = got;
       if (!c.mode && (!leaf_vt.empty() || got.empty())) row.diff_vs_leaf = int64_t(missing(leaf_vt, got) + missing(got, leaf_vt));
-      if (c.backend == "cpu" && c.mode && k + 1 == sc.frames.size() && c.mode->mode == MINKQ_MODE_BOX) {
+      // The box candidates (box mode without the leaf test) feed the narrow-phase measurement.
+      if (c.backend == "cpu" && c.mode && k + 1 == sc.frames.size() && c.mode->mode == MINKQ_MODE_BOX &&
+          !(c.mode->flags & MINKQ_QUERY_LEAF_EXACT)) {
         std::vector<int32_t>& dst = vt ? box_vt : box_ee;
         dst.clear();
         for (uint64_t x : got) dst.insert(dst.end(), {int32_t(x >> 32), int32_t(x & 0xffffffffu)});

@@ -8,8 +8,10 @@
  *
  * Guarantee: every pair of elements within r is reported (zero false negatives), in every
  * mode, for every finite input; finer modes report subsets of coarser ones:
- *   true contacts <= leaf_exact <= capsule_exact <= capsule_ray <= box   (EE)
- *   true contacts <= leaf_exact <= sphere <= box                         (VT)
+ *   true contacts <= capsule_exact <= capsule_ray <= box   (EE)
+ *   true contacts <= sphere <= box                         (VT)
+ * and MINKQ_QUERY_LEAF_EXACT keeps, of any mode's pairs, the true contacts (plus at most pairs
+ * within the leaf test's slack, stated at minkq_scene_query).
  *
  * Thread safety: different objects may be used from different threads at once. One object
  * (device, scene, bvh, result) must not be used by two threads at the same time; a device
@@ -162,7 +164,9 @@ typedef enum minkq_mode {
 } minkq_mode;
 
 typedef enum minkq_query_flags {
-  MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts */
+  MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts.
+                                 Fastest with MINKQ_MODE_BOX: the finer node tests cost more
+                                 than they save once the leaves test distances */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
   MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
   MINKQ_QUERY_STATS = 8       /* count the traversal's work into info->stats (a separately compiled

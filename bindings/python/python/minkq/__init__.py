@@ -6,7 +6,7 @@ use it for their per-step vertex-triangle (VT) and edge-edge (EE) broad phase::
 
     import numpy as np, minkq
     scene = minkq.Scene(minkq.Device("auto"), vertices, triangles)  # (n, 3) float32, (m, 3) int32
-    vt = scene.query("vt", "sphere", r, leaf_exact=True)            # (k, 2) int32 (vertex, triangle)
+    vt = scene.query("vt", "box", r, leaf_exact=True)               # contacts: (k, 2) int32 (vertex, triangle)
     ee = scene.query("ee", "capsule_exact", r)                      # (k, 2) int32 (e, f), e < f
     scene.refit(new_vertices)                                       # every step
     if scene.tree_growth() > 1.5:                                   # after large motions:

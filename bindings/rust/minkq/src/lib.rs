@@ -22,7 +22,7 @@
 //! let mut scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
 //! let mut pairs = PairBuffer::new()?;
 //! let r = 0.2;
-//! let vt = scene.query(&Query::vt(Mode::Sphere, r).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
+//! let vt = scene.query(&Query::vt(Mode::Box, r).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
 //! assert_eq!(vt.len(), 6);
 //! let ee = scene.query(&Query::ee(Mode::CapsuleExact, r), &mut pairs)?;
 //! assert!(ee.len() >= 9);

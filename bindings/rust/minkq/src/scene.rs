@@ -177,7 +177,7 @@ impl<'a> From<&SceneDesc<'a>> for SceneBuffers<'a> {
 /// let triangles = [[0, 1, 2], [3, 4, 5]];
 /// let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
 /// let mut pairs = PairBuffer::new()?;
-/// let vt = scene.query(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
+/// let vt = scene.query(&Query::vt(Mode::Box, 0.2).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
 /// assert_eq!(vt.len(), 6); // each vertex against the other triangle
 /// # Ok::<(), minkq::Error>(())
 /// ```
@@ -453,7 +453,7 @@ impl Scene {
     /// # let triangles = [[0, 1, 2], [3, 4, 5]];
     /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
     /// let mut pairs = PairBuffer::new()?;
-    /// let ee = scene.query(&Query::ee(Mode::CapsuleExact, 0.2).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
+    /// let ee = scene.query(&Query::ee(Mode::Box, 0.2).with_flags(QueryFlags::LEAF_EXACT), &mut pairs)?;
     /// assert_eq!(ee.len(), 9); // every lower edge against every upper edge
     /// assert!(ee.iter().all(|&[e, f]| e < f));
     /// let err = scene.query(&Query::ee(Mode::Sphere, 0.2), &mut pairs).unwrap_err();
