@@ -279,7 +279,7 @@ MINKQ_HD bool segment_segment_distance_within(Vec3 p0, Vec3 p1, Vec3 q0, Vec3 q1
 // axis v joining the two segments' centres (any axis serves, so the computed v is as good as
 // the exact one) the gap costs three dot products, a root and a division, against about 30 ns
 // for the full distance; on cloth it settles about half the box candidates that are not
-// contacts, and EE contacts come 1.1-1.3x faster (bench/results/contacts.md; the same screen
+// contacts, and EE contacts come 1.07-1.27x faster (bench/results/contacts.md; the same screen
 // for VT, along p minus the triangle's centroid, gained nothing there and is not used). It
 // answers "apart" only when the computed gap exceeds r + 2^-18 * T, T >= S a bound on the
 // operands' size (S as above): the computed gap is off by at most about 2^-49 * T (a few
