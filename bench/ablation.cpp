@@ -771,27 +771,21 @@ std::string compare_policies(const SceneFrames& sc, int rounds, bool& ok) {
 
 // ---- Contacts: the node test and the leaf screen under the leaf distance test ---------------
 
-// The sources' incident-pair and reverse finer tests without their leaf test.
-template <class Queries>
-Queries without_leaf_test(Queries q) {
-  q.filters &= ~kLeafExact;
-  return q;
-}
-
-// EE's leaf test before the separation screen: the full distance alone.
-struct EdgeEdgeUnscreened {
-  EdgeEdgeQueries candidates;  // without_leaf_test of the library's source
-  static constexpr bool kOncePerPair = true;
+// A library source with a study's leaf test in place of its own: `candidates` (the source
+// without kLeafExact) keeps its incident-pair and reverse finer tests, then leaf_test(q, prim).
+template <class Queries, class LeafTest>
+struct WithLeafTest {
+  Queries candidates;
+  LeafTest leaf_test;
+  static constexpr bool kOncePerPair = Queries::kOncePerPair;
+  WithLeafTest(Queries source, LeafTest test) : candidates(source), leaf_test(test) { candidates.filters &= ~kLeafExact; }
   QueryTarget target(int32_t i) const { return candidates.target(i); }
-  QueryGeometry geometry(int32_t e) const { return candidates.geometry(e); }
+  QueryGeometry geometry(int32_t q) const { return candidates.geometry(q); }
   template <class Shape>
-  bool accept(int32_t e, int32_t f, const Box&) const {
-    if (!candidates.accept<Shape>(e, f)) return false;
-    const Edge lo = candidates.edges[e < f ? e : f], hi = candidates.edges[e < f ? f : e];
-    const Vec3* x = candidates.vertices;
-    return segment_segment_distance_within(x[lo.v[0]], x[lo.v[1]], x[hi.v[0]], x[hi.v[1]], candidates.r);
+  bool accept(int32_t q, int32_t prim, const Box&) const {
+    return candidates.template accept<Shape>(q, prim) && leaf_test(q, prim);
   }
-  Pair pair(int32_t e, int32_t f) const { return candidates.pair(e, f); }
+  Pair pair(int32_t q, int32_t prim) const { return candidates.pair(q, prim); }
 };
 
 // EE's screen tried for VT (not kept): point p against triangle abc along v = 3 (p - the
@@ -807,20 +801,6 @@ bool point_triangle_apart(Vec3 p, Vec3 a, Vec3 b, Vec3 c, float r) {
   const double gap = min_num(dot(v, pa), min_num(dot(v, pb), dot(v, pc))) / std::sqrt(vv);
   return gap > double(r) + 0x1p-18 * max3(abs_sum(pa), abs_sum(pb), abs_sum(pc));
 }
-struct VertexTriangleScreened {
-  VertexTriangleQueries candidates;  // without_leaf_test of the library's source
-  static constexpr bool kOncePerPair = false;
-  QueryTarget target(int32_t i) const { return candidates.target(i); }
-  QueryGeometry geometry(int32_t v) const { return candidates.geometry(v); }
-  template <class Shape>
-  bool accept(int32_t v, int32_t t, const Box&) const {
-    if (!candidates.accept<Shape>(v, t)) return false;
-    const Triangle tri = candidates.triangles[t];
-    const Vec3 *x = candidates.vertices, p = x[v], a = x[tri.v[0]], b = x[tri.v[1]], c = x[tri.v[2]];
-    return !point_triangle_apart(p, a, b, c, candidates.r) && point_triangle_within(p, a, b, c, candidates.r);
-  }
-  Pair pair(int32_t v, int32_t t) const { return candidates.pair(v, t); }
-};
 
 // Contacts (MINKQ_QUERY_LEAF_EXACT) four ways on the library's trees at the last frame: the
 // finer node mode (sphere for VT, capsule_exact for EE: the benchmark's leaf_exact before) or
@@ -837,8 +817,17 @@ std::string compare_contacts(const SceneFrames& sc, int repeats, bool& ok) {
   const uint32_t filters = kDropIncident | kLeafExact;
   const VertexTriangleQueries vt{v, t, trees.order.data(), r, filters};
   const EdgeEdgeQueries ee{v, e, trees.edges.sorted_prims().data(), r, filters};
-  const VertexTriangleScreened vt_screened{without_leaf_test(vt)};
-  const EdgeEdgeUnscreened ee_full{without_leaf_test(ee)};
+  // VT behind the study's screen; EE with the full distance alone (before the library's screen).
+  const WithLeafTest vt_screened(vt, [&vt](int32_t q, int32_t t) {
+    const Triangle tri = vt.triangles[t];
+    const Vec3 *x = vt.vertices, p = x[q], a = x[tri.v[0]], b = x[tri.v[1]], c = x[tri.v[2]];
+    return !point_triangle_apart(p, a, b, c, vt.r) && point_triangle_within(p, a, b, c, vt.r);
+  });
+  const WithLeafTest ee_full(ee, [&ee](int32_t e, int32_t f) {
+    const Edge lo = ee.edges[e < f ? e : f], hi = ee.edges[e < f ? f : e];
+    const Vec3* x = ee.vertices;
+    return segment_segment_distance_within(x[lo.v[0]], x[lo.v[1]], x[hi.v[0]], x[hi.v[1]], ee.r);
+  });
   const BvhView tri = trees.triangles.view(), edge = trees.edges.view();
   // [kind][variant]; variants: finer + full, box + full, box + screen, finer + screen.
   static const char* const labels[2][4] = {
