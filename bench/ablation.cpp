@@ -18,6 +18,8 @@
 //        built at the first frame and refit to the last (a simulator's refit-only steps) and
 //        rebuilt at the last frame (minkq_scene_rebuild), and a binned SAH build (not kept)
 //        either way; with each tree's growth (minkq_scene_tree_growth)
+//   VT + EE: two minkq_scene_query calls  vs  one minkq_scene_query_vt_ee call (through the C
+//        API, on the CPU or with --backend cuda)
 // Both variants of a kind must return the same pairs (checked), except the two box tests
 // (different roundings at the boundary: their counts are shown). Writes
 // bench/results/ablation.md and (the trees) bench/results/trees.md; see bench/README.md.
@@ -884,26 +886,86 @@ std::string compare_scene(const SceneFrames& sc, int repeats, bool& ok) {
 
 }  // namespace
 
+// ---- One pass for VT and EE: minkq_scene_query_vt_ee against two minkq_scene_query calls ------
+
+// The scene created at the first frame and refit to the last (a simulator's refit-only step),
+// then per variant one step's queries: VT and EE by two calls, or by one fused call; the box
+// candidates and the contacts (box + leaf_exact). Pairs checked equal by digest.
+std::string compare_fused(const SceneFrames& sc, minkq_device* device, int rounds, bool& ok) {
+  const float r = float(sc.radius_factor * sc.mean_edge);
+  std::fprintf(stderr, "%s (fused): %d V, %d T, r = %.4g\n", sc.name.c_str(), int(sc.mesh.vertex_count()),
+               int(sc.mesh.triangle_count()), double(r));
+  Scene scene = create_scene(device, sc.frames[0], sc.mesh.tris);
+  const std::vector<float>& last = sc.frames.back();
+  check(minkq_scene_refit(scene.get(), {last.data(), 12, last.size() / 3, MINKQ_MEMORY_HOST}), "minkq_scene_refit");
+  Result vt = new_result(), ee = new_result();
+  struct Variant {
+    const char* output;
+    uint32_t flags;
+    bool fused;
+  };
+  const Variant variants[] = {{"box candidates", 0, false}, {"box candidates", 0, true},
+                              {"contacts (leaf_exact)", MINKQ_QUERY_LEAF_EXACT, false},
+                              {"contacts (leaf_exact)", MINKQ_QUERY_LEAF_EXACT, true}};
+  auto run = [&](const Variant& v, uint32_t extra) {
+    const minkq_query_desc qvt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, v.flags | extra, r};
+    const minkq_query_desc qee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, v.flags | extra, r};
+    if (v.fused) {
+      check(minkq_scene_query_vt_ee_result(scene.get(), &qvt, &qee, vt.get(), ee.get()), "minkq_scene_query_vt_ee_result");
+    } else {
+      check(minkq_scene_query_result(scene.get(), &qvt, vt.get()), "minkq_scene_query_result");
+      check(minkq_scene_query_result(scene.get(), &qee, ee.get()), "minkq_scene_query_result");
+    }
+  };
+  const size_t n = std::size(variants);
+  std::vector<std::pair<uint64_t, uint64_t>> digests(n), counts(n);
+  for (size_t i = 0; i < n; ++i) {
+    run(variants[i], MINKQ_QUERY_DIGEST);  // also the warm-up, growing the results
+    digests[i] = {minkq_result_digest(vt.get()), minkq_result_digest(ee.get())};
+    counts[i] = {minkq_result_count(vt.get()), minkq_result_count(ee.get())};
+    ok &= digests[i] == digests[i & ~size_t(1)];
+  }
+  std::vector<std::vector<double>> times(n);
+  for (int round = 0; round < rounds; ++round)
+    for (size_t i = 0; i < n; ++i) {
+      const double start = now_ms();
+      run(variants[i], 0);
+      times[i].push_back(now_ms() - start);
+    }
+  std::string out;
+  for (size_t i = 0; i < n; ++i) {
+    const double ms = median(times[i]), before = median(times[i & ~size_t(1)]);
+    out += "| " + sc.name + " | " + std::to_string(sc.mesh.triangle_count()) + " | " + variants[i].output + " | " +
+           (variants[i].fused ? "one call (minkq_scene_query_vt_ee)" : "two calls (VT, then EE)") + " | " +
+           std::to_string(counts[i].first) + " | " + std::to_string(counts[i].second) + " | " + fmt(ms, 4) + " | " +
+           fmt(before / ms, 3) + "x |\n";
+  }
+  return out;
+}
+
 int main(int argc, char** argv) {
   try {
     std::string data = MINKQ_BENCH_DATA_DIR, out = MINKQ_BENCH_RESULTS_DIR;
     int repeats = 5;
     double scale = 0;  // reference sizes
-    std::string sections = "all";  // or "traversal" (ablation.md), "trees" (trees.md), "wide" (wide.md), "policies" (policies.md), "contacts" (contacts.md)
+    std::string sections = "all";  // or "traversal" (ablation.md), "trees" (trees.md), "wide" (wide.md), "policies" (policies.md), "contacts" (contacts.md), "fused" (fused.md)
+    std::string backend = "cpu";   // the device of the C API studies (fused)
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--quick") repeats = 1;
       else if (a == "--out" && i + 1 < argc) out = argv[++i];
       else if (a == "--data" && i + 1 < argc) data = argv[++i];
       else if (a == "--triangles" && i + 1 < argc) scale = std::stod(argv[++i]);
+      else if (a == "--backend" && i + 1 < argc) backend = argv[++i];
       else if (a == "--only" && i + 1 < argc &&
                (std::string(argv[i + 1]) == "traversal" || std::string(argv[i + 1]) == "trees" ||
                 std::string(argv[i + 1]) == "wide" || std::string(argv[i + 1]) == "policies" ||
-                std::string(argv[i + 1]) == "contacts"))
+                std::string(argv[i + 1]) == "contacts" || std::string(argv[i + 1]) == "fused"))
         sections = argv[++i];
       else {
         std::fprintf(stderr,
-                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--only traversal|trees|wide|policies|contacts]\n");
+                     "usage: minkq_ablation [--quick] [--out DIR] [--data DIR] [--triangles N] [--backend cpu|cuda] "
+                     "[--only traversal|trees|wide|policies|contacts|fused]\n");
         return 2;
       }
     }
@@ -1031,6 +1093,30 @@ int main(int argc, char** argv) {
           o << compare_contacts(load_real_scene(m, data), repeats, ok);
       o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
       write("contacts.md", o.str());
+    }
+    if (sections == "all" || sections == "fused") {
+      Device device = open_device(backend.c_str());
+      const std::string file = backend == "cpu" ? "fused.md" : "fused_" + backend.substr(0, backend.find(':')) + ".md";
+      std::ostringstream o;
+      o << "# One pass for VT and EE (issue 8)\n\nMachine: " << machine_line(minkq_device_name(device.get()))
+        << ". Load average (1 min) at start " << fmt(load_average(), 3) << ". Each scene created at its first frame "
+        << "and refit to its last, r = the scene's radius, incident pairs dropped, box mode; one step's VT and EE "
+        << "queries through the C API into reused results: two minkq_scene_query_result calls against one "
+        << "minkq_scene_query_vt_ee_result call (one parallel loop over both query sets on the CPU; one kernel launch "
+        << "and one count readback on CUDA), for the box candidates and for the contacts (leaf_exact). Pairs checked "
+        << "equal by digest. The variants run round-robin, " << 3 * repeats << " rounds after a warm-up; ms = the "
+        << "median; speed = two calls' ms / this ms, in the same run. Written by `minkq_ablation --only fused"
+        << (backend == "cpu" ? "" : " --backend " + backend) << "`" << (repeats == 1 ? " --quick" : "") << ".\n\n"
+        << "| scene | triangles | output | variant | VT pairs | EE pairs | ms | speed |\n|---|---|---|---|---|---|---|---|\n";
+      for (const std::string& name : procedural_scene_names())
+        o << compare_fused(make_scene(name, scale, 2, data), device.get(), 3 * repeats, ok);
+      o << compare_fused(make_scene("twist_target", scale, 2, data), device.get(), 3 * repeats, ok);
+      for (const RealMesh& m : real_meshes())
+        if (m.name == "unisex_shirt" || m.name == "multilayer_drape")
+          o << compare_fused(load_real_scene(m, data), device.get(), 3 * repeats, ok);
+      o << compare_fused(make_scene("twist_target", 1e6, 2, data), device.get(), 3 * repeats, ok);
+      o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
+      write(file, o.str());
     }
     if (!ok) {
       std::fprintf(stderr, "FAIL: a variant returned different pairs\n");

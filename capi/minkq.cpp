@@ -5,11 +5,13 @@
 #include <xxhash.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <new>
 #include <string>
+#include <utility>
 #include <type_traits>
 #include <vector>
 
@@ -185,39 +187,86 @@ void require_radius(float r) {
 constexpr uint32_t kKnownQueryFlags =
     MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS;
 
-// Runs a request against a store with the common output checks, CAPACITY and digest.
-void run_and_report(minkq_device* device, minkq::Store& store, const minkq::QueryRequest& request, uint32_t flags,
-                    int32_t* out_pairs, size_t capacity, const minkq_memory& out_memory, minkq_query_info* info) {
-  require(info != nullptr, Status::kInvalidArgument, "info is NULL");
+// The parameter names of an output buffer, for messages.
+struct OutputNames {
+  std::string pairs, capacity, info;
+};
+
+// A caller's output buffer, checked.
+minkq::PairOutput checked_output(const minkq_device* device, int32_t* out_pairs, size_t capacity,
+                                 const minkq_memory& out_memory, uint32_t flags, const minkq_query_info* info,
+                                 const OutputNames& name) {
+  require(info != nullptr, Status::kInvalidArgument, name.info + " is NULL");
   const int64_t memory = enum_value(out_memory);
   require(memory == MINKQ_MEMORY_HOST || memory == MINKQ_MEMORY_DEVICE, Status::kInvalidArgument,
           "out_memory is not a minkq_memory value");
   require(out_memory == MINKQ_MEMORY_HOST || device->kind == MINKQ_BACKEND_CUDA, Status::kInvalidArgument,
-          "out_pairs is in device memory but the device is " + device->name);
+          name.pairs + " is in device memory but the device is " + device->name);
   require(capacity == 0 || out_pairs != nullptr, Status::kInvalidArgument,
-          "out_pairs is NULL but capacity is " + std::to_string(capacity));
+          name.pairs + " is NULL but " + name.capacity + " is " + std::to_string(capacity));
   require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
-          "capacity " + std::to_string(capacity) + " pairs overflows the address space");
-  const bool digest = flags & MINKQ_QUERY_DIGEST;
-  const minkq::PairOutput out{out_pairs, capacity, static_cast<minkq::Memory>(out_memory),
-                              digest || (flags & MINKQ_QUERY_CANONICAL)};
+          name.capacity + " " + std::to_string(capacity) + " pairs overflows the address space");
+  return {out_pairs, capacity, static_cast<minkq::Memory>(out_memory),
+          (flags & (MINKQ_QUERY_DIGEST | MINKQ_QUERY_CANONICAL)) != 0};
+}
+
+// Fills info from a query's count and work, and its digest when asked for and the pairs fit.
+// Returns whether they fit.
+bool report(const minkq_device* device, const minkq::PairOutput& out, uint32_t flags, uint64_t count,
+            const minkq::WorkCounts& work, minkq_query_info* info) {
   *info = minkq_query_info{};
-  minkq::WorkCounts work;
-  const uint64_t count = store.query(request, out, (flags & MINKQ_QUERY_STATS) ? &work : nullptr);
   info->count = count;
   info->stats = {work.nodes_visited, work.node_tests, work.primitive_tests, work.candidates};
-  if (count > capacity)
-    fail(Status::kCapacity, std::to_string(count) + " pairs found but the buffer holds " + std::to_string(capacity));
-  if (digest) {
+  if (count > out.capacity) return false;
+  if (flags & MINKQ_QUERY_DIGEST) {
     const size_t bytes = size_t(count) * 2 * sizeof(int32_t);
-    if (out_memory == MINKQ_MEMORY_HOST) {
-      info->digest = XXH64(out_pairs, bytes, 0);
+    if (out.memory == minkq::Memory::kHost) {
+      info->digest = XXH64(out.pairs, bytes, 0);
     } else {
       std::vector<int32_t> host(size_t(count) * 2);
-      device->backend->copy_to_host(host.data(), out_pairs, bytes, minkq::Memory::kDevice);
+      device->backend->copy_to_host(host.data(), out.pairs, bytes, minkq::Memory::kDevice);
       info->digest = XXH64(host.data(), bytes, 0);
     }
   }
+  return true;
+}
+
+std::string capacity_message(uint64_t count, size_t capacity) {
+  return std::to_string(count) + " pairs found but the buffer holds " + std::to_string(capacity);
+}
+
+// Runs a request against a store with the common output checks, CAPACITY and digest.
+void run_and_report(minkq_device* device, minkq::Store& store, const minkq::QueryRequest& request, uint32_t flags,
+                    int32_t* out_pairs, size_t capacity, const minkq_memory& out_memory, minkq_query_info* info) {
+  const minkq::PairOutput out = checked_output(device, out_pairs, capacity, out_memory, flags, info,
+                                                    {"out_pairs", "capacity", "info"});
+  *info = minkq_query_info{};
+  minkq::WorkCounts work;
+  const uint64_t count = store.query(request, out, (flags & MINKQ_QUERY_STATS) ? &work : nullptr);
+  if (!report(device, out, flags, count, work, info)) fail(Status::kCapacity, capacity_message(count, capacity));
+}
+
+// A scene query's description, checked; `name` names it in messages ("query", "vt_query").
+minkq::QueryRequest checked_scene_request(const minkq_scene* scene, const minkq_query_desc* query,
+                                          const std::string& name) {
+  require(query != nullptr, Status::kInvalidArgument, name + " is NULL");
+  const int64_t kind = enum_value(query->kind), mode = enum_value(query->mode);
+  require(kind == MINKQ_QUERY_VT || kind == MINKQ_QUERY_EE, Status::kInvalidArgument,
+          name + "->kind is not a minkq_query_kind value");
+  require(mode >= MINKQ_MODE_BOX && mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
+          name + "->mode is not a minkq_mode value");
+  require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, name + "->flags has unknown bits");
+  const bool vt = query->kind == MINKQ_QUERY_VT;
+  require(scene->flags & (vt ? MINKQ_SCENE_VT : MINKQ_SCENE_EE), Status::kInvalidArgument,
+          vt ? "VT query on a scene created without MINKQ_SCENE_VT" : "EE query on a scene created without MINKQ_SCENE_EE");
+  require(vt || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
+          "sphere mode needs point queries; use capsule_ray or capsule_exact for EE");
+  require_radius(query->radius);
+  uint32_t filters = 0;
+  if (scene->flags & MINKQ_SCENE_DROP_INCIDENT) filters |= minkq::kDropIncident;
+  if (query->flags & MINKQ_QUERY_LEAF_EXACT) filters |= minkq::kLeafExact;
+  return {vt ? minkq::QueryKind::kVertexTriangle : minkq::QueryKind::kEdgeEdge, static_cast<minkq::Mode>(query->mode),
+          filters, query->radius, {}, {}};
 }
 
 // New vertex positions for a scene, validated: `verb` names the call in messages.
@@ -241,6 +290,28 @@ minkq::Strided checked_new_boxes(const minkq_bvh* bvh, minkq_buffer boxes, const
   require_finite(*bvh->device->backend, values, 6, "box");
   require_ordered_boxes(*bvh->device->backend, values);
   return values;
+}
+
+// Runs query(infos), a call writing into the results' buffers, so that the results grow as
+// needed: on CAPACITY each short buffer grows to its exact count and the call runs again.
+template <size_t N, class Query>
+minkq_status query_into_results(const std::array<minkq_result*, N>& results, Query&& query) {
+  std::array<minkq_query_info, N> info{};
+  minkq_status status = query(info);
+  if (status == MINKQ_ERROR_CAPACITY) {
+    const minkq_status grown = guarded([&] {
+      for (size_t k = 0; k < N; ++k)
+        if (results[k]->pairs.size() / 2 < info[k].count) results[k]->pairs.resize(size_t(info[k].count) * 2);
+    });
+    if (grown != MINKQ_SUCCESS) return grown;
+    status = query(info);
+  }
+  for (size_t k = 0; k < N; ++k) {
+    results[k]->count = status == MINKQ_SUCCESS ? info[k].count : 0;
+    results[k]->digest = status == MINKQ_SUCCESS ? info[k].digest : 0;
+    results[k]->stats = status == MINKQ_SUCCESS ? info[k].stats : minkq_query_stats{};
+  }
+  return status;
 }
 
 }  // namespace
@@ -386,25 +457,38 @@ minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query
                                size_t capacity, minkq_memory out_memory, minkq_query_info* info) {
   return guarded([&] {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-    require(query != nullptr, Status::kInvalidArgument, "query is NULL");
-    const int64_t kind = enum_value(query->kind), mode = enum_value(query->mode);
-    require(kind == MINKQ_QUERY_VT || kind == MINKQ_QUERY_EE, Status::kInvalidArgument,
-            "query->kind is not a minkq_query_kind value");
-    require(mode >= MINKQ_MODE_BOX && mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
-            "query->mode is not a minkq_mode value");
-    require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, "query->flags has unknown bits");
-    const bool vt = query->kind == MINKQ_QUERY_VT;
-    require(scene->flags & (vt ? MINKQ_SCENE_VT : MINKQ_SCENE_EE), Status::kInvalidArgument,
-            vt ? "VT query on a scene created without MINKQ_SCENE_VT" : "EE query on a scene created without MINKQ_SCENE_EE");
-    require(vt || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
-            "sphere mode needs point queries; use capsule_ray or capsule_exact for EE");
-    require_radius(query->radius);
-    uint32_t filters = 0;
-    if (scene->flags & MINKQ_SCENE_DROP_INCIDENT) filters |= minkq::kDropIncident;
-    if (query->flags & MINKQ_QUERY_LEAF_EXACT) filters |= minkq::kLeafExact;
-    const minkq::QueryRequest request{vt ? minkq::QueryKind::kVertexTriangle : minkq::QueryKind::kEdgeEdge,
-                                      static_cast<minkq::Mode>(query->mode), filters, query->radius, {}, {}};
+    const minkq::QueryRequest request = checked_scene_request(scene, query, "query");
     run_and_report(scene->device, *scene->store, request, query->flags, out_pairs, capacity, out_memory, info);
+  });
+}
+
+minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                     const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                     int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
+                                     minkq_query_info* vt_info, minkq_query_info* ee_info) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    const minkq::QueryRequest vt = checked_scene_request(scene, vt_query, "vt_query");
+    const minkq::QueryRequest ee = checked_scene_request(scene, ee_query, "ee_query");
+    require(vt_query->kind == MINKQ_QUERY_VT, Status::kInvalidArgument, "vt_query->kind is not MINKQ_QUERY_VT");
+    require(ee_query->kind == MINKQ_QUERY_EE, Status::kInvalidArgument, "ee_query->kind is not MINKQ_QUERY_EE");
+    const minkq::PairOutput vt_out =
+        checked_output(scene->device, vt_pairs, vt_capacity, out_memory, vt_query->flags, vt_info,
+                       {"vt_pairs", "vt_capacity", "vt_info"});
+    const minkq::PairOutput ee_out =
+        checked_output(scene->device, ee_pairs, ee_capacity, out_memory, ee_query->flags, ee_info,
+                       {"ee_pairs", "ee_capacity", "ee_info"});
+    require(vt_info != ee_info, Status::kInvalidArgument, "vt_info and ee_info are the same struct");
+    *vt_info = minkq_query_info{};
+    *ee_info = minkq_query_info{};
+    minkq::WorkCounts vt_work, ee_work;
+    const std::array<uint64_t, 2> counts = scene->store->query_vt_ee(
+        {vt, vt_out, (vt_query->flags & MINKQ_QUERY_STATS) ? &vt_work : nullptr},
+        {ee, ee_out, (ee_query->flags & MINKQ_QUERY_STATS) ? &ee_work : nullptr});
+    const bool vt_fits = report(scene->device, vt_out, vt_query->flags, counts[0], vt_work, vt_info);
+    const bool ee_fits = report(scene->device, ee_out, ee_query->flags, counts[1], ee_work, ee_info);
+    if (!vt_fits) fail(Status::kCapacity, "VT: " + capacity_message(counts[0], vt_capacity));
+    if (!ee_fits) fail(Status::kCapacity, "EE: " + capacity_message(counts[1], ee_capacity));
   });
 }
 
@@ -425,19 +509,26 @@ minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc
     last_error = "result is NULL";
     return MINKQ_ERROR_INVALID_ARGUMENT;
   }
-  // Try the buffer as it is; on CAPACITY grow it to the exact count and run again.
-  minkq_query_info info{};
-  minkq_status status = minkq_scene_query(scene, query, result->pairs.data(), result->pairs.size() / 2,
-                                          MINKQ_MEMORY_HOST, &info);
-  if (status == MINKQ_ERROR_CAPACITY) {
-    const minkq_status grown = guarded([&] { result->pairs.resize(size_t(info.count) * 2); });
-    if (grown != MINKQ_SUCCESS) return grown;
-    status = minkq_scene_query(scene, query, result->pairs.data(), result->pairs.size() / 2, MINKQ_MEMORY_HOST, &info);
+  return query_into_results<1>({result}, [&](std::array<minkq_query_info, 1>& info) {
+    return minkq_scene_query(scene, query, result->pairs.data(), result->pairs.size() / 2, MINKQ_MEMORY_HOST,
+                             &info[0]);
+  });
+}
+
+minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                            const minkq_query_desc* ee_query, minkq_result* vt_result,
+                                            minkq_result* ee_result) {
+  if (vt_result == nullptr || ee_result == nullptr || vt_result == ee_result) {
+    last_error = vt_result == nullptr   ? "vt_result is NULL"
+                 : ee_result == nullptr ? "ee_result is NULL"
+                                        : "vt_result and ee_result are the same result";
+    return MINKQ_ERROR_INVALID_ARGUMENT;
   }
-  result->count = status == MINKQ_SUCCESS ? info.count : 0;
-  result->digest = status == MINKQ_SUCCESS ? info.digest : 0;
-  result->stats = status == MINKQ_SUCCESS ? info.stats : minkq_query_stats{};
-  return status;
+  return query_into_results<2>({vt_result, ee_result}, [&](std::array<minkq_query_info, 2>& info) {
+    return minkq_scene_query_vt_ee(scene, vt_query, ee_query, vt_result->pairs.data(), vt_result->pairs.size() / 2,
+                                   ee_result->pairs.data(), ee_result->pairs.size() / 2, MINKQ_MEMORY_HOST, &info[0],
+                                   &info[1]);
+  });
 }
 
 minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh) {

@@ -29,7 +29,7 @@ extern "C" {
 
 /* ---- Versions ------------------------------------------------------------------------------ */
 #define MINKQ_VERSION_MAJOR 0
-#define MINKQ_VERSION_MINOR 2
+#define MINKQ_VERSION_MINOR 3
 #define MINKQ_VERSION_PATCH 0
 /* Bumped whenever a struct layout, enum value or function signature changes. */
 #define MINKQ_ABI_VERSION 2
@@ -203,6 +203,18 @@ typedef struct minkq_query_info {
 minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
                                size_t capacity, minkq_memory out_memory, minkq_query_info* info);
 
+/* A VT query and an EE query of one scene (created with both) in one pass: one parallel loop on
+ * the CPU, one kernel launch and one count readback on CUDA, where two minkq_scene_query calls
+ * take two of each. vt_query->kind must be MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE;
+ * modes, flags and radii are each query's own. Each query's pairs, count, digest and stats are
+ * exactly those minkq_scene_query gives it alone. Buffers as minkq_scene_query, both in
+ * out_memory: a query whose pairs fit is written in full; if either does not fit, returns
+ * CAPACITY (the message names VT or EE) with both infos' counts exact. */
+minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                     const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                     int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
+                                     minkq_query_info* vt_info, minkq_query_info* ee_info);
+
 /* ---- Results: library-owned, growing pair buffers ------------------------------------------ */
 typedef struct minkq_result minkq_result;
 
@@ -210,6 +222,10 @@ minkq_status minkq_result_create(minkq_result** out_result);
 void minkq_result_release(minkq_result* result);
 /* Like minkq_scene_query, into a result that grows as needed (host memory). */
 minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query, minkq_result* result);
+/* Like minkq_scene_query_vt_ee, into two distinct results that grow as needed (host memory). */
+minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                            const minkq_query_desc* ee_query, minkq_result* vt_result,
+                                            minkq_result* ee_result);
 uint64_t minkq_result_count(const minkq_result* result);
 /* 2 * count int32, valid until the result is reused or released. */
 const int32_t* minkq_result_pairs(const minkq_result* result);

@@ -116,6 +116,61 @@ TEST_F(Fixture, bad_radius_mode_kind_and_flags_are_rejected) {
   EXPECT_EQ(minkq_scene_query(both.handle, &ok, nullptr, 5, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
 }
 
+TEST_F(Fixture, vt_ee_call_checks_each_query_and_buffer_by_name) {
+  test::Scene vt_only(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
+  test::Scene both(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f}, ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, 1.0f};
+  std::vector<int32_t> a(64), b(64);
+  minkq_query_info vt_info{}, ee_info{};
+  auto run = [&](minkq_scene* scene, const minkq_query_desc* v, const minkq_query_desc* e, int32_t* vp, size_t vc,
+                 int32_t* ep, size_t ec, minkq_query_info* vi, minkq_query_info* ei) {
+    return minkq_scene_query_vt_ee(scene, v, e, vp, vc, ep, ec, MINKQ_MEMORY_HOST, vi, ei);
+  };
+  auto expect = [&](minkq_status status, minkq_status expected, const std::string& words) {
+    EXPECT_EQ(status, expected) << words;
+    EXPECT_NE(message().find(words), std::string::npos) << message();
+  };
+  expect(run(vt_only.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "EE query on a scene created without MINKQ_SCENE_EE");
+  expect(run(nullptr, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "scene is NULL");
+  expect(run(both.handle, nullptr, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "vt_query is NULL");
+  expect(run(both.handle, &ee, &vt, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "vt_query->kind is not MINKQ_QUERY_VT");
+  expect(run(both.handle, &vt, &vt, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "ee_query->kind is not MINKQ_QUERY_EE");
+  const minkq_query_desc ee_sphere{MINKQ_QUERY_EE, MINKQ_MODE_SPHERE, 0, 1.0f};
+  expect(run(both.handle, &vt, &ee_sphere, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
+         MINKQ_ERROR_INVALID_ARGUMENT, "sphere mode needs point queries");
+  const minkq_query_desc ee_bad_radius{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, -2.0f};
+  expect(run(both.handle, &vt, &ee_bad_radius, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
+         MINKQ_ERROR_INVALID_ARGUMENT, "radius -2 is negative");
+  const minkq_query_desc vt_bad_flags{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 1u << 9, 1.0f};
+  expect(run(both.handle, &vt_bad_flags, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
+         MINKQ_ERROR_INVALID_ARGUMENT, "vt_query->flags has unknown bits");
+  expect(run(both.handle, &vt, &ee, nullptr, 3, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "vt_pairs is NULL but vt_capacity is 3");
+  expect(run(both.handle, &vt, &ee, a.data(), 32, nullptr, 4, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "ee_pairs is NULL but ee_capacity is 4");
+  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, nullptr, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "vt_info is NULL");
+  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, nullptr), MINKQ_ERROR_INVALID_ARGUMENT,
+         "ee_info is NULL");
+  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &vt_info), MINKQ_ERROR_INVALID_ARGUMENT,
+         "vt_info and ee_info are the same");
+  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), SIZE_MAX, &vt_info, &ee_info), MINKQ_ERROR_SIZE_OVERFLOW,
+         "ee_capacity");
+  expect(minkq_scene_query_vt_ee(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, MINKQ_MEMORY_DEVICE, &vt_info,
+                                 &ee_info),
+         MINKQ_ERROR_INVALID_ARGUMENT, "vt_pairs is in device memory but the device is cpu");
+  expect(minkq_scene_query_vt_ee_result(both.handle, &vt, &ee, nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT,
+         "vt_result is NULL");
+  EXPECT_EQ(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_SUCCESS) << message();
+  EXPECT_GT(vt_info.count, 0u);
+  EXPECT_GT(ee_info.count, 0u);
+}
+
 // The backend's store holds the scene's only copy of its topology: counts and edges come back
 // from it, on the CPU and on a CUDA device where one exists.
 TEST_F(Fixture, scene_edges_come_back_derived_in_lexicographic_order_or_as_given) {

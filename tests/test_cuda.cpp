@@ -470,6 +470,68 @@ TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {
   }
 }
 
+// The fused VT + EE call on CUDA: one launch for both; each query's output equals the CPU's
+// (fused or alone), into host or device buffers, and a short EE buffer gets nothing past it.
+TEST_F(Cuda, vt_and_ee_in_one_call_match_cpu_into_host_and_device_buffers) {
+  test::Device cpu("cpu"), cuda("cuda");
+  for (const auto& [name, mesh] : Scenes(seed).meshes) {
+    ScenePtr a = make_scene(cpu.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    ScenePtr b = make_scene(cuda.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    ASSERT_TRUE(a && b);
+    const double edge = reference::mean_edge_length(mesh);
+    const uint32_t all = MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS;
+    for (minkq_mode vt_mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
+      for (minkq_mode ee_mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_EXACT})
+        for (uint32_t leaf : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)}) {
+          const std::string what = name + " VT mode " + std::to_string(vt_mode) + " EE mode " +
+                                   std::to_string(ee_mode) + (leaf ? " leaf_exact" : "");
+          const minkq_query_desc vt{MINKQ_QUERY_VT, vt_mode, leaf | all, float(0.5 * edge)};
+          const minkq_query_desc ee{MINKQ_QUERY_EE, ee_mode, leaf | all, float(0.25 * edge)};
+          const Outcome vt_alone = scene_query(a.get(), vt.kind, vt.mode, vt.radius, vt.flags);
+          const Outcome ee_alone = scene_query(a.get(), ee.kind, ee.mode, ee.radius, ee.flags);
+          for (minkq_memory memory : {MINKQ_MEMORY_HOST, MINKQ_MEMORY_DEVICE}) {
+            const size_t guard = 64, vt_room = size_t(vt_alone.count), ee_room = size_t(ee_alone.count) + guard;
+            DeviceMemory vt_device(2 * (vt_room + 1) * sizeof(int32_t)), ee_device(2 * ee_room * sizeof(int32_t));
+            std::vector<int32_t> vt_host(2 * vt_room), ee_host(2 * ee_room, -1);
+            ASSERT_EQ(cudaMemset(ee_device.ptr, 0xFF, 2 * ee_room * sizeof(int32_t)), cudaSuccess);
+            const bool on_device = memory == MINKQ_MEMORY_DEVICE;
+            int32_t* vt_out = on_device ? vt_device.as<int32_t>() : vt_host.data();
+            int32_t* ee_out = on_device ? ee_device.as<int32_t>() : ee_host.data();
+            auto fetch = [&](const int32_t* out, uint64_t count) {
+              std::vector<int32_t> pairs(2 * size_t(count));
+              if (on_device)
+                EXPECT_EQ(cudaMemcpy(pairs.data(), out, pairs.size() * sizeof(int32_t), cudaMemcpyDeviceToHost),
+                          cudaSuccess);
+              else
+                std::copy(out, out + pairs.size(), pairs.begin());
+              return pairs;
+            };
+            minkq_query_info vt_info{}, ee_info{};
+            if (ee_alone.count > 0) {  // EE one short: CAPACITY, VT written, nothing past the EE buffer
+              EXPECT_EQ(minkq_scene_query_vt_ee(b.get(), &vt, &ee, vt_out, vt_room, ee_out, size_t(ee_alone.count) - 1,
+                                                memory, &vt_info, &ee_info),
+                        MINKQ_ERROR_CAPACITY)
+                  << what;
+              EXPECT_EQ(ee_info.count, ee_alone.count) << what;
+              const std::vector<int32_t> tail = fetch(ee_out, ee_room);
+              for (size_t i = 2 * (size_t(ee_alone.count) - 1); i < tail.size(); ++i)
+                ASSERT_EQ(tail[i], -1) << what << ": written past capacity";
+              Outcome vt_got{vt_info.count, vt_info.digest, vt_info.stats, fetch(vt_out, vt_info.count)};
+              expect_same(vt_alone, vt_got, what + " VT beside a short EE buffer");
+            }
+            ASSERT_EQ(minkq_scene_query_vt_ee(b.get(), &vt, &ee, vt_out, vt_room, ee_out, ee_room, memory, &vt_info,
+                                              &ee_info),
+                      MINKQ_SUCCESS)
+                << minkq_last_error_message();
+            expect_same(vt_alone, Outcome{vt_info.count, vt_info.digest, vt_info.stats, fetch(vt_out, vt_info.count)},
+                        what + " VT fused");
+            expect_same(ee_alone, Outcome{ee_info.count, ee_info.digest, ee_info.stats, fetch(ee_out, ee_info.count)},
+                        what + " EE fused");
+          }
+        }
+  }
+}
+
 TEST_F(Cuda, user_queries_from_device_memory_match_host_queries) {
   test::Device cpu("cpu"), cuda("cuda");
   test::Random rng(seed);

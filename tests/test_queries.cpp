@@ -3,6 +3,7 @@
 // completeness, refit, scale invariance and the extreme cases of DESIGN.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -305,6 +306,126 @@ TEST_F(Queries, empty_and_single_element_scenes) {
   one.tris = {0, 1, 2};
   check_scene(one, 0.15f, false, "one triangle");
   check_scene(one, 0.15f, true, "one triangle");
+}
+
+// One query's output through the C API: status, info and the pairs written.
+struct QueryOutput {
+  minkq_status status;
+  minkq_query_info info;
+  std::vector<int32_t> pairs;
+};
+
+// Pairs as a sorted list, for outputs not asked to be canonical.
+std::vector<int32_t> as_sorted(std::vector<int32_t> raw) {
+  std::vector<std::pair<int32_t, int32_t>> pairs(raw.size() / 2);
+  for (size_t i = 0; i < pairs.size(); ++i) pairs[i] = {raw[2 * i], raw[2 * i + 1]};
+  std::sort(pairs.begin(), pairs.end());
+  for (size_t i = 0; i < pairs.size(); ++i) raw[2 * i] = pairs[i].first, raw[2 * i + 1] = pairs[i].second;
+  return raw;
+}
+
+void expect_same_output(const QueryOutput& alone, const QueryOutput& fused, uint32_t flags, const std::string& what) {
+  EXPECT_EQ(fused.status, alone.status) << what;
+  EXPECT_EQ(fused.info.count, alone.info.count) << what;
+  EXPECT_EQ(fused.info.digest, alone.info.digest) << what;
+  EXPECT_EQ(fused.info.stats.nodes_visited, alone.info.stats.nodes_visited) << what;
+  EXPECT_EQ(fused.info.stats.node_tests, alone.info.stats.node_tests) << what;
+  EXPECT_EQ(fused.info.stats.primitive_tests, alone.info.stats.primitive_tests) << what;
+  EXPECT_EQ(fused.info.stats.candidates, alone.info.stats.candidates) << what;
+  if (flags & (MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST)) EXPECT_EQ(fused.pairs, alone.pairs) << what;
+  else EXPECT_EQ(as_sorted(fused.pairs), as_sorted(alone.pairs)) << what;
+}
+
+// minkq_scene_query_vt_ee: each query's pairs, count, digest and work are what a call of its
+// own gives, for every pair of modes and mixes of flags and radii.
+TEST_F(Queries, vt_and_ee_in_one_call_give_what_each_gives_alone) {
+  const Mesh soup = reference::random_soup(800, seed, 0.1), sheet = reference::twisted_sheet(24, 3.0);
+  for (const auto& [mesh, flags] : {std::pair{&soup, kBoth}, std::pair{&sheet, kBoth | MINKQ_SCENE_DROP_INCIDENT}}) {
+    test::Device device;
+    test::Scene scene(device.handle, *mesh, flags);
+    const double edge = reference::mean_edge_length(*mesh);
+    const float vt_r = float(0.5 * edge), ee_r = float(0.25 * edge);  // unequal: a mix-up shows
+    auto alone = [&](const minkq_query_desc& q) {
+      QueryOutput out{};
+      out.status = minkq_scene_query(scene.handle, &q, nullptr, 0, MINKQ_MEMORY_HOST, &out.info);
+      out.pairs.resize(2 * out.info.count);
+      out.status = minkq_scene_query(scene.handle, &q, out.pairs.data(), out.info.count, MINKQ_MEMORY_HOST, &out.info);
+      return out;
+    };
+    for (minkq_mode vt_mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+      for (minkq_mode ee_mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+        for (uint32_t vt_flags : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS)})
+          for (uint32_t ee_flags : {uint32_t(MINKQ_QUERY_CANONICAL | MINKQ_QUERY_STATS),
+                                    uint32_t(MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_DIGEST)}) {
+            const std::string what = "VT mode " + std::to_string(vt_mode) + " flags " + std::to_string(vt_flags) +
+                                     ", EE mode " + std::to_string(ee_mode) + " flags " + std::to_string(ee_flags);
+            const minkq_query_desc vt{MINKQ_QUERY_VT, vt_mode, vt_flags, vt_r}, ee{MINKQ_QUERY_EE, ee_mode, ee_flags, ee_r};
+            const QueryOutput vt_alone = alone(vt), ee_alone = alone(ee);
+            ASSERT_EQ(vt_alone.status, MINKQ_SUCCESS) << minkq_last_error_message();
+            ASSERT_EQ(ee_alone.status, MINKQ_SUCCESS) << minkq_last_error_message();
+            ASSERT_GT(vt_alone.info.count, 0u) << what;
+            ASSERT_GT(ee_alone.info.count, 0u) << what;
+            QueryOutput vt_fused{}, ee_fused{};
+            vt_fused.pairs.resize(vt_alone.pairs.size());
+            ee_fused.pairs.resize(ee_alone.pairs.size());
+            vt_fused.status = ee_fused.status = minkq_scene_query_vt_ee(
+                scene.handle, &vt, &ee, vt_fused.pairs.data(), vt_alone.info.count, ee_fused.pairs.data(),
+                ee_alone.info.count, MINKQ_MEMORY_HOST, &vt_fused.info, &ee_fused.info);
+            expect_same_output(vt_alone, vt_fused, vt_flags, what + " (VT)");
+            expect_same_output(ee_alone, ee_fused, ee_flags, what + " (EE)");
+          }
+  }
+}
+
+// A fused call whose EE pairs do not fit: CAPACITY naming EE, both counts exact, the VT pairs
+// written in full and nothing past the EE buffer; results grow both buffers as needed.
+TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
+  const Mesh mesh = reference::random_soup(500, seed, 0.1);
+  test::Device device;
+  test::Scene scene(device.handle, mesh, kBoth);
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, MINKQ_QUERY_DIGEST, r};
+  const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, r};
+  uint64_t vt_digest = 0;
+  const Pairs vt_all = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, r, 0, &vt_digest);
+  const Pairs ee_all = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r);
+  ASSERT_GT(ee_all.size(), 1u);
+  std::vector<int32_t> vt_pairs(2 * vt_all.size()), ee_pairs(2 * ee_all.size() + 8, -77);
+  minkq_query_info vt_info{}, ee_info{};
+  const size_t ee_capacity = ee_all.size() - 1;
+  EXPECT_EQ(minkq_scene_query_vt_ee(scene.handle, &vt, &ee, vt_pairs.data(), vt_all.size(), ee_pairs.data(),
+                                    ee_capacity, MINKQ_MEMORY_HOST, &vt_info, &ee_info),
+            MINKQ_ERROR_CAPACITY);
+  const std::string message = minkq_last_error_message();
+  EXPECT_EQ(message.rfind("EE: " + std::to_string(ee_all.size()) + " pairs found", 0), 0u) << message;
+  EXPECT_EQ(vt_info.count, vt_all.size());
+  EXPECT_EQ(vt_info.digest, vt_digest);
+  EXPECT_EQ(ee_info.count, ee_all.size());
+  for (size_t i = 0; i < vt_all.size(); ++i) ASSERT_EQ(vt_all[i], std::make_pair(vt_pairs[2 * i], vt_pairs[2 * i + 1]));
+  for (size_t i = 2 * ee_capacity; i < ee_pairs.size(); ++i) ASSERT_EQ(ee_pairs[i], -77) << "written past the buffer";
+  // VT short too: the message names VT first.
+  EXPECT_EQ(minkq_scene_query_vt_ee(scene.handle, &vt, &ee, nullptr, 0, nullptr, 0, MINKQ_MEMORY_HOST, &vt_info,
+                                    &ee_info),
+            MINKQ_ERROR_CAPACITY);
+  EXPECT_EQ(std::string(minkq_last_error_message()).rfind("VT: ", 0), 0u) << minkq_last_error_message();
+  EXPECT_EQ(vt_info.count, vt_all.size());
+  EXPECT_EQ(ee_info.count, ee_all.size());
+
+  minkq_result *vt_result = nullptr, *ee_result = nullptr;
+  ASSERT_EQ(minkq_result_create(&vt_result), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_result_create(&ee_result), MINKQ_SUCCESS);
+  for (int round = 0; round < 2; ++round) {  // grows both, then reuses them
+    ASSERT_EQ(minkq_scene_query_vt_ee_result(scene.handle, &vt, &ee, vt_result, ee_result), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    ASSERT_EQ(minkq_result_count(vt_result), vt_all.size());
+    ASSERT_EQ(minkq_result_count(ee_result), ee_all.size());
+    EXPECT_EQ(minkq_result_digest(vt_result), vt_digest);
+    const int32_t* ee_got = minkq_result_pairs(ee_result);
+    for (size_t i = 0; i < ee_all.size(); ++i) ASSERT_EQ(ee_all[i], std::make_pair(ee_got[2 * i], ee_got[2 * i + 1]));
+  }
+  EXPECT_EQ(minkq_scene_query_vt_ee_result(scene.handle, &vt, &ee, vt_result, vt_result), MINKQ_ERROR_INVALID_ARGUMENT);
+  minkq_result_release(vt_result);
+  minkq_result_release(ee_result);
 }
 
 }  // namespace

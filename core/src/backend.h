@@ -2,6 +2,7 @@
 // digests) and a backend (CPU or CUDA) that owns the arrays and runs build, refit and queries.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -62,6 +63,13 @@ struct PairOutput {
   bool canonical;  // lexicographic order
 };
 
+// One query of a call: what to run, where its pairs go, and where its work is counted (or null).
+struct QueryJob {
+  QueryRequest request;
+  PairOutput out;
+  WorkCounts* work;
+};
+
 // One scene's arrays and trees on a backend.
 class Store {
  public:
@@ -84,6 +92,9 @@ class MeshStore : public Store {
  public:
   // The scene's edges, copied to host memory (edge_count entries).
   virtual void copy_edges(Edge* host_out) = 0;
+  // A VT and an EE query in one pass (one parallel loop; on CUDA one kernel launch and one
+  // count readback): each query's total, pairs and work as query() gives them alone.
+  virtual std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) = 0;
 };
 
 class Backend {
@@ -108,23 +119,53 @@ std::unique_ptr<Backend> make_cuda_backend(int ordinal);
 int cuda_device_count();  // 0 where built without CUDA or no device/driver
 bool built_with_cuda();
 
-// Calls fn with a default-constructed value of the shape type that `mode` selects. Point
-// queries (VT, user spheres) are zero-length capsules: capsule_ray tests the box, and
-// capsule_exact the sphere. The front end rejects sphere mode for segments and any non-box
-// mode for box queries before calling.
-template <class Fn>
-void with_shape(Mode mode, bool point_queries, Fn&& fn) {
+// Calls fn with a default-constructed value of the shape type that `mode` selects, for point
+// queries (VT, user spheres: kPoints) or segment and box queries; only the shapes a kind can
+// use are compiled for it. Points are zero-length capsules: capsule_ray tests the box, and
+// capsule_exact the sphere. The front end rejects sphere mode for segments and any non-box mode
+// for box queries before calling.
+template <bool kPoints, class Fn>
+void with_shape(Mode mode, Fn&& fn) {
   switch (mode) {
-    case Mode::kBox: fn(BoxShape{}); return;
-    case Mode::kSphere: fn(SphereShape{}); return;
+    case Mode::kBox: return fn(BoxShape{});
+    case Mode::kSphere:
+      if constexpr (kPoints) return fn(SphereShape{});
+      break;
     case Mode::kCapsuleRay:
-      if (point_queries) fn(BoxShape{}); else fn(CapsuleRayShape{});
-      return;
+      if constexpr (kPoints) return fn(BoxShape{}); else return fn(CapsuleRayShape{});
     case Mode::kCapsuleExact:
-      if (point_queries) fn(SphereShape{}); else fn(CapsuleExactShape{});
-      return;
+      if constexpr (kPoints) return fn(SphereShape{}); else return fn(CapsuleExactShape{});
   }
-  fail(Status::kInternal, "unknown mode");
+  fail(Status::kInternal, "mode not available for these queries");
+}
+
+// The queries of one request for a pass: the tree, the query source and where the pairs go,
+// with the node test as a type.
+template <class Shape_, class Queries>
+struct QueryPass {
+  using Shape = Shape_;
+  BvhView bvh;
+  Queries queries;
+  int32_t num_queries;
+  PairOutput out;
+};
+
+// Calls fn with the QueryPass of a request (its shape chosen by with_shape).
+template <bool kPoints, class Queries, class Fn>
+void with_pass(const QueryRequest& request, const BvhView& bvh, const Queries& queries, int32_t num_queries,
+               const PairOutput& out, Fn&& fn) {
+  with_shape<kPoints>(request.mode, [&](auto shape) {
+    fn(QueryPass<decltype(shape), Queries>{bvh, queries, num_queries, out});
+  });
+}
+
+// Calls run.template operator()<Work>() with the work type a call's passes need: the counted
+// traversal if any pass counts (the others' counts are then dropped), else the uncounted one.
+template <size_t N, class Run>
+auto with_work(const std::array<WorkCounts*, N>& works, Run&& run) {
+  for (WorkCounts* w : works)
+    if (w) return run(WorkCounts{});
+  return run(NoWork{});
 }
 
 // A tree's area cost (sum of node_area over the root's half area) now over its value at its

@@ -32,35 +32,29 @@ std::vector<Box> gather_boxes(const Strided& values) {
 
 namespace {
 
-// Runs every query in fixed blocks, each into its own buffer, then concatenates in block
-// order: the output order is deterministic whatever the thread count.
-template <class Shape, class Queries, class Work>
-uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out,
-                     Work* work) {
-  constexpr int32_t kBlock = 256;
-  const int32_t blocks = (num_queries + kBlock - 1) / kBlock;
-  std::vector<std::vector<int32_t>> parts(static_cast<size_t>(blocks));
-  std::vector<Work> block_work(static_cast<size_t>(blocks));
-  tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
-    std::vector<int32_t>& part = parts[b];
-    auto emit = [&part](int32_t first, int32_t second) {
-      part.push_back(first);
-      part.push_back(second);
-    };
-    Work local;
-    const int32_t end = std::min(num_queries, (b + 1) * kBlock);
-    for (int32_t i = b * kBlock; i < end; ++i) run_query<Shape>(bvh, queries, i, emit, local);
-    block_work[b] = local;
-  });
-  if constexpr (std::is_same<Work, WorkCounts>::value)
-    for (const WorkCounts& w : block_work) work->add(w);
+// Queries per block: each block runs its queries in order into its own buffer.
+constexpr int32_t kBlock = 256;
+
+template <class Work, class Pass>
+void run_block(const Pass& pass, int32_t block, std::vector<int32_t>& part, Work& work) {
+  auto emit = [&part](int32_t first, int32_t second) {
+    part.push_back(first);
+    part.push_back(second);
+  };
+  const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
+  for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, emit, work);
+}
+
+// Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
+// total, writing nothing if it exceeds the capacity.
+uint64_t write_pass(const std::vector<int32_t>* parts, int32_t blocks, const PairOutput& out) {
   uint64_t total = 0;
-  for (const auto& part : parts) total += part.size() / 2;
+  for (int32_t b = 0; b < blocks; ++b) total += parts[b].size() / 2;
   if (total > out.capacity) return total;
   int32_t* cursor = out.pairs;
-  for (const auto& part : parts) {
-    if (!part.empty()) std::memcpy(cursor, part.data(), part.size() * sizeof(int32_t));
-    cursor += part.size();
+  for (int32_t b = 0; b < blocks; ++b) {
+    if (!parts[b].empty()) std::memcpy(cursor, parts[b].data(), parts[b].size() * sizeof(int32_t));
+    cursor += parts[b].size();
   }
   if (out.canonical) {
     std::vector<uint64_t> packed(total);
@@ -76,20 +70,42 @@ uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_que
   return total;
 }
 
-template <class Queries>
-uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView& bvh, const Queries& queries,
-                  int32_t num_queries, const PairOutput& out, WorkCounts* work) {
-  uint64_t total = 0;
-  with_shape(request.mode, point_queries, [&](auto shape) {
-    using Shape = decltype(shape);
-    if (work) {
-      total = run_queries<Shape>(bvh, queries, num_queries, out, work);
-    } else {
-      NoWork* none = nullptr;
-      total = run_queries<Shape>(bvh, queries, num_queries, out, none);
-    }
+// Runs the passes' queries in one parallel loop over fixed blocks (each block within one pass),
+// each block into its own buffer, then concatenates each pass's blocks in order: the output
+// order is deterministic whatever the thread count. Returns each pass's total.
+template <class Work, class... Pass>
+std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                 const Pass&... passes) {
+  constexpr size_t kPasses = sizeof...(Pass);
+  const std::array<int32_t, kPasses> num_queries{passes.num_queries...};
+  std::array<int32_t, kPasses + 1> first_block{};
+  for (size_t k = 0; k < kPasses; ++k) first_block[k + 1] = first_block[k] + (num_queries[k] + kBlock - 1) / kBlock;
+  const int32_t blocks = first_block[kPasses];
+  std::vector<std::vector<int32_t>> parts(static_cast<size_t>(blocks));
+  std::vector<Work> block_work(static_cast<size_t>(blocks));
+  tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
+    size_t k = 0;
+    auto run_if_owner = [&](const auto& pass) {
+      if (b >= first_block[k] && b < first_block[k + 1]) run_block(pass, b - first_block[k], parts[b], block_work[b]);
+      ++k;
+    };
+    (run_if_owner(passes), ...);
   });
-  return total;
+  const std::array<PairOutput, kPasses> outs{passes.out...};
+  std::array<uint64_t, kPasses> totals{};
+  for (size_t k = 0; k < kPasses; ++k) {
+    if constexpr (std::is_same<Work, WorkCounts>::value)
+      if (works[k])
+        for (int32_t b = first_block[k]; b < first_block[k + 1]; ++b) works[k]->add(block_work[b]);
+    totals[k] = write_pass(parts.data() + first_block[k], first_block[k + 1] - first_block[k], outs[k]);
+  }
+  return totals;
+}
+
+template <class... Pass>
+std::array<uint64_t, sizeof...(Pass)> run_counted(const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                  const Pass&... passes) {
+  return with_work(works, [&](auto work) { return run_passes<decltype(work)>(works, passes...); });
 }
 
 class CpuMeshStore final : public MeshStore {
@@ -124,17 +140,34 @@ class CpuMeshStore final : public MeshStore {
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
-    if (request.kind == QueryKind::kVertexTriangle) {
-      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
-                                          request.filters};
-      return dispatch(request, true, triangle_tree_.view(), queries, int32_t(vertices_.size()), out, work);
-    }
-    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree_.sorted_prims().data(), request.r,
-                                  request.filters};
-    return dispatch(request, false, edge_tree_.view(), queries, int32_t(edges_.size()), out, work);
+    uint64_t total = 0;
+    auto run = [&](const auto& pass) { total = run_counted({work}, pass)[0]; };
+    if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
+    return total;
+  }
+
+  std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) override {
+    std::array<uint64_t, 2> totals{};
+    with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
+      with_ee_pass(ee.request, ee.out, [&](const auto& ee_pass) { totals = run_counted({vt.work, ee.work}, vt_pass, ee_pass); });
+    });
+    return totals;
   }
 
  private:
+  // Calls fn with the QueryPass of a VT request, or of an EE request.
+  template <class Fn>
+  void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
+                                        request.filters};
+    with_pass<true>(request, triangle_tree_.view(), queries, int32_t(vertices_.size()), out, fn);
+  }
+  template <class Fn>
+  void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree_.sorted_prims().data(), request.r, request.filters};
+    with_pass<false>(request, edge_tree_.view(), queries, int32_t(edges_.size()), out, fn);
+  }
+
   // The trees the flags ask for, and the VT query order, from the current vertices.
   void build_trees() {
     if (has_triangle_tree_) {
@@ -171,8 +204,11 @@ class CpuBoxStore final : public Store {
     const std::vector<Vec3> first = gather_vec3(request.first);
     const std::vector<Vec3> second = gather_vec3(request.second);
     const UserQueries queries{first.data(), second.empty() ? nullptr : second.data(), request.r};
-    return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
-                    int32_t(first.size()), out, work);
+    uint64_t total = 0;
+    auto run = [&](const auto& pass) { total = run_counted({work}, pass)[0]; };
+    if (request.kind == QueryKind::kUserSpheres) with_pass<true>(request, tree_.view(), queries, int32_t(first.size()), out, run);
+    else with_pass<false>(request, tree_.view(), queries, int32_t(first.size()), out, run);
+    return total;
   }
 
  private:

@@ -12,8 +12,10 @@
 #include <thrust/iterator/counting_iterator.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <limits>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 
@@ -393,19 +395,41 @@ __device__ void add_work(const WorkCounts& w, unsigned long long* work) {
   }
 }
 
-// One thread per query. With WorkCounts, every thread of the block stays to the end so that
-// whole warps take part in the reduction of the counts.
-template <class Shape, class Queries, class Work>
-__global__ void __launch_bounds__(kQueryThreads) query_kernel(BvhView bvh, Queries queries, int32_t num_queries,
-                                                              PairSlots slots, unsigned long long* work_out) {
-  const int64_t i = global_index();
+// A pass's queries on the device: thread first_thread + i runs query i. Passes start at block
+// boundaries, so every block (and warp) runs one pass.
+template <class Shape_, class Queries>
+struct DevicePass {
+  using Shape = Shape_;
+  BvhView bvh;
+  Queries queries;
+  int32_t num_queries;
+  int64_t first_thread;
+  PairSlots slots;
+  unsigned long long* work;  // WorkCounts' four counters
+};
+
+__host__ __device__ int64_t round_up_to_block(int64_t n) { return (n + kQueryThreads - 1) / kQueryThreads * kQueryThreads; }
+
+// Thread i's share of a pass, if i lies in the pass's blocks. With WorkCounts, every thread of
+// those blocks stays to the end so that whole warps take part in the reduction of the counts.
+template <class Work, class Pass>
+__device__ void run_pass_thread(const Pass& pass, int64_t i) {
+  const int64_t q = i - pass.first_thread;
+  if (q < 0 || q >= round_up_to_block(pass.num_queries)) return;  // uniform over the block
   Work work;
-  if (i < num_queries) {
-    PairBuffer emit(slots);
-    run_query<Shape>(bvh, queries, int32_t(i), emit, work);
+  if (q < pass.num_queries) {
+    PairBuffer emit(pass.slots);
+    run_query<typename Pass::Shape>(pass.bvh, pass.queries, int32_t(q), emit, work);
     emit.flush();
   }
-  if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, work_out);
+  if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, pass.work);
+}
+
+// One thread per query of each pass: one launch answers them all.
+template <class Work, class... Pass>
+__global__ void __launch_bounds__(kQueryThreads) query_kernel(Pass... passes) {
+  const int64_t i = global_index();
+  (run_pass_thread<Work>(passes, i), ...);
 }
 
 __global__ void pack_pairs_kernel(const int32_t* pairs, int64_t n, uint64_t* keys) {
@@ -427,6 +451,7 @@ struct QueryWorkspace {
   DeviceBuffer<int32_t> pairs;  // host output: pairs are collected here first
   DeviceBuffer<uint64_t> keys, sorted_keys;
   DeviceBuffer<char> temp;
+  std::array<uint64_t, 5> last_count{};  // per QueryKind: the most pairs a query of that kind found
 };
 
 int bit_width(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }
@@ -444,55 +469,99 @@ void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWorkspace& 
   launch("unpack_pairs_kernel launch", unpack_pairs_kernel, n, kThreads, ws.sorted_keys.data(), n, pairs);
 }
 
-template <class Shape, class Queries, class Work>
-uint64_t run_queries(const BvhView& bvh, const Queries& queries, int32_t num_queries, const PairOutput& out,
-                     QueryWorkspace& ws, WorkCounts* work) {
-  const bool to_host = out.memory == Memory::kHost;
-  // Host output goes through device scratch: first sized by a guess, then rerun at the exact
-  // count if the guess was short but the caller's buffer is not.
-  uint64_t capacity = out.capacity;
-  if (to_host)
-    capacity = std::min<uint64_t>(out.capacity, std::max<uint64_t>(ws.pairs.size() / 2, 8 * uint64_t(num_queries) + 65536));
-  ws.count.ensure(1);
-  ws.work.ensure(4);
-  uint64_t total = 0;
-  for (int attempt = 0; attempt < 2; ++attempt) {
-    if (to_host) ws.pairs.ensure(2 * size_t(capacity));
-    int32_t* const pairs = to_host ? ws.pairs.data() : out.pairs;
-    zero(ws.count, 1);
-    zero(ws.work, 4);
-    launch("query_kernel launch", query_kernel<Shape, Queries, Work>, num_queries, kQueryThreads, bvh, queries,
-           num_queries, PairSlots{pairs, capacity, ws.count.data()}, ws.work.data());
-    unsigned long long count = 0;
-    copy(&count, ws.count.data(), sizeof(count), cudaMemcpyDeviceToHost);
-    total = count;
-    if (total > out.capacity || total <= capacity) break;  // too many for the caller, or done
-    capacity = total;
-  }
-  if (work) {  // the last run's counts: a rerun repeats the same work
-    unsigned long long counts[4];
-    copy(counts, ws.work.data(), sizeof(counts), cudaMemcpyDeviceToHost);
-    work->add(WorkCounts{counts[0], counts[1], counts[2], counts[3]});
-  }
-  if (total > out.capacity) return total;  // the caller learns the exact count; nothing copied
-  if (total > capacity) fail(Status::kInternal, "pair count changed between two runs of the same query");
-  int32_t* const pairs = to_host ? ws.pairs.data() : out.pairs;
-  if (out.canonical) sort_pairs(pairs, int64_t(total), num_queries, ws);
-  if (to_host) copy(out.pairs, pairs, total * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
-  else check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");  // report kernel faults here
-  return total;
+// Host output goes through device scratch, sized first by a guess: the kind's last count, or
+// 8 pairs per query; a pass whose guess was short (but not the caller's buffer) reruns.
+uint64_t scratch_guess(const QueryWorkspace& ws, QueryKind kind, int32_t num_queries) {
+  return std::max<uint64_t>(ws.last_count[int(kind)], 8 * uint64_t(num_queries) + 65536);
 }
 
-template <class Queries>
-uint64_t dispatch(const QueryRequest& request, bool point_queries, const BvhView& bvh, const Queries& queries,
-                  int32_t num_queries, const PairOutput& out, QueryWorkspace& ws, WorkCounts* work) {
-  uint64_t total = 0;
-  with_shape(request.mode, point_queries, [&](auto shape) {
-    using Shape = decltype(shape);
-    if (work) total = run_queries<Shape, Queries, WorkCounts>(bvh, queries, num_queries, out, ws, work);
-    else total = run_queries<Shape, Queries, NoWork>(bvh, queries, num_queries, out, ws, nullptr);
-  });
-  return total;
+template <class Work, class... Pass>
+void launch_passes(const Pass&... passes) {
+  const int64_t threads = (round_up_to_block(passes.num_queries) + ...);
+  launch("query_kernel launch", query_kernel<Work, Pass...>, threads, kQueryThreads, passes...);
+}
+
+// Runs the passes in one kernel launch and one count readback; returns each pass's total,
+// its pairs written (and sorted if asked) where they fit the caller's buffer.
+template <class Work, class... Pass>
+std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::array<QueryKind, sizeof...(Pass)>& kinds,
+                                                 const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                 const Pass&... passes) {
+  constexpr size_t kPasses = sizeof...(Pass);
+  const std::array<PairOutput, kPasses> outs{passes.out...};
+  const std::array<int32_t, kPasses> num_queries{passes.num_queries...};
+  std::array<uint64_t, kPasses> capacity{};
+  for (size_t k = 0; k < kPasses; ++k) {
+    capacity[k] = outs[k].capacity;
+    if (outs[k].memory == Memory::kHost) capacity[k] = std::min<uint64_t>(outs[k].capacity, scratch_guess(ws, kinds[k], num_queries[k]));
+  }
+  ws.count.ensure(kPasses);
+  ws.work.ensure(4 * kPasses);
+  std::array<int32_t*, kPasses> pairs{};
+  std::array<uint64_t, kPasses> totals{};
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    size_t scratch = 0;  // host outputs' slots in ws.pairs, one after another
+    for (size_t k = 0; k < kPasses; ++k)
+      if (outs[k].memory == Memory::kHost) scratch += 2 * capacity[k];
+    ws.pairs.ensure(scratch);
+    scratch = 0;
+    for (size_t k = 0; k < kPasses; ++k) {
+      pairs[k] = outs[k].pairs;
+      if (outs[k].memory == Memory::kHost) {
+        pairs[k] = ws.pairs.data() + scratch;
+        scratch += 2 * capacity[k];
+      }
+    }
+    zero(ws.count, kPasses);
+    zero(ws.work, 4 * kPasses);
+    int64_t first_thread = 0;
+    size_t k = 0;
+    auto device_pass = [&](const auto& pass) {
+      using P = std::decay_t<decltype(pass)>;
+      const DevicePass<typename P::Shape, decltype(pass.queries)> d{
+          pass.bvh, pass.queries, pass.num_queries, first_thread,
+          PairSlots{pairs[k], capacity[k], ws.count.data() + k}, ws.work.data() + 4 * k};
+      first_thread += round_up_to_block(pass.num_queries);
+      ++k;
+      return d;
+    };
+    const auto device_passes = std::tuple{device_pass(passes)...};  // braces: built left to right
+    std::apply([](const auto&... d) { launch_passes<Work>(d...); }, device_passes);
+    unsigned long long counts[kPasses];
+    copy(counts, ws.count.data(), sizeof(counts), cudaMemcpyDeviceToHost);
+    bool rerun = false;
+    for (size_t j = 0; j < kPasses; ++j) {
+      totals[j] = counts[j];
+      if (totals[j] <= outs[j].capacity && totals[j] > capacity[j]) {
+        capacity[j] = totals[j];
+        rerun = true;
+      }
+    }
+    if (!rerun) break;
+  }
+  if constexpr (std::is_same<Work, WorkCounts>::value) {  // the last run's counts: a rerun repeats the same work
+    unsigned long long counts[4 * kPasses];
+    copy(counts, ws.work.data(), sizeof(counts), cudaMemcpyDeviceToHost);
+    for (size_t k = 0; k < kPasses; ++k)
+      if (works[k]) works[k]->add(WorkCounts{counts[4 * k], counts[4 * k + 1], counts[4 * k + 2], counts[4 * k + 3]});
+  }
+  for (size_t k = 0; k < kPasses; ++k) {
+    ws.last_count[int(kinds[k])] = std::max(ws.last_count[int(kinds[k])], totals[k]);
+    if (totals[k] > outs[k].capacity) continue;  // the caller learns the exact count; nothing copied
+    if (totals[k] > capacity[k]) fail(Status::kInternal, "pair count changed between two runs of the same query");
+    if (outs[k].canonical) sort_pairs(pairs[k], int64_t(totals[k]), num_queries[k], ws);
+    if (outs[k].memory == Memory::kHost)
+      copy(outs[k].pairs, pairs[k], totals[k] * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
+  }
+  check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");  // report kernel faults here
+  return totals;
+}
+
+template <class... Pass>
+std::array<uint64_t, sizeof...(Pass)> run_counted(QueryWorkspace& ws, const std::array<QueryKind, sizeof...(Pass)>& kinds,
+                                                  const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                  const Pass&... passes) {
+  return with_work(works, [&](auto work) { return run_passes<decltype(work)>(ws, kinds, works, passes...); });
 }
 
 // ---- Stores and backend ---------------------------------------------------------------------
@@ -553,17 +622,37 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     use_device(ordinal_);
-    if (request.kind == QueryKind::kVertexTriangle) {
-      const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
-                                          request.filters};
-      return dispatch(request, true, triangle_tree_.view(), queries, num_vertices_, out, ws_, work);
-    }
-    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree_.sorted_prims(), request.r,
-                                  request.filters};
-    return dispatch(request, false, edge_tree_.view(), queries, num_edges_, out, ws_, work);
+    uint64_t total = 0;
+    auto run = [&](const auto& pass) { total = run_counted(ws_, {request.kind}, {work}, pass)[0]; };
+    if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
+    return total;
+  }
+
+  std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) override {
+    use_device(ordinal_);
+    std::array<uint64_t, 2> totals{};
+    with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
+      with_ee_pass(ee.request, ee.out, [&](const auto& ee_pass) {
+        totals = run_counted(ws_, {vt.request.kind, ee.request.kind}, {vt.work, ee.work}, vt_pass, ee_pass);
+      });
+    });
+    return totals;
   }
 
  private:
+  // Calls fn with the QueryPass of a VT request, or of an EE request.
+  template <class Fn>
+  void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
+                                        request.filters};
+    with_pass<true>(request, triangle_tree_.view(), queries, num_vertices_, out, fn);
+  }
+  template <class Fn>
+  void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree_.sorted_prims(), request.r, request.filters};
+    with_pass<false>(request, edge_tree_.view(), queries, num_edges_, out, fn);
+  }
+
   // The trees the flags ask for, and the VT query order, from the current vertices.
   void build_trees() {
     if (has_triangle_tree_) {
@@ -620,8 +709,12 @@ class CudaBoxStore final : public CudaStore<Store> {
     gather_to_device(request.first, first);
     gather_to_device(request.second, second);
     const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
-    return dispatch(request, request.kind == QueryKind::kUserSpheres, tree_.view(), queries,
-                    int32_t(request.first.count), out, ws_, work);
+    uint64_t total = 0;
+    const int32_t n = int32_t(request.first.count);
+    auto run = [&](const auto& pass) { total = run_counted(ws_, {request.kind}, {work}, pass)[0]; };
+    if (request.kind == QueryKind::kUserSpheres) with_pass<true>(request, tree_.view(), queries, n, out, run);
+    else with_pass<false>(request, tree_.view(), queries, n, out, run);
+    return total;
   }
 
  private:

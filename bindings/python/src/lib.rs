@@ -307,6 +307,36 @@ impl PyScene {
         Ok((info.count, info.digest))
     }
 
+    /// Runs a VT and an EE query in one pass into `vt_out` and `ee_out` (writable (capacity, 2)
+    /// int32 arrays in the same memory); returns ((count, digest), (count, digest)).
+    #[allow(clippy::too_many_arguments)]
+    fn query_vt_ee_into(
+        &self,
+        py: Python<'_>,
+        vt_out: &PyAny,
+        ee_out: &PyAny,
+        vt_mode: &str,
+        ee_mode: &str,
+        radius: f32,
+        leaf_exact: bool,
+        canonical: bool,
+        digest: bool,
+    ) -> PyResult<((u64, Option<u64>), (u64, Option<u64>))> {
+        let flags = query_flags(leaf_exact, canonical, digest);
+        let vt = Query::new(QueryKind::Vt, parse_mode(vt_mode)?, radius).with_flags(flags);
+        let ee = Query::new(QueryKind::Ee, parse_mode(ee_mode)?, radius).with_flags(flags);
+        let mut vt_out = Array::<i32>::get(vt_out, "vt_out", &[2], true)?;
+        let mut ee_out = Array::<i32>::get(ee_out, "ee_out", &[2], true)?;
+        // SAFETY: rows of 2 int32, writable, packed, used only here (two distinct arrays: the
+        // caller allocates each).
+        let (vt_pairs, ee_pairs) = unsafe { (vt_out.pairs_out(), ee_out.pairs_out()) };
+        let scene = &self.inner;
+        let (vt_info, ee_info) = py
+            .allow_threads(|| lock(scene).query_vt_ee_to(&vt, &ee, vt_pairs, ee_pairs))
+            .map_err(|e| to_py_err(py, e))?;
+        Ok(((vt_info.count, vt_info.digest), (ee_info.count, ee_info.digest)))
+    }
+
     /// Runs a query with MINKQ_QUERY_STATS (pairs discarded); returns (nodes_visited,
     /// node_tests, primitive_tests, candidates).
     fn work(

@@ -190,6 +190,28 @@ def test_canonical_query_into_and_capacity(device):
     assert np.all(small == -7)
 
 
+@pytest.mark.parametrize("vt_mode, ee_mode", [("box", "box"), ("sphere", "capsule_exact"), ("capsule_ray", "capsule_ray")])
+def test_vt_ee_in_one_pass_gives_what_each_query_gives(device, vt_mode, ee_mode):
+    xyz, tris = rolled_sheet(12, 11)
+    scene = minkq.Scene(device, xyz, tris)
+    for r, leaf_exact in ((0.04, True), (0.02, False), (0.04, False)):  # sizes regrow, then shrink
+        vt, ee = scene.query_vt_ee(r, vt_mode=vt_mode, ee_mode=ee_mode, leaf_exact=leaf_exact, canonical=True)
+        assert np.array_equal(vt, scene.query("vt", vt_mode, r, leaf_exact=leaf_exact, canonical=True))
+        assert np.array_equal(ee, scene.query("ee", ee_mode, r, leaf_exact=leaf_exact, canonical=True))
+        assert len(vt) > 0 and len(ee) > 0
+    with pytest.raises(minkq.InvalidArgumentError, match="sphere mode needs point queries"):
+        scene.query_vt_ee(0.04, ee_mode="sphere")
+    with pytest.raises(ValueError, match="vt_mode"):
+        scene.query_vt_ee(0.04, vt_mode="ball")
+
+
+def test_vt_ee_needs_both_trees(device):
+    xyz, tris = rolled_sheet(8, 12)
+    scene = minkq.Scene(device, xyz, tris, ee=False)
+    with pytest.raises(minkq.InvalidArgumentError, match="without MINKQ_SCENE_EE"):
+        scene.query_vt_ee(0.04)
+
+
 def test_repeated_queries_reuse_their_size_and_return_fresh_arrays(device):
     xyz, tris = rolled_sheet(10, 10)
     scene = minkq.Scene(device, xyz, tris)

@@ -38,7 +38,7 @@ from ._errors import (
 ABI_VERSION: int = _native.ABI_VERSION
 """The ABI version the bindings were generated against (MINKQ_ABI_VERSION)."""
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 
 __all__ = [
     "ABI_VERSION",

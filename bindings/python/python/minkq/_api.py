@@ -204,6 +204,28 @@ class _SizedQueries:
         # Do not keep a much larger array alive behind a small result.
         return head(out, count, 2 * count < len(out)), digest
 
+    def _run_vt_ee(self, key: Tuple[Any, ...], run: Callable[[Any, Any], Tuple[Tuple[int, Optional[int]], ...]], like: Optional[Like]) -> Tuple[Tuple[Any, Optional[int]], ...]:
+        """Like ``_run`` for a fused VT + EE call: a CapacityError names the first short buffer
+        ("VT: ..." before "EE: ...") with its exact count, so at most two regrowths."""
+        like_key = (None if like is None else (like.kind, like.cuda),)
+        keys = [("vt",) + key + like_key, ("ee",) + key + like_key]
+        capacity = [self._last_count.get(k, 0) for k in keys]
+        for attempt in range(3):
+            outs = [allocate_pairs(like, c) for c in capacity]
+            args = _Args(self.device)
+            try:
+                results = run(args.out(outs[0]), args.out(outs[1]))
+                break
+            except CapacityError as e:
+                if attempt == 2:
+                    raise
+                capacity[0 if e.message.startswith("VT") else 1] = e.needed
+        out = []
+        for k, buffer, (count, digest) in zip(keys, outs, results):
+            self._last_count[k] = count
+            out.append((head(buffer, count, 2 * count < len(buffer)), digest))
+        return tuple(out)
+
 
 class Device:
     """A compute device: ``"cpu"``, ``"cuda"`` (GPU 0), ``"cuda:N"`` or ``"auto"`` (CUDA when a GPU
@@ -437,6 +459,42 @@ class Scene(_SizedQueries):
         checked_args = (args.out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
         count, dig = self._native.query_into(*checked_args, bool(leaf_exact), bool(canonical), bool(digest))
         return QueryInfo(count, dig)
+
+    def query_vt_ee(
+        self,
+        radius: float,
+        *,
+        vt_mode: "Mode" = "box",
+        ee_mode: "Mode" = "box",
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        like: Any = None,
+    ) -> Tuple["Pairs", "Pairs"]:
+        """The VT and the EE pairs within ``radius`` from one pass (one parallel loop on the CPU,
+        one kernel launch and one count readback on CUDA): exactly what ``query("vt", vt_mode,
+        ...)`` and ``query("ee", ee_mode, ...)`` return. ``leaf_exact=True`` gives the contacts
+        (fastest with the default box modes). Results as :meth:`query`.
+
+        >>> import numpy as np, minkq
+        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> vt, ee = scene.query_vt_ee(0.2, leaf_exact=True, canonical=True)
+        >>> vt.tolist()
+        [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
+        >>> len(ee)
+        9
+        """
+        vt_mode = _choice(vt_mode, "vt_mode", MODES)
+        ee_mode = _choice(ee_mode, "ee_mode", MODES)
+        r = _radius(radius)
+        flags = (bool(leaf_exact), bool(canonical), False)
+        target = self._like if like is None else _Args(self.device).like(like)
+        (vt, _), (ee, _) = self._run_vt_ee(
+            (vt_mode, ee_mode) + flags,
+            lambda vt_out, ee_out: self._native.query_vt_ee_into(vt_out, ee_out, vt_mode, ee_mode, r, *flags),
+            target,
+        )
+        return vt, ee
 
     def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
         """Runs the query once with the library's work counters on and returns them (the pairs

@@ -45,6 +45,17 @@ class Scene:
         canonical: bool,
         digest: bool,
     ) -> Tuple[int, Optional[int]]: ...
+    def query_vt_ee_into(
+        self,
+        vt_out: Union[npt.NDArray[np.int32], Raw],
+        ee_out: Union[npt.NDArray[np.int32], Raw],
+        vt_mode: str,
+        ee_mode: str,
+        radius: float,
+        leaf_exact: bool,
+        canonical: bool,
+        digest: bool,
+    ) -> Tuple[Tuple[int, Optional[int]], Tuple[int, Optional[int]]]: ...
     def work(self, kind: str, mode: str, radius: float, leaf_exact: bool) -> Tuple[int, int, int, int]: ...
 
 class Bvh:

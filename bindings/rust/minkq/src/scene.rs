@@ -532,6 +532,108 @@ impl Scene {
         query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity, Memory::Host))
     }
 
+    /// Runs a VT and an EE query in one pass (`minkq_scene_query_vt_ee`: one parallel loop on
+    /// the CPU, one kernel launch and one count readback on CUDA) into two library-owned
+    /// buffers that grow as needed; returns the VT and the EE pairs, each exactly what
+    /// [`Scene::query`] gives it alone.
+    ///
+    /// Errors: as [`Scene::query`] for either query, and [`Error::InvalidArgument`] when `vt`
+    /// is not a VT query or `ee` not an EE query.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let (mut vt_pairs, mut ee_pairs) = (PairBuffer::new()?, PairBuffer::new()?);
+    /// let contacts = QueryFlags::LEAF_EXACT | QueryFlags::CANONICAL;
+    /// let (vt, ee) = scene.query_vt_ee(
+    ///     &Query::vt(Mode::Box, 0.2).with_flags(contacts),
+    ///     &Query::ee(Mode::Box, 0.2).with_flags(contacts),
+    ///     &mut vt_pairs,
+    ///     &mut ee_pairs,
+    /// )?;
+    /// assert_eq!(vt, &[[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]);
+    /// assert_eq!(ee.len(), 9); // every lower edge against every upper edge
+    /// let swapped = scene.query_vt_ee(&Query::ee(Mode::Box, 0.2), &Query::vt(Mode::Box, 0.2), &mut vt_pairs, &mut ee_pairs);
+    /// assert!(matches!(swapped, Err(Error::InvalidArgument(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_vt_ee<'r>(
+        &self,
+        vt: &Query,
+        ee: &Query,
+        vt_out: &'r mut PairBuffer,
+        ee_out: &'r mut PairBuffer,
+    ) -> Result<(&'r [[i32; 2]], &'r [[i32; 2]])> {
+        let (vt_desc, ee_desc) = (vt.raw(), ee.raw());
+        // SAFETY: a live scene, two distinct live results (two `&mut`), valid descriptions.
+        check(unsafe {
+            sys::minkq_scene_query_vt_ee_result(self.raw.as_ptr(), &vt_desc, &ee_desc, vt_out.as_ptr(), ee_out.as_ptr())
+        })?;
+        Ok((vt_out.pairs(), ee_out.pairs()))
+    }
+
+    /// Runs a VT and an EE query in one pass into two [`PairsOut`] in the same memory (host,
+    /// or device memory on a CUDA device); returns the VT and the EE query's info. A query
+    /// whose pairs fit is written in full; if either does not fit, the error is
+    /// [`Error::Capacity`] with the exact count of the first that does not (VT before EE; the
+    /// message names it), and nothing is written past either buffer.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let (vt, ee) = (Query::vt(Mode::Sphere, 0.2), Query::ee(Mode::Box, 0.2));
+    /// let (mut vt_pairs, mut ee_pairs) = ([[0; 2]; 8], [[0; 2]; 4]);
+    /// let short = scene.query_vt_ee_to(&vt, &ee, PairsOut::from_slice(&mut vt_pairs), PairsOut::from_slice(&mut ee_pairs));
+    /// assert!(matches!(short, Err(Error::Capacity { needed: 9, .. })));
+    /// let mut ee_pairs = [[0; 2]; 9];
+    /// let (vt_info, ee_info) = scene.query_vt_ee_to(&vt, &ee, PairsOut::from_slice(&mut vt_pairs), PairsOut::from_slice(&mut ee_pairs))?;
+    /// assert_eq!((vt_info.count, ee_info.count), (6, 9));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn query_vt_ee_to(
+        &self,
+        vt: &Query,
+        ee: &Query,
+        vt_out: PairsOut<'_>,
+        ee_out: PairsOut<'_>,
+    ) -> Result<(QueryInfo, QueryInfo)> {
+        if vt_out.memory() != ee_out.memory() {
+            return Err(Error::InvalidArgument("vt_out and ee_out are in different memories".into()));
+        }
+        let (vt_desc, ee_desc) = (vt.raw(), ee.raw());
+        let (mut vt_info, mut ee_info) = (QueryInfo::raw(), QueryInfo::raw());
+        // SAFETY: each PairsOut holds 2 * capacity writable int32 in its memory (its
+        // constructor promised it); the infos are distinct.
+        let status = unsafe {
+            sys::minkq_scene_query_vt_ee(
+                self.raw.as_ptr(),
+                &vt_desc,
+                &ee_desc,
+                vt_out.data(),
+                vt_out.capacity(),
+                ee_out.data(),
+                ee_out.capacity(),
+                vt_out.memory().raw(),
+                &mut vt_info,
+                &mut ee_info,
+            )
+        };
+        match check(status) {
+            Ok(()) => Ok((QueryInfo::from_raw(&vt_info, vt.flags), QueryInfo::from_raw(&ee_info, ee.flags))),
+            Err(Error::Capacity { message, .. }) => {
+                let needed = if vt_info.count > vt_out.capacity() as u64 { vt_info.count } else { ee_info.count };
+                Err(Error::Capacity { needed, message })
+            }
+            Err(e) => Err(e),
+        }
+    }
+
     fn query_raw(&self, query: &Query, pairs: *mut i32, capacity: usize, memory: Memory) -> Result<QueryInfo> {
         let desc = query.raw();
         let mut info = QueryInfo::raw();
