@@ -39,4 +39,12 @@ minkq_status shim_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, i
   return minkq_bvh_query(bvh, query, out_pairs, capacity, out_memory, info);
 }
 
+minkq_status shim_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                    const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                    int32_t* ee_pairs, size_t ee_capacity, int out_memory, minkq_query_info* vt_info,
+                                    minkq_query_info* ee_info) {
+  return minkq_scene_query_vt_ee(scene, vt_query, ee_query, vt_pairs, vt_capacity, ee_pairs, ee_capacity, out_memory,
+                                 vt_info, ee_info);
+}
+
 const char* shim_status_name(int status) { return minkq_status_name(status); }

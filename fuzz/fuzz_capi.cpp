@@ -37,6 +37,10 @@ minkq_status shim_scene_query(minkq_scene* scene, const minkq_query_desc* query,
                               int out_memory, minkq_query_info* info);
 minkq_status shim_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, int32_t* out_pairs, size_t capacity,
                             int out_memory, minkq_query_info* info);
+minkq_status shim_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                    const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                    int32_t* ee_pairs, size_t ee_capacity, int out_memory, minkq_query_info* vt_info,
+                                    minkq_query_info* ee_info);
 const char* shim_status_name(int status);
 }
 
@@ -328,7 +332,9 @@ class Session {
         case 4: scene_release(); break;
         case 5: scene_refit(); break;
         case 6: case 7: scene_query(); break;
-        case 8: scene_query_result(); break;
+        case 8:
+          if (gen_.choice(2)) scene_query_result(); else scene_query_vt_ee();
+          break;
         case 9: scene_edges(); break;
         case 10: bvh_create(); break;
         case 11: bvh_refit(); break;
@@ -537,7 +543,8 @@ class Session {
     bool null_info = false;
     Misuse misuse;
   };
-  Output output(uint64_t needed) {
+  // `own_memory` false: host memory, never misused (the fused call's second buffer shares the first's).
+  Output output(uint64_t needed, bool own_memory = true) {
     Output o;
     switch (gen_.choice(8)) {
       case 0: o.capacity = 0; break;
@@ -560,7 +567,7 @@ class Session {
         o.misuse.add(true, MINKQ_ERROR_SIZE_OVERFLOW, "capacity overflows");
       }
     }
-    o.memory = gen_.choice(6) == 0 ? gen_.memory() : MINKQ_MEMORY_HOST;
+    o.memory = own_memory && gen_.choice(6) == 0 ? gen_.memory() : MINKQ_MEMORY_HOST;
     o.misuse.add(o.memory != MINKQ_MEMORY_HOST && o.memory != MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT,
                  "out_memory invalid");
     o.misuse.add(o.memory == MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT, "out_memory device on CPU");
@@ -608,6 +615,53 @@ class Session {
     if (a.flags & (MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST)) {
       o.pairs.resize(2 * size_t(info.count));
       if (o.pairs != expected) failure("canonical pairs differ between minkq_scene_query and the result path");
+    }
+  }
+
+  // The fused call: a VT and an EE description (either may be misused, or of the wrong kind),
+  // two outputs in one memory; each query that fits must be written as the result path gives it.
+  void scene_query_vt_ee() {
+    bool null_scene;
+    SceneSlot* s = scene(&null_scene);
+    const QueryArgs vt = query_args(s, null_scene), ee = query_args(s, null_scene);
+    Misuse m = vt.misuse;
+    m.merge(ee.misuse);
+    m.add(!vt.null_desc && vt.kind != MINKQ_QUERY_VT, MINKQ_ERROR_INVALID_ARGUMENT, "vt_query not VT");
+    m.add(!ee.null_desc && ee.kind != MINKQ_QUERY_EE, MINKQ_ERROR_INVALID_ARGUMENT, "ee_query not EE");
+    uint64_t needed[2] = {0, 0};
+    std::vector<int32_t> expected[2];
+    if (m.none() && !(reference_count(s->handle, vt.desc, &needed[0], &expected[0]) &&
+                      reference_count(s->handle, ee.desc, &needed[1], &expected[1])))
+      failure("a valid query failed through minkq_scene_query_result: " + std::string(minkq_last_error_message()));
+    Output o[2] = {output(needed[0]), output(needed[1], false)};
+    m.merge(o[0].misuse);
+    m.merge(o[1].misuse);
+    minkq_query_info info[2] = {{12345, 67890, {1, 2, 3, 4}}, {54321, 9876, {4, 3, 2, 1}}};
+    const minkq_status st = shim_scene_query_vt_ee(
+        null_scene ? nullptr : s->handle, vt.null_desc ? nullptr : &vt.desc, ee.null_desc ? nullptr : &ee.desc,
+        o[0].data, o[0].capacity, o[1].data, o[1].capacity, o[0].memory, o[0].null_info ? nullptr : &info[0],
+        o[1].null_info ? nullptr : &info[1]);
+    const bool short_buffer = needed[0] > o[0].capacity || needed[1] > o[1].capacity;
+    expect("minkq_scene_query_vt_ee", st, m, short_buffer ? MINKQ_ERROR_CAPACITY : MINKQ_SUCCESS);
+    if (st != MINKQ_SUCCESS && st != MINKQ_ERROR_CAPACITY) return;
+    const QueryArgs* args[2] = {&vt, &ee};
+    for (int k = 0; k < 2; ++k) {
+      if (info[k].count != needed[k]) failure("minkq_scene_query_vt_ee: a count is not the exact count");
+      if (info[k].stats.candidates != ((args[k]->flags & MINKQ_QUERY_STATS) ? info[k].count : 0u))
+        failure("minkq_scene_query_vt_ee: stats.candidates is not the count with MINKQ_QUERY_STATS, or not 0 without");
+      if (needed[k] > o[k].capacity) {
+        for (int32_t x : o[k].pairs)
+          if (x != -5) failure("minkq_scene_query_vt_ee wrote into a buffer too small for its query");
+        continue;
+      }
+      check_pairs("minkq_scene_query_vt_ee", o[k].pairs.data(), info[k].count, queries_of(*s, args[k]->kind),
+                  prims_of(*s, args[k]->kind), k == 1, args[k]->flags, info[k].digest);
+      for (size_t i = 2 * size_t(info[k].count); i < o[k].pairs.size(); ++i)
+        if (o[k].pairs[i] != -5) failure("minkq_scene_query_vt_ee wrote past the pairs it reported");
+      if (args[k]->flags & (MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST)) {
+        o[k].pairs.resize(2 * size_t(info[k].count));
+        if (o[k].pairs != expected[k]) failure("minkq_scene_query_vt_ee: canonical pairs differ from the result path");
+      }
     }
   }
 

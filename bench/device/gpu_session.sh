@@ -15,7 +15,8 @@
 #   build  cmake --preset sm90 with the benchmarks, build everything (build-sm90)
 #   test   the whole ctest suite, CUDA suites included (CPU == CUDA pair sets, digests, errors)
 #   bench  minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale), frames
-#          exported for Warp; $OUT/results.tar.gz holds bench/results-style tables
+#          exported for Warp, and minkq_ablation --only fused --backend cuda (one VT + EE launch
+#          against two); $OUT/results.tar.gz holds bench/results-style tables
 #   warp   bench/warp_baseline.py --device cuda:0 on the exported frames beside minkq's cuda rows
 #   profile  Nsight Compute on the 1M-triangle twisted sheet's query and refit kernels ($OUT/ncu.txt)
 # --smoke (first argument): bench --quick, to try the script on a machine without a GPU.
@@ -83,6 +84,11 @@ stage_bench() {
   build-sm90/bin/minkq_bench "${args[@]}" > "$out/bench.log" 2>&1
   local status=$?
   tail -20 "$out/bench.log"
+  # One fused VT + EE launch against two (fused_cuda.md), beside the CPU's fused.md.
+  local fused=(--only fused --backend cuda --out "$results")
+  [ $smoke = 1 ] && fused=(--only fused --backend auto --quick --out "$results")  # no GPU there
+  build-sm90/bin/minkq_ablation "${fused[@]}" > "$out/fused.log" 2>&1 || status=1
+  tail -3 "$out/fused.log"
   nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv > "$results/device.txt" 2>&1 || true
   tar czf "$out/results.tar.gz" -C "$results" .
   return $status
