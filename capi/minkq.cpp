@@ -11,8 +11,8 @@
 #include <cstring>
 #include <new>
 #include <string>
-#include <utility>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "backend.h"
@@ -210,11 +210,10 @@ minkq::PairOutput checked_output(const minkq_device* device, int32_t* out_pairs,
           (flags & (MINKQ_QUERY_DIGEST | MINKQ_QUERY_CANONICAL)) != 0};
 }
 
-// Fills info from a query's count and work, and its digest when asked for and the pairs fit.
-// Returns whether they fit.
+// Fills info (zeroed before the query ran) from a query's count and work, and its digest when
+// asked for and the pairs fit. Returns whether they fit.
 bool report(const minkq_device* device, const minkq::PairOutput& out, uint32_t flags, uint64_t count,
             const minkq::WorkCounts& work, minkq_query_info* info) {
-  *info = minkq_query_info{};
   info->count = count;
   info->stats = {work.nodes_visited, work.node_tests, work.primitive_tests, work.candidates};
   if (count > out.capacity) return false;

@@ -139,11 +139,12 @@ void with_shape(Mode mode, Fn&& fn) {
   fail(Status::kInternal, "mode not available for these queries");
 }
 
-// The queries of one request for a pass: the tree, the query source and where the pairs go,
-// with the node test as a type.
+// The queries of one request for a pass: the request's kind, the tree, the query source and
+// where the pairs go, with the node test as a type.
 template <class Shape_, class Queries>
 struct QueryPass {
   using Shape = Shape_;
+  QueryKind kind;
   BvhView bvh;
   Queries queries;
   int32_t num_queries;
@@ -155,12 +156,12 @@ template <bool kPoints, class Queries, class Fn>
 void with_pass(const QueryRequest& request, const BvhView& bvh, const Queries& queries, int32_t num_queries,
                const PairOutput& out, Fn&& fn) {
   with_shape<kPoints>(request.mode, [&](auto shape) {
-    fn(QueryPass<decltype(shape), Queries>{bvh, queries, num_queries, out});
+    fn(QueryPass<decltype(shape), Queries>{request.kind, bvh, queries, num_queries, out});
   });
 }
 
-// Calls run.template operator()<Work>() with the work type a call's passes need: the counted
-// traversal if any pass counts (the others' counts are then dropped), else the uncounted one.
+// Calls run(Work{}) with the work type a call's passes need: the counted traversal if any pass
+// counts (the others' counts are then dropped), else the uncounted one.
 template <size_t N, class Run>
 auto with_work(const std::array<WorkCounts*, N>& works, Run&& run) {
   for (WorkCounts* w : works)

@@ -395,14 +395,12 @@ __device__ void add_work(const WorkCounts& w, unsigned long long* work) {
   }
 }
 
-// A pass's queries on the device: thread first_thread + i runs query i. Passes start at block
+// A pass's queries on the device: thread first_thread + i runs query i of the QueryPass (whose
+// `out` the device does not read: the slots say where the pairs go). Passes start at block
 // boundaries, so every block (and warp) runs one pass.
-template <class Shape_, class Queries>
+template <class Pass>
 struct DevicePass {
-  using Shape = Shape_;
-  BvhView bvh;
-  Queries queries;
-  int32_t num_queries;
+  Pass pass;
   int64_t first_thread;
   PairSlots slots;
   unsigned long long* work;  // WorkCounts' four counters
@@ -413,16 +411,16 @@ __host__ __device__ int64_t round_up_to_block(int64_t n) { return (n + kQueryThr
 // Thread i's share of a pass, if i lies in the pass's blocks. With WorkCounts, every thread of
 // those blocks stays to the end so that whole warps take part in the reduction of the counts.
 template <class Work, class Pass>
-__device__ void run_pass_thread(const Pass& pass, int64_t i) {
-  const int64_t q = i - pass.first_thread;
-  if (q < 0 || q >= round_up_to_block(pass.num_queries)) return;  // uniform over the block
+__device__ void run_pass_thread(const DevicePass<Pass>& d, int64_t i) {
+  const int64_t q = i - d.first_thread;
+  if (q < 0 || q >= round_up_to_block(d.pass.num_queries)) return;  // uniform over the block
   Work work;
-  if (q < pass.num_queries) {
-    PairBuffer emit(pass.slots);
-    run_query<typename Pass::Shape>(pass.bvh, pass.queries, int32_t(q), emit, work);
+  if (q < d.pass.num_queries) {
+    PairBuffer emit(d.slots);
+    run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), emit, work);
     emit.flush();
   }
-  if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, pass.work);
+  if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, d.work);
 }
 
 // One thread per query of each pass: one launch answers them all.
@@ -477,17 +475,17 @@ uint64_t scratch_guess(const QueryWorkspace& ws, QueryKind kind, int32_t num_que
 
 template <class Work, class... Pass>
 void launch_passes(const Pass&... passes) {
-  const int64_t threads = (round_up_to_block(passes.num_queries) + ...);
+  const int64_t threads = (round_up_to_block(passes.pass.num_queries) + ...);
   launch("query_kernel launch", query_kernel<Work, Pass...>, threads, kQueryThreads, passes...);
 }
 
 // Runs the passes in one kernel launch and one count readback; returns each pass's total,
 // its pairs written (and sorted if asked) where they fit the caller's buffer.
 template <class Work, class... Pass>
-std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::array<QueryKind, sizeof...(Pass)>& kinds,
-                                                 const std::array<WorkCounts*, sizeof...(Pass)>& works,
+std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                  const Pass&... passes) {
   constexpr size_t kPasses = sizeof...(Pass);
+  const std::array<QueryKind, kPasses> kinds{passes.kind...};
   const std::array<PairOutput, kPasses> outs{passes.out...};
   const std::array<int32_t, kPasses> num_queries{passes.num_queries...};
   std::array<uint64_t, kPasses> capacity{};
@@ -517,10 +515,9 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
     int64_t first_thread = 0;
     size_t k = 0;
     auto device_pass = [&](const auto& pass) {
-      using P = std::decay_t<decltype(pass)>;
-      const DevicePass<typename P::Shape, decltype(pass.queries)> d{
-          pass.bvh, pass.queries, pass.num_queries, first_thread,
-          PairSlots{pairs[k], capacity[k], ws.count.data() + k}, ws.work.data() + 4 * k};
+      const DevicePass<std::decay_t<decltype(pass)>> d{pass, first_thread,
+                                                       PairSlots{pairs[k], capacity[k], ws.count.data() + k},
+                                                       ws.work.data() + 4 * k};
       first_thread += round_up_to_block(pass.num_queries);
       ++k;
       return d;
@@ -558,10 +555,9 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
 }
 
 template <class... Pass>
-std::array<uint64_t, sizeof...(Pass)> run_counted(QueryWorkspace& ws, const std::array<QueryKind, sizeof...(Pass)>& kinds,
-                                                  const std::array<WorkCounts*, sizeof...(Pass)>& works,
+std::array<uint64_t, sizeof...(Pass)> run_counted(QueryWorkspace& ws, const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                   const Pass&... passes) {
-  return with_work(works, [&](auto work) { return run_passes<decltype(work)>(ws, kinds, works, passes...); });
+  return with_work(works, [&](auto work) { return run_passes<decltype(work)>(ws, works, passes...); });
 }
 
 // ---- Stores and backend ---------------------------------------------------------------------
@@ -623,7 +619,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     use_device(ordinal_);
     uint64_t total = 0;
-    auto run = [&](const auto& pass) { total = run_counted(ws_, {request.kind}, {work}, pass)[0]; };
+    auto run = [&](const auto& pass) { total = run_counted(ws_, {work}, pass)[0]; };
     if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
     return total;
   }
@@ -633,7 +629,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
     std::array<uint64_t, 2> totals{};
     with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
       with_ee_pass(ee.request, ee.out, [&](const auto& ee_pass) {
-        totals = run_counted(ws_, {vt.request.kind, ee.request.kind}, {vt.work, ee.work}, vt_pass, ee_pass);
+        totals = run_counted(ws_, {vt.work, ee.work}, vt_pass, ee_pass);
       });
     });
     return totals;
@@ -711,7 +707,7 @@ class CudaBoxStore final : public CudaStore<Store> {
     const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
     uint64_t total = 0;
     const int32_t n = int32_t(request.first.count);
-    auto run = [&](const auto& pass) { total = run_counted(ws_, {request.kind}, {work}, pass)[0]; };
+    auto run = [&](const auto& pass) { total = run_counted(ws_, {work}, pass)[0]; };
     if (request.kind == QueryKind::kUserSpheres) with_pass<true>(request, tree_.view(), queries, n, out, run);
     else with_pass<false>(request, tree_.view(), queries, n, out, run);
     return total;

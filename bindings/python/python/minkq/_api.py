@@ -5,7 +5,7 @@ array interface (minkq._interop), in and out; output arrays sized from the exact
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -189,42 +189,38 @@ class _SizedQueries:
         self._last_count: Dict[Tuple[Any, ...], int] = {}
 
     def _run(self, key: Tuple[Any, ...], run: Callable[[Any], Tuple[int, Optional[int]]], like: Optional[Like] = None) -> Tuple[Any, Optional[int]]:
-        def attempt(capacity: int) -> Tuple[Any, int, Optional[int]]:
-            out = allocate_pairs(like, capacity)
-            args = _Args(self.device)
-            count, digest = run(args.out(out))
-            return out, count, digest
+        ((pairs, digest),) = self._run_outputs([key], lambda out: (run(out),), like, lambda e: 0)
+        return pairs, digest
 
-        key = key + (None if like is None else (like.kind, like.cuda),)
-        try:
-            out, count, digest = attempt(self._last_count.get(key, 0))
-        except CapacityError as e:
-            out, count, digest = attempt(e.needed)
-        self._last_count[key] = count
-        # Do not keep a much larger array alive behind a small result.
-        return head(out, count, 2 * count < len(out)), digest
-
-    def _run_vt_ee(self, key: Tuple[Any, ...], run: Callable[[Any, Any], Tuple[Tuple[int, Optional[int]], ...]], like: Optional[Like]) -> Tuple[Tuple[Any, Optional[int]], ...]:
-        """Like ``_run`` for a fused VT + EE call: a CapacityError names the first short buffer
-        ("VT: ..." before "EE: ...") with its exact count, so at most two regrowths."""
+    def _run_outputs(
+        self,
+        keys: List[Tuple[Any, ...]],
+        run: Callable[..., Tuple[Tuple[int, Optional[int]], ...]],
+        like: Optional[Like],
+        short: Callable[[CapacityError], int],
+    ) -> List[Tuple[Any, Optional[int]]]:
+        """Runs ``run(*outs)``, one array per key, each sized by the last count under its key; on
+        CapacityError the array ``short(e)`` names regrows to ``e.needed`` and the call runs again
+        (at most once per array). Returns (pairs, digest) per key."""
         like_key = (None if like is None else (like.kind, like.cuda),)
-        keys = [("vt",) + key + like_key, ("ee",) + key + like_key]
+        keys = [k + like_key for k in keys]
         capacity = [self._last_count.get(k, 0) for k in keys]
-        for attempt in range(3):
+        for attempt in range(len(keys) + 1):
             outs = [allocate_pairs(like, c) for c in capacity]
             args = _Args(self.device)
             try:
-                results = run(args.out(outs[0]), args.out(outs[1]))
+                results = run(*[args.out(out) for out in outs])
                 break
             except CapacityError as e:
-                if attempt == 2:
+                if attempt == len(keys):
                     raise
-                capacity[0 if e.message.startswith("VT") else 1] = e.needed
-        out = []
-        for k, buffer, (count, digest) in zip(keys, outs, results):
-            self._last_count[k] = count
-            out.append((head(buffer, count, 2 * count < len(buffer)), digest))
-        return tuple(out)
+                capacity[short(e)] = e.needed
+        pairs = []
+        for key, out, (count, digest) in zip(keys, outs, results):
+            self._last_count[key] = count
+            # Do not keep a much larger array alive behind a small result.
+            pairs.append((head(out, count, 2 * count < len(out)), digest))
+        return pairs
 
 
 class Device:
@@ -489,10 +485,12 @@ class Scene(_SizedQueries):
         r = _radius(radius)
         flags = (bool(leaf_exact), bool(canonical), False)
         target = self._like if like is None else _Args(self.device).like(like)
-        (vt, _), (ee, _) = self._run_vt_ee(
-            (vt_mode, ee_mode) + flags,
+        key = (vt_mode, ee_mode) + flags
+        (vt, _), (ee, _) = self._run_outputs(
+            [("vt",) + key, ("ee",) + key],
             lambda vt_out, ee_out: self._native.query_vt_ee_into(vt_out, ee_out, vt_mode, ee_mode, r, *flags),
             target,
+            lambda e: 0 if e.message.startswith("VT:") else 1,  # the first short buffer, VT before EE
         )
         return vt, ee
 
