@@ -33,6 +33,7 @@
 #include <memory>
 #include <fstream>
 #include <sstream>
+#include <type_traits>
 
 #include "common.h"
 #include "backend.h"
@@ -92,6 +93,7 @@ struct PaddedBoxShape {
   // Not symmetric: the other edge's padded box against this box is the reverse test.
   bool finer(const Box& b) const { return boxes_overlap(box, b); }
   unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
+  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const { return overlaps_each(*this, g, lanes); }
 };
 
 // A shape whose box tests run box by box: at leaf groups one box at a time (may_overlap_each)
@@ -105,14 +107,32 @@ struct BoxByBox {
   bool may_overlap(const Box& b) const { return kFineAtEveryNode ? shape.overlaps(b) : shape.may_overlap(b); }
   bool finer(const Box& b) const { return shape.finer(b); }
   unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
+  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const { return overlaps_each(*this, g, lanes); }
 };
 // The node tests before: the mode's own test at every node, not only at primitive boxes.
 template <class Shape>
 using FineAtEveryNode = BoxByBox<Shape, true>;
 // The leaf scan before: each leaf box tested alone, against four at a time in vector lanes
-// (may_overlap_group; kept).
+// (overlaps_group; kept).
 template <class Shape>
 using LeafBoxByBox = BoxByBox<Shape, false>;
+// The leaf scan between the two: the box test on four leaf boxes at once, then the mode's
+// finer test box by box on those that passed (before the finer tests had vector lanes too).
+template <class Shape>
+struct FinerBoxByBox {
+  Shape shape;
+  static FinerBoxByBox from(const QueryGeometry& q) { return {Shape::from(q)}; }
+  bool overlaps(const Box& b) const { return shape.overlaps(b); }
+  bool may_overlap(const Box& b) const { return shape.may_overlap(b); }
+  bool finer(const Box& b) const { return shape.finer(b); }
+  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return shape.may_overlap_group(g, lanes); }
+  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
+    unsigned bits = shape.may_overlap_group(g, lanes);
+    for (unsigned rest = bits; rest != 0; rest &= rest - 1u)
+      if (!shape.finer(group_box(g, lowest_bit(rest)))) bits &= ~(1u << lowest_bit(rest));
+    return bits;
+  }
+};
 
 struct Outcome {
   WorkCounts work;
@@ -286,29 +306,36 @@ std::string compare_fine_nodes(const SceneFrames& sc, const FrameTrees& trees, c
   return out;
 }
 
-// Leaf scans box by box (before) or four boxes at a time in vector lanes (kept): VT sphere, EE
-// box and EE capsule_exact on the library's trees; the pairs must not change.
+// Leaf scans box by box, or the box test four boxes at a time in vector lanes and the finer
+// test box by box (before), or both tests in vector lanes (kept): VT sphere, EE box (no finer
+// test), capsule_ray and capsule_exact on the library's trees; the pairs must not change.
+template <class Shape, class Queries>
+std::string compare_leaf_lanes_one(const std::string& scene, const BvhView& bvh, const Queries& queries, int32_t n,
+                                   const char* kind, const char* mode, int repeats, bool& ok) {
+  const bool finer = !std::is_same<Shape, BoxShape>::value;
+  const Outcome one = run<LeafBoxByBox<Shape>>(bvh, queries, n, repeats);
+  std::string out = row(scene, kind, mode, "leaf boxes tested one by one", one, n, one);
+  if (finer) {
+    const Outcome box_lanes = run<FinerBoxByBox<Shape>>(bvh, queries, n, repeats);
+    ok &= box_lanes.pairs == one.pairs;
+    out += row(scene, kind, mode, "box test in vector lanes, finer test one by one (before)", box_lanes, n, one);
+  }
+  const Outcome kept = run<Shape>(bvh, queries, n, repeats);
+  ok &= kept.pairs == one.pairs;
+  return out + row(scene, kind, mode, finer ? "box and finer tests in vector lanes (kept)" : "box test in vector lanes (kept)",
+                   kept, n, one);
+}
+
 std::string compare_leaf_lanes(const SceneFrames& sc, const FrameTrees& trees, const Vec3* v, const Triangle* t,
                                const Edge* e, float r, int repeats, bool& ok) {
   const int32_t nv = trees.nv, ne = trees.ne;
   const VertexTriangleQueries vt{v, t, trees.order.data(), r, kDropIncident};
   const EdgeEdgeQueries ee{v, e, trees.edges.sorted_prims().data(), r, kDropIncident};
   const BvhView tri = trees.triangles.view(), edge = trees.edges.view();
-  const Outcome got[6] = {run<LeafBoxByBox<SphereShape>>(tri, vt, nv, repeats), run<SphereShape>(tri, vt, nv, repeats),
-                          run<LeafBoxByBox<BoxShape>>(edge, ee, ne, repeats), run<BoxShape>(edge, ee, ne, repeats),
-                          run<LeafBoxByBox<CapsuleExactShape>>(edge, ee, ne, repeats),
-                          run<CapsuleExactShape>(edge, ee, ne, repeats)};
-  const char* kinds[3] = {"VT", "EE", "EE"};
-  const char* modes[3] = {"sphere", "box", "capsule_exact"};
-  std::string out;
-  for (int k = 0; k < 3; ++k) {
-    ok &= got[2 * k].pairs == got[2 * k + 1].pairs;
-    const int32_t n = k ? ne : nv;
-    out += row(sc.name, kinds[k], modes[k], "leaf boxes tested one by one (before)", got[2 * k], n, got[2 * k]) +
-           row(sc.name, kinds[k], modes[k], "leaf boxes tested four at a time, vector lanes (kept)", got[2 * k + 1], n,
-               got[2 * k]);
-  }
-  return out;
+  return compare_leaf_lanes_one<SphereShape>(sc.name, tri, vt, nv, "VT", "sphere", repeats, ok) +
+         compare_leaf_lanes_one<BoxShape>(sc.name, edge, ee, ne, "EE", "box", repeats, ok) +
+         compare_leaf_lanes_one<CapsuleRayShape>(sc.name, edge, ee, ne, "EE", "capsule_ray", repeats, ok) +
+         compare_leaf_lanes_one<CapsuleExactShape>(sc.name, edge, ee, ne, "EE", "capsule_exact", repeats, ok);
 }
 
 // Box mode: the padded box (before) against the float gap test (kept), VT and EE. The pair

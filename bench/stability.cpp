@@ -68,6 +68,7 @@ struct CapsuleUnitShape {
   unsigned may_overlap_group(const minkq::BoxGroup& g, unsigned lanes) const {
     return minkq::may_overlap_each(*this, g, lanes);
   }
+  unsigned overlaps_group(const minkq::BoxGroup& g, unsigned lanes) const { return minkq::overlaps_each(*this, g, lanes); }
   bool finer(const minkq::Box& b) const {
     float t_near = 0.0f, t_far = t_max;
     for (int axis = 0; axis < 3; ++axis) {
@@ -94,6 +95,7 @@ struct CoreRayShape {
   minkq::CapsuleRayShape s;
   bool may_overlap(const minkq::Box& b) const { return s.may_overlap(b); }
   unsigned may_overlap_group(const minkq::BoxGroup& g, unsigned lanes) const { return s.may_overlap_group(g, lanes); }
+  unsigned overlaps_group(const minkq::BoxGroup& g, unsigned lanes) const { return s.overlaps_group(g, lanes); }
   bool overlaps(const minkq::Box& b) const { return s.overlaps(b); }
   bool finer(const minkq::Box& b) const { return s.finer(b); }
 };

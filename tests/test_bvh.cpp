@@ -190,5 +190,65 @@ TEST(Bvh, leaf_scan_four_at_a_time_matches_the_test_box_by_box) {
   }
 }
 
+// Each shape's test on a group of four boxes (4-float lanes on the host, their own selects for
+// min_num, max_num and next_down) gives, lane by lane, the verdict of its scalar test, which the
+// CUDA backend runs: on random boxes and on the edge cases of the scalar code's branches (gaps
+// of exactly r, a bound stepping from 0 or overflowing to -inf, segment directions that are 0,
+// subnormal or huge on an axis, empty boxes, mixed signs of zero).
+template <class Shape>
+void expect_group_test_matches_scalar(test::Random& rng) {
+  const float special[] = {0.0f, -0.0f, 1.40129846e-45f, 1.17549435e-38f, 1e-30f, 1.0f, 1e30f, FLT_MAX, INFINITY};
+  auto pick = [&](float typical) {
+    const float v = rng.integer(0, 2) == 0 ? special[rng.integer(0, 8)] : typical;
+    return rng.integer(0, 1) ? v : -v;
+  };
+  for (int trial = 0; trial < 4000; ++trial) {
+    const float scale = rng.log_uniform(1e-20f, 1e20f);
+    const Vec3 offset = rng.integer(0, 3) == 0 ? rng.vec3(-1e7f, 1e7f) : Vec3{0, 0, 0};
+    Vec3 p0 = offset + scale * rng.vec3(-1.0f, 1.0f);
+    Vec3 p1 = p0 + scale * rng.vec3(-1.0f, 1.0f);
+    for (int axis = 0; axis < 3; ++axis) {
+      const int kind = rng.integer(0, 6);
+      float& c0 = axis == 0 ? p0.x : (axis == 1 ? p0.y : p0.z);
+      float& c = axis == 0 ? p1.x : (axis == 1 ? p1.y : p1.z);
+      if (kind == 0) c = c0;                                        // d == 0 on this axis
+      if (kind == 1) c0 = 0.0f, c = pick(1.40129846e-45f);          // from 0: a subnormal or special d
+      if (kind == 2 && std::fabs(c0) < 1e30f) c = c0 + pick(1e30f);  // huge
+    }
+    const float r = rng.integer(0, 4) == 0 ? std::fabs(pick(scale)) : scale * rng.uniform(0.0f, 0.5f);
+    if (!std::isfinite(r) || !std::isfinite(p1.x) || !std::isfinite(p1.y) || !std::isfinite(p1.z)) continue;
+    const Shape shape = Shape::from({p0, p1, r});
+    BoxGroup group;
+    for (int k = 0; k < 4; ++k) {
+      Box b = rng.box(p0 + scale * rng.vec3(-1.0f, 1.0f), scale);
+      switch (rng.integer(0, 6)) {
+        case 0: b.lo.x = p0.x + r, b.hi.x = std::max(b.hi.x, b.lo.x); break;  // gap of exactly r
+        case 1: b.hi.y = p0.y - r, b.lo.y = std::min(b.lo.y, b.hi.y); break;
+        case 2: b = {{r, -r, pick(1.0f)}, {r, -r, FLT_MAX}}; break;  // bounds - r or + r reach 0
+        case 3: b = {{-FLT_MAX, pick(scale), -FLT_MAX}, {FLT_MAX, FLT_MAX, FLT_MAX}}; break;
+        case 4: b = Box::empty(); break;
+        default: break;
+      }
+      set_group_box(group, k, b);
+    }
+    for (unsigned lanes = 0; lanes < 16; ++lanes) {
+      unsigned want = 0;
+      for (int k = 0; k < 4; ++k)
+        if ((lanes >> k & 1u) && shape.overlaps(group_box(group, k))) want |= 1u << k;
+      ASSERT_EQ(shape.overlaps_group(group, lanes), want)
+          << "trial " << trial << " lanes " << lanes << " p0 " << p0.x << " " << p0.y << " " << p0.z << " p1 " << p1.x
+          << " " << p1.y << " " << p1.z << " r " << r;
+    }
+  }
+}
+
+TEST(Bvh, group_tests_of_every_shape_match_the_scalar_tests) {
+  test::Random rng(test::fresh_seed());
+  expect_group_test_matches_scalar<BoxShape>(rng);
+  expect_group_test_matches_scalar<SphereShape>(rng);
+  expect_group_test_matches_scalar<CapsuleRayShape>(rng);
+  expect_group_test_matches_scalar<CapsuleExactShape>(rng);
+}
+
 }  // namespace
 }  // namespace minkq

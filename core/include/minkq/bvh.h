@@ -275,7 +275,7 @@ struct NoWork {
 };
 
 // Leaf positions max(first, after + 1)..last, a group of four at a time: on_leaf(prim, box) for
-// each whose box passes may_overlap (four at once: may_overlap_group) and finer, that is overlaps.
+// each whose box passes overlaps (four at once: overlaps_group).
 template <class Shape, class OnLeaf, class Work>
 MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape, int32_t first,
                           int32_t last, int32_t after, OnLeaf& on_leaf, Work& work) {
@@ -283,12 +283,11 @@ MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const int32_t* sorted_pri
     const int64_t base = p & ~int64_t(3);
     const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
     const BoxGroup& group = leaf_groups[base >> 2];
-    unsigned hits = shape.may_overlap_group(group, (2u << to) - (1u << from));  // lanes from..to
+    unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
     for (int k = from; k <= to; ++k) work.test_node();
     for (; hits != 0; hits &= hits - 1u) {
       const int k = lowest_bit(hits);
-      const Box box = group_box(group, k);
-      if (shape.finer(box)) on_leaf(sorted_prims[base + k], box);
+      on_leaf(sorted_prims[base + k], group_box(group, k));
     }
   }
 }
@@ -307,8 +306,8 @@ MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const int32_t* sorte
 }
 
 // The one traversal: every query shape supplies overlaps(const Box&), its test,
-// may_overlap(const Box&), the test of internal and leaf-range boxes, may_overlap_group, the
-// same on a group of four leaf boxes, and finer(const Box&), what overlaps adds to may_overlap
+// may_overlap(const Box&), the test of internal and leaf-range boxes, overlaps_group, its test
+// on a group of four leaf boxes, and finer(const Box&), what overlaps adds to may_overlap
 // (see shapes.h);
 // on_leaf(prim, box) is called for every primitive whose box the shape overlaps, provided
 // may_overlap accepts every ancestor box (it is monotone under box inclusion and accepts

@@ -1,7 +1,9 @@
 // Query shapes: each is a box test (BoxShape, its `box`) and finer(b), the test a finer mode
 // adds to it: overlaps(b) = box.overlaps(b) && finer(b) is the mode's test, may_overlap(b) the
-// box test alone, applied to internal and leaf-range boxes, and may_overlap_group(g, lanes)
-// the box test on leaf boxes four at a time; traversal (bvh.h) is written once for all.
+// box test alone, applied to internal and leaf-range boxes, overlaps_group(g, lanes) the
+// mode's test on a group of four leaf boxes (on the host in 4-float lanes, box test and finer
+// test alike), and may_overlap_group(g, lanes) the box test so (wide-node studies in bench/);
+// traversal (bvh.h) is written once for all.
 // Finer modes are the coarser test AND a tighter one, so the candidate sets nest by
 // construction in float: capsule_exact <= capsule_ray <= box, sphere <= box.
 // The finer tests run only on primitive boxes: on the cloth scenes they pruned 0-4% of the
@@ -35,6 +37,56 @@ MINKQ_HD unsigned may_overlap_each(const Shape& shape, const BoxGroup& g, unsign
   }
   return bits;
 }
+// overlaps the same way: the finer shapes' leaf test in CUDA code (a thread reads only the
+// boxes it tests), and bench studies.
+template <class Shape>
+MINKQ_HD unsigned overlaps_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
+  unsigned bits = 0;
+  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
+    const int k = lowest_bit(rest);
+    bits |= unsigned(shape.overlaps(group_box(g, k))) << k;
+  }
+  return bits;
+}
+
+#if !defined(__CUDACC__)
+// Four floats in 4-float vector lanes (GCC vector extensions, SSE2 here): the host's leaf tests
+// on a group's four boxes at once. Each lane runs the scalar test's float operations in the
+// scalar test's order, with its selects for min_num / max_num / next_down, so every verdict is
+// the scalar one bit for bit (tests/test_bvh.cpp checks each shape against it).
+namespace simd4 {
+typedef float F4 __attribute__((vector_size(16)));
+typedef int32_t M4 __attribute__((vector_size(16)));  // a comparison: -1 (true) or 0 per lane
+inline F4 load(const float* p) {
+  F4 v;
+  memcpy(&v, p, 16);
+  return v;
+}
+inline F4 splat(float x) { return F4{x, x, x, x}; }
+inline unsigned mask_bits(M4 m) {
+  return unsigned(m[0] & 1) | unsigned(m[1] & 1) << 1 | unsigned(m[2] & 1) << 2 | unsigned(m[3] & 1) << 3;
+}
+inline F4 min_num(F4 a, F4 b) { return ((a < b) | (b != b)) ? a : b; }
+inline F4 max_num(F4 a, F4 b) { return ((a > b) | (b != b)) ? a : b; }
+inline F4 abs(F4 x) {
+  M4 bits;
+  memcpy(&bits, &x, 16);
+  bits &= 0x7fffffff;
+  memcpy(&x, &bits, 16);
+  return x;
+}
+inline F4 next_down(F4 x) {  // minkq::next_down per lane
+  M4 bits;
+  memcpy(&bits, &x, 16);
+  bits = (x > 0.0f) ? bits - 1 : bits + 1;
+  F4 stepped;
+  memcpy(&stepped, &bits, 16);
+  stepped = (x == 0.0f) ? splat(-1.40129846e-45f) : stepped;
+  return ((x != x) | (x == -INFINITY)) ? x : stepped;
+}
+inline F4 next_up(F4 x) { return -next_down(-x); }
+}  // namespace simd4
+#endif
 
 // The box mode: the query's own box (segment p0-p1, or the user box lo-hi with r = 0) within r
 // of b in every axis, as box_gap_within decides it: symmetric, so an EE pair needs it one way
@@ -53,15 +105,10 @@ struct BoxShape {
 #if defined(__CUDACC__)
     return may_overlap_each(*this, g, lanes);  // may_overlap is overlaps here
 #else
-    typedef float Lanes __attribute__((vector_size(16)));
-    typedef int32_t Masks __attribute__((vector_size(16)));
-    Lanes v[6];
-    memcpy(&v[0], g.lo[0], 16), memcpy(&v[1], g.lo[1], 16), memcpy(&v[2], g.lo[2], 16);
-    memcpy(&v[3], g.hi[0], 16), memcpy(&v[4], g.hi[1], 16), memcpy(&v[5], g.hi[2], 16);
-    const Masks pass = (v[0] - hi.x <= r) & (lo.x - v[3] <= r) & (v[1] - hi.y <= r) & (lo.y - v[4] <= r) &
-                       (v[2] - hi.z <= r) & (lo.z - v[5] <= r);
-    return lanes & (unsigned(pass[0] & 1) | unsigned(pass[1] & 1) << 1 | unsigned(pass[2] & 1) << 2 |
-                    unsigned(pass[3] & 1) << 3);
+    using simd4::load;
+    const simd4::M4 pass = (load(g.lo[0]) - hi.x <= r) & (lo.x - load(g.hi[0]) <= r) & (load(g.lo[1]) - hi.y <= r) &
+                           (lo.y - load(g.hi[1]) <= r) & (load(g.lo[2]) - hi.z <= r) & (lo.z - load(g.hi[2]) <= r);
+    return lanes & simd4::mask_bits(pass);
 #endif
   }
   MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return overlaps_group(g, lanes); }
@@ -77,6 +124,27 @@ struct SphereShape {  // p0 is the centre; p1 is ignored
   MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && finer(b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
   MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return box.overlaps_group(g, lanes); }
+  MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
+#if defined(__CUDACC__)
+    return overlaps_each(*this, g, lanes);
+#else
+    return finer_group(g, box.overlaps_group(g, lanes));
+#endif
+  }
+#if !defined(__CUDACC__)
+  // finer on the lanes asked for: point_box_distance2 <= r2_upper, lane by lane.
+  unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
+    if (lanes == 0) return 0;
+    simd4::F4 d2 = simd4::splat(0.0f);
+    for (int axis = 0; axis < 3; ++axis) {
+      const float p = component(box.lo, axis);
+      const simd4::F4 gap = simd4::max_num(simd4::max_num(simd4::load(g.lo[axis]) - p, p - simd4::load(g.hi[axis])),
+                                           simd4::splat(0.0f));
+      d2 = axis == 0 ? gap * gap : d2 + gap * gap;
+    }
+    return lanes & simd4::mask_bits(d2 <= r2_upper);
+  }
+#endif
 };
 
 struct CapsuleRayShape {
@@ -87,6 +155,43 @@ struct CapsuleRayShape {
   MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && finer(b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
   MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return box.overlaps_group(g, lanes); }
+  MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
+#if defined(__CUDACC__)
+    return overlaps_each(*this, g, lanes);
+#else
+    return finer_group(g, box.overlaps_group(g, lanes));
+#endif
+  }
+#if !defined(__CUDACC__)
+  // capsule_ray_overlaps_box on the lanes asked for. The swap of the slab's ends is the
+  // scalar test's (t0 > t1), a NaN end (inf - inf in the widening) is dropped by
+  // max_num / min_num as there, and an axis with d == 0 is the scalar test's early rejection.
+  unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
+    using simd4::F4;
+    using simd4::M4;
+    if (lanes == 0) return 0;
+    const float r = box.r;
+    F4 t_near = simd4::splat(0.0f), t_far = simd4::splat(1.0f);
+    M4 inside = t_near == t_near;  // every lane
+    for (int axis = 0; axis < 3; ++axis) {
+      const F4 lo = simd4::next_down(simd4::load(g.lo[axis]) - r);
+      const F4 hi = simd4::next_up(simd4::load(g.hi[axis]) + r);
+      const float o = component(p0, axis), dk = component(d, axis);
+      if (dk == 0.0f) {
+        inside &= ~((o < lo) | (o > hi));
+        continue;
+      }
+      const F4 a = (lo - o) / dk, b = (hi - o) / dk;
+      const M4 swap = a > b;
+      F4 t0 = swap ? b : a, t1 = swap ? a : b;
+      t0 = t0 - simd4::abs(t0) * 9.5367431640625e-07f - FLT_MIN;  // 2^-20
+      t1 = t1 + simd4::abs(t1) * 9.5367431640625e-07f + FLT_MIN;
+      t_near = simd4::max_num(t_near, t0);
+      t_far = simd4::min_num(t_far, t1);
+    }
+    return lanes & simd4::mask_bits(inside & (t_near <= t_far));
+  }
+#endif
 };
 
 struct CapsuleExactShape {
@@ -103,6 +208,19 @@ struct CapsuleExactShape {
   MINKQ_HD bool may_overlap(const Box& b) const { return ray.box.overlaps(b); }
   MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const {
     return ray.box.overlaps_group(g, lanes);
+  }
+  // The ray test on four lanes, then the segment-box distance lane by lane (it branches).
+  MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
+#if defined(__CUDACC__)
+    return overlaps_each(*this, g, lanes);
+#else
+    unsigned bits = ray.overlaps_group(g, lanes);
+    for (unsigned rest = bits; rest != 0; rest &= rest - 1u) {
+      const int k = lowest_bit(rest);
+      if (!(segment_box_distance2(ray.p0, p1, group_box(g, k)) <= threshold2)) bits &= ~(1u << k);
+    }
+    return bits;
+#endif
   }
 };
 
