@@ -15,7 +15,10 @@
  *
  * Thread safety: different objects may be used from different threads at once. One object
  * (device, scene, bvh, result) must not be used by two threads at the same time; a device
- * may be shared by scenes used from different threads.
+ * may be shared by scenes used from different threads. On CUDA, creating and rebuilding
+ * scenes and bvhs frees temporary device memory, which waits for all work on the GPU: such
+ * calls are safe from several threads but do not overlap other threads' GPU work. Each call
+ * selects its device for its duration and gives the calling thread's current device back.
  */
 #ifndef MINKQ_H
 #define MINKQ_H

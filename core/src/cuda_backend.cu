@@ -39,7 +39,25 @@ void check(cudaError_t error, const char* call) {
        std::string(call) + " failed: " + cudaGetErrorString(error));
 }
 
-void use_device(int ordinal) { check(cudaSetDevice(ordinal), "cudaSetDevice"); }
+// Makes `ordinal` the calling thread's device for one library call (declared before the call's
+// device buffers, so it outlives them) and gives the caller's device back after it: an
+// application driving another GPU from the same thread is not moved to ours.
+class DeviceScope {
+ public:
+  explicit DeviceScope(int ordinal) {
+    check(cudaGetDevice(&previous_), "cudaGetDevice");
+    if (previous_ != ordinal) check(cudaSetDevice(ordinal), "cudaSetDevice");
+    ordinal_ = ordinal;
+  }
+  DeviceScope(const DeviceScope&) = delete;
+  DeviceScope& operator=(const DeviceScope&) = delete;
+  ~DeviceScope() {
+    if (previous_ != ordinal_) cudaSetDevice(previous_);  // a destructor cannot report
+  }
+
+ private:
+  int previous_ = 0, ordinal_ = 0;
+};
 
 // Owns one cudaMalloc allocation of `size` elements (none when empty).
 template <class T>
@@ -64,7 +82,9 @@ class DeviceBuffer {
     if (count > std::numeric_limits<size_t>::max() / sizeof(T))
       fail(Status::kOutOfMemory, "device allocation size overflows");
     release();  // free first: growing must not need the old and the new block at once
-    check(cudaMalloc(reinterpret_cast<void**>(&data_), count * sizeof(T)), "cudaMalloc");
+    T* data = nullptr;  // kept only on success: a failed cudaMalloc leaves nothing to free
+    check(cudaMalloc(reinterpret_cast<void**>(&data), count * sizeof(T)), "cudaMalloc");
+    data_ = data;
     size_ = count;
   }
   T* data() const { return data_; }
@@ -308,15 +328,14 @@ class CudaTree {
     copy(&root, nodes_.data(), sizeof(root), cudaMemcpyDeviceToHost);
     const double root_area = root_half_area(root);
     if (!(root_area > 0.0)) return 0.0;
-    DeviceBuffer<double> sum(1);
-    DeviceBuffer<char> temp;
+    area_sum_.ensure(1);
     const thrust::counting_iterator<int32_t> ids(0);
-    run_cub(temp, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
-      return cub::DeviceReduce::TransformReduce(storage, bytes, ids, sum.data(), num_nodes_, DoubleSum{},
+    run_cub(area_temp_, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
+      return cub::DeviceReduce::TransformReduce(storage, bytes, ids, area_sum_.data(), num_nodes_, DoubleSum{},
                                                 NodeArea{nodes_.data()}, 0.0, kStream);
     });
     double total = 0.0;
-    copy(&total, sum.data(), sizeof(total), cudaMemcpyDeviceToHost);
+    copy(&total, area_sum_.data(), sizeof(total), cudaMemcpyDeviceToHost);
     return total / root_area;
   }
   double cost_at_build() const { return cost_at_build_; }
@@ -332,6 +351,10 @@ class CudaTree {
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
   DeviceBuffer<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
+  // area_cost()'s scratch, kept: growth is asked for every step, and a cudaFree would wait for
+  // the whole GPU.
+  mutable DeviceBuffer<double> area_sum_;
+  mutable DeviceBuffer<char> area_temp_;
 };
 
 // ---- Queries --------------------------------------------------------------------------------
@@ -468,9 +491,12 @@ void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWorkspace& 
 }
 
 // Host output goes through device scratch, sized first by a guess: the kind's last count, or
-// 8 pairs per query; a pass whose guess was short (but not the caller's buffer) reruns.
+// 8 pairs per query up to 2^24 pairs (128 MiB: a caller's large host buffer must not claim
+// gigabytes before anything is found); a pass whose guess was short (but not the caller's
+// buffer) reruns with the exact count.
 uint64_t scratch_guess(const QueryWorkspace& ws, QueryKind kind, int32_t num_queries) {
-  return std::max<uint64_t>(ws.last_count[int(kind)], 8 * uint64_t(num_queries) + 65536);
+  const uint64_t per_query = std::min<uint64_t>(8 * uint64_t(num_queries) + 65536, uint64_t(1) << 24);
+  return std::max<uint64_t>(ws.last_count[int(kind)], per_query);
 }
 
 template <class Work, class... Pass>
@@ -562,14 +588,35 @@ std::array<uint64_t, sizeof...(Pass)> run_counted(QueryWorkspace& ws, const std:
 
 // ---- Stores and backend ---------------------------------------------------------------------
 
-// Selects the store's device for every public call. The final classes' destructors select it
-// too, before their members (and this base's) are freed.
+// Every public call selects the store's device for its duration (DeviceScope). Constructors
+// and destructors hold it from hold_device() on: the members, and this base's, are then
+// allocated and freed on it, even when a constructor fails; teardown_ (destroyed after every
+// member) gives the caller's device back, or release_device() at the end of a constructor.
 template <class Interface>
 class CudaStore : public Interface {
  protected:
-  explicit CudaStore(int ordinal) : ordinal_(ordinal) { use_device(ordinal_); }
+  explicit CudaStore(int ordinal) : ordinal_(ordinal) {}
   void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }  // errors belong to this call
+  void hold_device() {
+    if (cudaGetDevice(&teardown_.previous) != cudaSuccess) teardown_.previous = ordinal_;
+    teardown_.ordinal = ordinal_;
+    if (teardown_.previous != ordinal_) check(cudaSetDevice(ordinal_), "cudaSetDevice");
+  }
+  void release_device() {
+    if (teardown_.previous != teardown_.ordinal) cudaSetDevice(teardown_.previous);
+    teardown_.previous = teardown_.ordinal = -1;
+  }
   int ordinal_;
+
+ private:
+  struct Teardown {
+    int previous = -1, ordinal = -1;
+    ~Teardown() {
+      if (previous != ordinal) cudaSetDevice(previous);  // a destructor cannot report
+    }
+  } teardown_;  // declared before ws_ and the final classes' members: destroyed after them
+
+ protected:
   QueryWorkspace ws_;
 };
 
@@ -578,6 +625,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   CudaMeshStore(int ordinal, const Strided& vertices, const std::vector<Triangle>& triangles,
                 const std::vector<Edge>& edges, bool triangle_tree, bool edge_tree)
       : CudaStore(ordinal), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
+    hold_device();
     gather_to_device(vertices, vertices_);
     num_vertices_ = int32_t(vertices.count);
     num_triangles_ = int32_t(triangles.size());
@@ -586,16 +634,17 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
     upload(edges_, edges.data(), edges.size());
     build_trees();
     finish();
+    release_device();
   }
-  ~CudaMeshStore() override { cudaSetDevice(ordinal_); }
+  ~CudaMeshStore() override { hold_device(); }
 
   void copy_edges(Edge* host_out) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     copy(host_out, edges_.data(), size_t(num_edges_) * sizeof(Edge), cudaMemcpyDeviceToHost);
   }
 
   void refit(const Strided& vertices) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     gather_to_device(vertices, vertices_);
     if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
     if (has_edge_tree_) edge_tree_.refit(edge_boxes());
@@ -603,21 +652,21 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   }
 
   void rebuild(const Strided& vertices) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     gather_to_device(vertices, vertices_);
     build_trees();
     finish();
   }
 
   double tree_growth() override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     double g = has_triangle_tree_ ? growth(triangle_tree_.area_cost(), triangle_tree_.cost_at_build()) : 0.0;
     if (has_edge_tree_) g = std::max(g, growth(edge_tree_.area_cost(), edge_tree_.cost_at_build()));
     return g;
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     uint64_t total = 0;
     auto run = [&](const auto& pass) { total = run_counted(ws_, {work}, pass)[0]; };
     if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
@@ -625,7 +674,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   }
 
   std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     std::array<uint64_t, 2> totals{};
     with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
       with_ee_pass(ee.request, ee.out, [&](const auto& ee_pass) {
@@ -673,38 +722,40 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
 class CudaBoxStore final : public CudaStore<Store> {
  public:
   CudaBoxStore(int ordinal, const Strided& boxes) : CudaStore(ordinal) {
+    hold_device();
     gather_to_device(boxes, boxes_);
     num_boxes_ = int32_t(boxes.count);
     tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
     finish();
+    release_device();
   }
-  ~CudaBoxStore() override { cudaSetDevice(ordinal_); }
+  ~CudaBoxStore() override { hold_device(); }
 
   void refit(const Strided& boxes) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     gather_to_device(boxes, boxes_);
     tree_.refit(GivenBoxes{boxes_.data()});
     finish();
   }
 
   void rebuild(const Strided& boxes) override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     gather_to_device(boxes, boxes_);
     tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
     finish();
   }
 
   double tree_growth() override {
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     return growth(tree_.area_cost(), tree_.cost_at_build());
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
-    use_device(ordinal_);
-    DeviceBuffer<Vec3> first, second;
-    gather_to_device(request.first, first);
-    gather_to_device(request.second, second);
-    const UserQueries queries{first.data(), request.second.count == 0 ? nullptr : second.data(), request.r};
+    const DeviceScope device(ordinal_);
+    gather_to_device(request.first, query_first_);
+    gather_to_device(request.second, query_second_);
+    const UserQueries queries{query_first_.data(), request.second.count == 0 ? nullptr : query_second_.data(),
+                              request.r};
     uint64_t total = 0;
     const int32_t n = int32_t(request.first.count);
     auto run = [&](const auto& pass) { total = run_counted(ws_, {work}, pass)[0]; };
@@ -717,6 +768,7 @@ class CudaBoxStore final : public CudaStore<Store> {
   DeviceBuffer<Box> boxes_;
   int32_t num_boxes_ = 0;
   CudaTree tree_;
+  DeviceBuffer<Vec3> query_first_, query_second_;  // the last queries' points, kept to be reused
 };
 
 class CudaBackend final : public Backend {
@@ -730,7 +782,7 @@ class CudaBackend final : public Backend {
 
   int64_t first_non_finite(const Strided& values, int floats) override {
     if (values.memory == Memory::kHost) return host_->first_non_finite(values, floats);
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     if (values.count == 0) return -1;
     DeviceBuffer<unsigned long long> first(1);
     const unsigned long long none = std::numeric_limits<unsigned long long>::max();
@@ -745,7 +797,7 @@ class CudaBackend final : public Backend {
 
   void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) override {
     if (memory == Memory::kHost) return host_->copy_to_host(dst, src, bytes, memory);
-    use_device(ordinal_);
+    const DeviceScope device(ordinal_);
     copy(dst, src, bytes, cudaMemcpyDeviceToHost);
   }
 
@@ -786,7 +838,7 @@ std::unique_ptr<Backend> make_cuda_backend(int ordinal) {
   if (ordinal < 0 || ordinal >= count)
     fail(Status::kUnsupported, "no CUDA device cuda:" + std::to_string(ordinal) + " (" + std::to_string(count) +
                                    " device" + (count == 1 ? "" : "s") + " found)");
-  use_device(ordinal);
+  const DeviceScope device(ordinal);  // creates the device's context now, not in the first call
   cudaDeviceProp properties;
   check(cudaGetDeviceProperties(&properties, ordinal), "cudaGetDeviceProperties");
   return std::make_unique<CudaBackend>(ordinal, properties.name);

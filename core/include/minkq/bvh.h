@@ -176,8 +176,10 @@ MINKQ_HD void collapse_node(int32_t i, const KarrasNode* karras, const int32_t* 
 
 MINKQ_HD int atomic_increment(int32_t* counter) {
 #if defined(__CUDA_ARCH__)
-  __threadfence();  // publish this thread's box writes before the sibling can read them
-  return atomicAdd(counter, 1);
+  __threadfence();  // release: publish this thread's box writes before the sibling can read them
+  const int before = atomicAdd(counter, 1);
+  if (before != 0) __threadfence();  // acquire: the second arrival reads the sibling's box after this
+  return before;
 #else
   return __atomic_fetch_add(counter, 1, __ATOMIC_ACQ_REL);
 #endif
