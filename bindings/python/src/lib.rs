@@ -70,6 +70,20 @@ impl<T: Element> Rows<T> {
         if writable && buffer.readonly() {
             return Err(PyValueError::new_err(format!("{name}: the array is read-only")));
         }
+        // pyo3 0.17's element check takes a byte-swapped buffer ('>' on a little-endian host) for
+        // a native one: refuse one here rather than read its values swapped.
+        let order = buffer.format().to_bytes().first().copied();
+        let swapped = if cfg!(target_endian = "little") {
+            matches!(order, Some(b'>') | Some(b'!'))
+        } else {
+            order == Some(b'<')
+        };
+        if swapped {
+            return Err(PyTypeError::new_err(format!(
+                "{name}: expected native byte order, got buffer format {:?}",
+                buffer.format()
+            )));
+        }
         let rows = shape[0];
         Ok(Rows { buffer, rows })
     }
@@ -275,7 +289,9 @@ impl PyScene {
     /// Writes the edges into `out`, an (edge_count, 2) int32 array.
     fn edges_into(&self, py: Python<'_>, out: &PyAny) -> PyResult<()> {
         let mut out = Rows::<i32>::get(out, "out", &[2], true)?;
-        let edges = lock(&self.inner).edges().map_err(|e| to_py_err(py, e))?;
+        let scene = &self.inner;
+        // Without the GIL: the lock may wait for a query running on another thread.
+        let edges = py.allow_threads(|| lock(scene).edges()).map_err(|e| to_py_err(py, e))?;
         if edges.len() != out.rows {
             return Err(PyValueError::new_err(format!("out: expected {} rows, got {}", edges.len(), out.rows)));
         }
@@ -350,8 +366,7 @@ impl PyScene {
         let query = Query::new(parse_kind(kind)?, parse_mode(mode)?, radius)
             .with_flags(query_flags(leaf_exact, false, false) | QueryFlags::STATS);
         let scene = &self.inner;
-        let info = py.allow_threads(|| lock(scene).query_vec(&query, &mut Vec::new())).map_err(|e| to_py_err(py, e))?;
-        let w = info.stats.unwrap_or_default();
+        let w = py.allow_threads(|| lock(scene).work(&query)).map_err(|e| to_py_err(py, e))?;
         Ok((w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates))
     }
 }

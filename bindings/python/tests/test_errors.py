@@ -73,6 +73,20 @@ def test_wrong_kind_mode_and_radius_name_the_argument(scene):
         scene._native.query_into(np.zeros((1, 2), np.int32), "vt", "exact", 0.1, False, False, False)
     with pytest.raises(TypeError, match="out: expected a i32 array"):
         scene._native.query_into(np.zeros((1, 2), np.int64), "vt", "box", 0.1, False, False, False)
+    # A byte-swapped array (pyo3 0.17 alone would read it as native): refused, not read swapped.
+    swapped = np.zeros((1, 2), np.dtype(np.int32).newbyteorder())
+    with pytest.raises(TypeError, match="out: expected native byte order"):
+        scene._native.query_into(swapped, "vt", "box", 0.1, False, False, False)
+
+
+def test_byte_swapped_vertices_are_refused_by_the_native_layer(device, mesh):
+    xyz, tris = mesh
+    swapped = xyz.astype(xyz.dtype.newbyteorder())
+    assert np.array_equal(swapped, xyz)  # the same values, the other byte order
+    with pytest.raises(TypeError, match="vertices: expected native byte order"):
+        _native.Scene(device._native, swapped, tris, None, True, True, True)
+    with pytest.raises(TypeError, match="vertices: expected a float32 array"):
+        minkq.Scene(device, swapped, tris)  # the package checks the exact dtype first
 
 
 def test_non_finite_vertex(device, mesh):

@@ -177,11 +177,16 @@ def _out(out: Any) -> np.ndarray:
     return out
 
 
+def _with_headroom(count: int) -> int:
+    """Room for ``count`` pairs and an eighth more (at least 64)."""
+    return count + count // 8 + 64
+
+
 class _SizedQueries:
-    """Runs queries into arrays sized by the last count of the same query (one run in the
-    steady state of a simulation) and regrown to the exact count on CapacityError. The arrays
-    are numpy arrays, or arrays of the library and device of ``like`` (a Warp array gives Warp
-    results on its device)."""
+    """Runs queries into arrays sized by the last count of the same query and an eighth more
+    (one run per call while a simulation's counts drift by less than that) and regrown to the
+    exact count on CapacityError. The arrays are numpy arrays, or arrays of the library and
+    device of ``like`` (a Warp array gives Warp results on its device)."""
 
     device: "Device"
 
@@ -204,7 +209,7 @@ class _SizedQueries:
         (at most once per array). Returns (pairs, digest) per key."""
         like_key = (None if like is None else (like.kind, like.cuda),)
         keys = [k + like_key for k in keys]
-        capacity = [self._last_count.get(k, 0) for k in keys]
+        capacity = [_with_headroom(self._last_count[k]) if k in self._last_count else 0 for k in keys]
         for attempt in range(len(keys) + 1):
             outs = [allocate_pairs(like, c) for c in capacity]
             args = _Args(self.device)
@@ -264,8 +269,9 @@ class Device:
 class Scene(_SizedQueries):
     """A triangle mesh on a device with the BVHs for VT and/or EE queries.
 
-    ``vertices``: (n, 3) float32; ``triangles``: (m, 3) int32; ``edges``: (e, 2) int32 or None
-    to derive them from the triangles (every distinct undirected edge as (min, max), sorted).
+    ``vertices``: (n, 3) float32; ``triangles``: (m, 3) int32; ``edges``: (e, 2) int32, or None
+    (or an empty array) to derive them from the triangles (every distinct undirected edge as
+    (min, max), sorted).
     numpy arrays must have exactly these dtypes and are used without a copy when C-contiguous.
     ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
     a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
@@ -277,7 +283,8 @@ class Scene(_SizedQueries):
     at any stride, e.g. the last two columns of an (e, 4) edge table); they are never copied or
     converted, and a CUDA array on a CPU device or another GPU raises
     :class:`InvalidArgumentError`. Queries then return arrays of the vertices' library and
-    device (or of ``like``).
+    device (or of ``like``): Warp, PyTorch and CuPy arrays, numpy for other host arrays; for
+    device arrays of other libraries (e.g. Numba) pass your own array to :meth:`query_into`.
 
     The GIL is released while the scene is built, refitted, rebuilt and queried. One scene may
     be used from several threads: calls on it wait for each other (as do builds on one device).

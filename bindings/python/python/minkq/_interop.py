@@ -229,6 +229,10 @@ def checked(array: Foreign, name: str, dtype: Any, trailing: Tuple[int, ...], *,
         )
     if writable and array.readonly:
         raise ValueError(f"{name}: the array is read-only")
+    # DLPack before 1.0 cannot mark a tensor read-only: refuse the library whose arrays are
+    # immutable rather than write into one.
+    if writable and array.kind in ("jax", "jaxlib"):
+        raise ValueError(f"{name}: JAX arrays are immutable; pass a numpy, Warp, PyTorch or CuPy array to write into")
     if rows and array.address % dtype.itemsize:
         raise ValueError(f"{name}: the data address is not {dtype.itemsize}-byte aligned")
     return array

@@ -125,6 +125,34 @@ impl PairBuffer {
         // SAFETY: a live result.
         unsafe { sys::minkq_result_digest(self.raw.as_ptr()) }
     }
+
+    /// With [`QueryFlags::STATS`](crate::QueryFlags::STATS): the work counts of the last
+    /// query; all 0 otherwise.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let mut buffer = PairBuffer::new()?;
+    /// scene.query(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::STATS), &mut buffer)?;
+    /// assert_eq!(buffer.stats().candidates, 6);
+    /// assert!(buffer.stats().primitive_tests >= 6);
+    /// scene.query(&Query::vt(Mode::Sphere, 0.2), &mut buffer)?;
+    /// assert_eq!(buffer.stats(), WorkStats::default());
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn stats(&self) -> crate::WorkStats {
+        // SAFETY: a live result.
+        let s = unsafe { sys::minkq_result_stats(self.raw.as_ptr()) };
+        crate::WorkStats {
+            nodes_visited: s.nodes_visited,
+            node_tests: s.node_tests,
+            primitive_tests: s.primitive_tests,
+            candidates: s.candidates,
+        }
+    }
 }
 
 impl Drop for PairBuffer {

@@ -6,7 +6,7 @@ use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
 use crate::pairs::{query_vec, PairBuffer};
-use crate::query::{Query, QueryInfo, SceneFlags};
+use crate::query::{Query, QueryFlags, QueryInfo, SceneFlags, WorkStats};
 use crate::sys;
 
 /// The mesh and options a [`Scene`] is built from (`minkq_scene_desc`).
@@ -629,6 +629,38 @@ impl Scene {
             Err(Error::Capacity { message, .. }) => {
                 let needed = if vt_info.count > vt_out.capacity() as u64 { vt_info.count } else { ee_info.count };
                 Err(Error::Capacity { needed, message })
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Counts a query's work ([`QueryFlags::STATS`] added) in one run that keeps no pairs:
+    /// nodes visited, node tests, primitive tests and candidates (the pair count), the same on
+    /// every backend.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let work = scene.work(&Query::vt(Mode::Sphere, 0.2))?;
+    /// assert_eq!(work.candidates, 6);
+    /// assert!(work.primitive_tests >= work.candidates && work.node_tests >= work.primitive_tests);
+    /// assert!(matches!(scene.work(&Query::ee(Mode::Sphere, 0.2)), Err(Error::InvalidArgument(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn work(&self, query: &Query) -> Result<WorkStats> {
+        let desc = query.with_flags(query.flags | QueryFlags::STATS).raw();
+        let mut info = QueryInfo::raw();
+        // SAFETY: capacity 0: nothing is written through the null pointer; the library fills
+        // the stats also when it reports CAPACITY.
+        let status = unsafe {
+            sys::minkq_scene_query(self.raw.as_ptr(), &desc, ptr::null_mut(), 0, Memory::Host.raw(), &mut info)
+        };
+        match check(status) {
+            Ok(()) | Err(Error::Capacity { .. }) => {
+                Ok(QueryInfo::from_raw(&info, QueryFlags::STATS).stats.unwrap_or_default())
             }
             Err(e) => Err(e),
         }
