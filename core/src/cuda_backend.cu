@@ -597,10 +597,11 @@ class CudaStore : public Interface {
  protected:
   explicit CudaStore(int ordinal) : ordinal_(ordinal) {}
   void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }  // errors belong to this call
-  void hold_device() {
+  // Returns cudaSetDevice's error: constructors check it, destructors cannot report it.
+  cudaError_t hold_device() noexcept {
     if (cudaGetDevice(&teardown_.previous) != cudaSuccess) teardown_.previous = ordinal_;
     teardown_.ordinal = ordinal_;
-    if (teardown_.previous != ordinal_) check(cudaSetDevice(ordinal_), "cudaSetDevice");
+    return teardown_.previous != ordinal_ ? cudaSetDevice(ordinal_) : cudaSuccess;
   }
   void release_device() {
     if (teardown_.previous != teardown_.ordinal) cudaSetDevice(teardown_.previous);
@@ -625,7 +626,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   CudaMeshStore(int ordinal, const Strided& vertices, const std::vector<Triangle>& triangles,
                 const std::vector<Edge>& edges, bool triangle_tree, bool edge_tree)
       : CudaStore(ordinal), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
-    hold_device();
+    check(hold_device(), "cudaSetDevice");
     gather_to_device(vertices, vertices_);
     num_vertices_ = int32_t(vertices.count);
     num_triangles_ = int32_t(triangles.size());
@@ -722,7 +723,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
 class CudaBoxStore final : public CudaStore<Store> {
  public:
   CudaBoxStore(int ordinal, const Strided& boxes) : CudaStore(ordinal) {
-    hold_device();
+    check(hold_device(), "cudaSetDevice");
     gather_to_device(boxes, boxes_);
     num_boxes_ = int32_t(boxes.count);
     tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
