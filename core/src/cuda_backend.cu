@@ -39,24 +39,43 @@ void check(cudaError_t error, const char* call) {
        std::string(call) + " failed: " + cudaGetErrorString(error));
 }
 
-// Makes `ordinal` the calling thread's device for one library call (declared before the call's
-// device buffers, so it outlives them) and gives the caller's device back after it: an
-// application driving another GPU from the same thread is not moved to ours.
-class DeviceScope {
+// Makes a device the calling thread's current one and gives the caller's device back on
+// leave() or destruction, so an application driving another GPU from the same thread is not
+// moved to ours.
+class DeviceSwitch {
  public:
-  explicit DeviceScope(int ordinal) {
-    check(cudaGetDevice(&previous_), "cudaGetDevice");
-    if (previous_ != ordinal) check(cudaSetDevice(ordinal), "cudaSetDevice");
-    ordinal_ = ordinal;
+  DeviceSwitch() = default;
+  DeviceSwitch(const DeviceSwitch&) = delete;
+  DeviceSwitch& operator=(const DeviceSwitch&) = delete;
+  ~DeviceSwitch() { leave(); }
+  // Returns the runtime's error (a destructor cannot report it; other callers check it); on
+  // one, nothing is switched.
+  cudaError_t enter(int ordinal) noexcept {
+    leave();
+    int previous = 0;
+    if (const cudaError_t error = cudaGetDevice(&previous); error != cudaSuccess) return error;
+    if (previous != ordinal)
+      if (const cudaError_t error = cudaSetDevice(ordinal); error != cudaSuccess) return error;
+    previous_ = previous, ordinal_ = ordinal;
+    return cudaSuccess;
   }
-  DeviceScope(const DeviceScope&) = delete;
-  DeviceScope& operator=(const DeviceScope&) = delete;
-  ~DeviceScope() {
-    if (previous_ != ordinal_) cudaSetDevice(previous_);  // a destructor cannot report
+  void leave() noexcept {
+    if (previous_ != ordinal_) cudaSetDevice(previous_);  // cannot be reported
+    previous_ = ordinal_ = -1;
   }
 
  private:
-  int previous_ = 0, ordinal_ = 0;
+  int previous_ = -1, ordinal_ = -1;
+};
+
+// The device of one library call, declared before the call's device buffers so that it
+// outlives them.
+class DeviceScope {
+ public:
+  explicit DeviceScope(int ordinal) { check(switch_.enter(ordinal), "cudaGetDevice / cudaSetDevice"); }
+
+ private:
+  DeviceSwitch switch_;
 };
 
 // Owns one cudaMalloc allocation of `size` elements (none when empty).
@@ -590,32 +609,20 @@ std::array<uint64_t, sizeof...(Pass)> run_counted(QueryWorkspace& ws, const std:
 
 // Every public call selects the store's device for its duration (DeviceScope). Constructors
 // and destructors hold it from hold_device() on: the members, and this base's, are then
-// allocated and freed on it, even when a constructor fails; teardown_ (destroyed after every
+// allocated and freed on it, even when a constructor fails; device_ (destroyed after every
 // member) gives the caller's device back, or release_device() at the end of a constructor.
 template <class Interface>
 class CudaStore : public Interface {
  protected:
   explicit CudaStore(int ordinal) : ordinal_(ordinal) {}
   void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }  // errors belong to this call
-  // Returns cudaSetDevice's error: constructors check it, destructors cannot report it.
-  cudaError_t hold_device() noexcept {
-    if (cudaGetDevice(&teardown_.previous) != cudaSuccess) teardown_.previous = ordinal_;
-    teardown_.ordinal = ordinal_;
-    return teardown_.previous != ordinal_ ? cudaSetDevice(ordinal_) : cudaSuccess;
-  }
-  void release_device() {
-    if (teardown_.previous != teardown_.ordinal) cudaSetDevice(teardown_.previous);
-    teardown_.previous = teardown_.ordinal = -1;
-  }
+  // Returns the runtime's error: constructors check it, destructors cannot report it.
+  cudaError_t hold_device() noexcept { return device_.enter(ordinal_); }
+  void release_device() noexcept { device_.leave(); }
   int ordinal_;
 
  private:
-  struct Teardown {
-    int previous = -1, ordinal = -1;
-    ~Teardown() {
-      if (previous != ordinal) cudaSetDevice(previous);  // a destructor cannot report
-    }
-  } teardown_;  // declared before ws_ and the final classes' members: destroyed after them
+  DeviceSwitch device_;  // declared before ws_ and the final classes' members: destroyed after them
 
  protected:
   QueryWorkspace ws_;
@@ -626,7 +633,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
   CudaMeshStore(int ordinal, const Strided& vertices, const std::vector<Triangle>& triangles,
                 const std::vector<Edge>& edges, bool triangle_tree, bool edge_tree)
       : CudaStore(ordinal), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
-    check(hold_device(), "cudaSetDevice");
+    check(hold_device(), "cudaGetDevice / cudaSetDevice");
     gather_to_device(vertices, vertices_);
     num_vertices_ = int32_t(vertices.count);
     num_triangles_ = int32_t(triangles.size());
@@ -723,7 +730,7 @@ class CudaMeshStore final : public CudaStore<MeshStore> {
 class CudaBoxStore final : public CudaStore<Store> {
  public:
   CudaBoxStore(int ordinal, const Strided& boxes) : CudaStore(ordinal) {
-    check(hold_device(), "cudaSetDevice");
+    check(hold_device(), "cudaGetDevice / cudaSetDevice");
     gather_to_device(boxes, boxes_);
     num_boxes_ = int32_t(boxes.count);
     tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);

@@ -1,5 +1,5 @@
-// Query shapes: each is a box test (BoxShape, its `box`) and finer(b), the test a finer mode
-// adds to it: overlaps(b) = box.overlaps(b) && finer(b) is the mode's test, may_overlap(b) the
+// Query shapes: each is a box test (a BoxShape, box_test()) and finer(b), the test a finer mode
+// adds to it: overlaps(b) = box_test().overlaps(b) && finer(b) is the mode's test, may_overlap(b) the
 // box test alone, applied to internal and leaf-range boxes, overlaps_group(g, lanes) the
 // mode's test on a group of four leaf boxes (on the host in 4-float lanes, box test and finer
 // test alike), and may_overlap_group(g, lanes) the box test so (wide-node studies in bench/);
@@ -114,23 +114,37 @@ struct BoxShape {
   MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return overlaps_group(g, lanes); }
 };
 
-struct SphereShape {  // p0 is the centre; p1 is ignored
-  BoxShape box;       // of the centre: lo == hi == centre
-  float r2_upper;
-  MINKQ_HD static SphereShape from(const QueryGeometry& q) {
-    return {BoxShape::from({q.p0, q.p0, q.r}), square_upper_bound(q.r)};
+// What a finer mode's shape (Shape) derives from its two tests: box_test(), its BoxShape, and
+// finer(b) with, on the host, finer_group(g, lanes), the same on the lanes asked for. On the
+// host a leaf group gets the box test and the finer test four boxes at once; CUDA code tests
+// box by box (a thread reads only the boxes it tests), with the same verdicts.
+template <class Shape>
+struct BoxThenFiner {
+  MINKQ_HD bool overlaps(const Box& b) const { return shape().box_test().overlaps(b) && shape().finer(b); }
+  MINKQ_HD bool may_overlap(const Box& b) const { return shape().box_test().overlaps(b); }
+  MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const {
+    return shape().box_test().overlaps_group(g, lanes);
   }
-  MINKQ_HD bool finer(const Box& b) const { return sphere_overlaps_box(box.lo, r2_upper, b); }
-  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && finer(b); }
-  MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
-  MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return box.overlaps_group(g, lanes); }
   MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
 #if defined(__CUDACC__)
-    return overlaps_each(*this, g, lanes);
+    return overlaps_each(shape(), g, lanes);
 #else
-    return finer_group(g, box.overlaps_group(g, lanes));
+    return shape().finer_group(g, may_overlap_group(g, lanes));
 #endif
   }
+
+ private:
+  MINKQ_HD const Shape& shape() const { return static_cast<const Shape&>(*this); }
+};
+
+struct SphereShape : BoxThenFiner<SphereShape> {  // p0 is the centre; p1 is ignored
+  BoxShape box;                                   // of the centre: lo == hi == centre
+  float r2_upper;
+  MINKQ_HD static SphereShape from(const QueryGeometry& q) {
+    return {{}, BoxShape::from({q.p0, q.p0, q.r}), square_upper_bound(q.r)};
+  }
+  MINKQ_HD const BoxShape& box_test() const { return box; }
+  MINKQ_HD bool finer(const Box& b) const { return sphere_overlaps_box(box.lo, r2_upper, b); }
 #if !defined(__CUDACC__)
   // finer on the lanes asked for: point_box_distance2 <= r2_upper, lane by lane.
   unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
@@ -147,21 +161,12 @@ struct SphereShape {  // p0 is the centre; p1 is ignored
 #endif
 };
 
-struct CapsuleRayShape {
+struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
   BoxShape box;
   Vec3 p0, d;
-  MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) { return {BoxShape::from(q), q.p0, q.p1 - q.p0}; }
+  MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) { return {{}, BoxShape::from(q), q.p0, q.p1 - q.p0}; }
+  MINKQ_HD const BoxShape& box_test() const { return box; }
   MINKQ_HD bool finer(const Box& b) const { return capsule_ray_overlaps_box(p0, d, box.r, b); }
-  MINKQ_HD bool overlaps(const Box& b) const { return box.overlaps(b) && finer(b); }
-  MINKQ_HD bool may_overlap(const Box& b) const { return box.overlaps(b); }
-  MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return box.overlaps_group(g, lanes); }
-  MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
-#if defined(__CUDACC__)
-    return overlaps_each(*this, g, lanes);
-#else
-    return finer_group(g, box.overlaps_group(g, lanes));
-#endif
-  }
 #if !defined(__CUDACC__)
   // capsule_ray_overlaps_box on the lanes asked for. The swap of the slab's ends is the
   // scalar test's (t0 > t1), a NaN end (inf - inf in the widening) is dropped by
@@ -194,34 +199,28 @@ struct CapsuleRayShape {
 #endif
 };
 
-struct CapsuleExactShape {
+struct CapsuleExactShape : BoxThenFiner<CapsuleExactShape> {
   CapsuleRayShape ray;
   Vec3 p1;
   float threshold2;
   MINKQ_HD static CapsuleExactShape from(const QueryGeometry& q) {
-    return {CapsuleRayShape::from(q), q.p1, capsule_exact_threshold2(q.p0, q.p1, q.r)};
+    return {{}, CapsuleRayShape::from(q), q.p1, capsule_exact_threshold2(q.p0, q.p1, q.r)};
   }
+  MINKQ_HD const BoxShape& box_test() const { return ray.box; }
   MINKQ_HD bool finer(const Box& b) const {
     return ray.finer(b) && segment_box_distance2(ray.p0, p1, b) <= threshold2;
   }
-  MINKQ_HD bool overlaps(const Box& b) const { return ray.box.overlaps(b) && finer(b); }
-  MINKQ_HD bool may_overlap(const Box& b) const { return ray.box.overlaps(b); }
-  MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const {
-    return ray.box.overlaps_group(g, lanes);
-  }
+#if !defined(__CUDACC__)
   // The ray test on four lanes, then the segment-box distance lane by lane (it branches).
-  MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
-#if defined(__CUDACC__)
-    return overlaps_each(*this, g, lanes);
-#else
-    unsigned bits = ray.overlaps_group(g, lanes);
+  unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
+    unsigned bits = ray.finer_group(g, lanes);
     for (unsigned rest = bits; rest != 0; rest &= rest - 1u) {
       const int k = lowest_bit(rest);
       if (!(segment_box_distance2(ray.p0, p1, group_box(g, k)) <= threshold2)) bits &= ~(1u << k);
     }
     return bits;
-#endif
   }
+#endif
 };
 
 }  // namespace minkq
