@@ -12,6 +12,13 @@
 
 namespace minkq {
 
+// The relative widening of the capsule slab test's t-interval (2^-20): covers the 3u error of
+// (bound - o) / d with d itself rounded.
+constexpr float kSlabWidening = 9.5367431640625e-07f;
+// The leaf tests' slack relative to the operands' size S (2^-20): they accept distances up to
+// r + kLeafSlack * S (see leaf_within).
+constexpr double kLeafSlack = 0x1p-20;
+
 // ---- Node tests (float32) -------------------------------------------------------------------
 
 // Squared distance from p to box b (0 inside). Computed value d2f satisfies
@@ -75,8 +82,8 @@ MINKQ_HD bool capsule_ray_overlaps_box(Vec3 p0, Vec3 d, float r, const Box& b) {
     }
     float t0 = (lo - o) / dk, t1 = (hi - o) / dk;
     if (t0 > t1) { const float t = t0; t0 = t1; t1 = t; }
-    t0 = t0 - fabsf(t0) * 9.5367431640625e-07f - FLT_MIN;  // 2^-20
-    t1 = t1 + fabsf(t1) * 9.5367431640625e-07f + FLT_MIN;
+    t0 = t0 - fabsf(t0) * kSlabWidening - FLT_MIN;
+    t1 = t1 + fabsf(t1) * kSlabWidening + FLT_MIN;
     t_near = max_num(t_near, t0);
     t_far = min_num(t_far, t1);
   }
@@ -257,7 +264,7 @@ MINKQ_HD double segments_scale(Vec3d p0, Vec3d p1, Vec3d q0, Vec3d q1) {
 // Leaf acceptance: distance2 <= (r + 2^-20 * S)^2, the square taken with a relative margin of
 // 2^-40 that covers double rounding of the threshold itself.
 MINKQ_HD bool leaf_within(double distance2, float r, double scale) {
-  const double limit = double(r) + 0x1p-20 * scale;
+  const double limit = double(r) + kLeafSlack * scale;
   return distance2 <= limit * limit * (1.0 + 0x1p-40);
 }
 

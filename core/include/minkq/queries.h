@@ -15,6 +15,13 @@ struct Edge {
   int32_t v[2];
 };
 
+// Whether triangle t has vertex v, and whether two edges share a vertex: the incidence the
+// kDropIncident filter drops.
+MINKQ_HD bool has_vertex(const Triangle& t, int32_t v) { return t.v[0] == v || t.v[1] == v || t.v[2] == v; }
+MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
+  return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
+}
+
 // Filter bits, numbered as the C API's flags.
 constexpr uint32_t kDropIncident = 1u;  // VT: vertex of the triangle; EE: edges sharing a vertex
 constexpr uint32_t kLeafExact = 2u;     // primitive distance test at the leaves
@@ -55,6 +62,10 @@ struct QueryTarget {
 struct Pair {
   int32_t first, second;
 };
+// A pair as one 64-bit key, first << 32 | second: keys sort as the pairs do lexicographically
+// (ids are non-negative).
+MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uint32_t(first)) << 32 | uint32_t(second); }
+MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(key & 0xffffffffu)}; }
 
 // Vertex v against the triangle tree; pairs (v, t). Queries run in `order` when given (the
 // vertices' Morton order: neighbouring queries then walk the same nodes).
@@ -75,7 +86,7 @@ struct VertexTriangleQueries {
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
     const Triangle tri = triangles[t];
-    if ((filters & kDropIncident) && (tri.v[0] == v || tri.v[1] == v || tri.v[2] == v)) return false;
+    if ((filters & kDropIncident) && has_vertex(tri, v)) return false;
     if (filters & kLeafExact)
       return point_triangle_within(vertices[v], vertices[tri.v[0]], vertices[tri.v[1]], vertices[tri.v[2]], r);
     return true;
@@ -107,9 +118,7 @@ struct EdgeEdgeQueries {
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
     const Edge a = edges[e], b = edges[f];
-    if ((filters & kDropIncident) &&
-        (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
-      return false;
+    if ((filters & kDropIncident) && share_vertex(a, b)) return false;
     // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
     // finer test against e's box (nothing for the box mode).
     if (!Shape::from(geometry(f)).finer(EdgeBoxes{vertices, edges}(e))) return false;

@@ -189,8 +189,8 @@ struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
       const F4 a = (lo - o) / dk, b = (hi - o) / dk;
       const M4 swap = a > b;
       F4 t0 = swap ? b : a, t1 = swap ? a : b;
-      t0 = t0 - simd4::abs(t0) * 9.5367431640625e-07f - FLT_MIN;  // 2^-20
-      t1 = t1 + simd4::abs(t1) * 9.5367431640625e-07f + FLT_MIN;
+      t0 = t0 - simd4::abs(t0) * kSlabWidening - FLT_MIN;
+      t1 = t1 + simd4::abs(t1) * kSlabWidening + FLT_MIN;
       t_near = simd4::max_num(t_near, t0);
       t_far = simd4::min_num(t_far, t1);
     }
