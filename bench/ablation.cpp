@@ -36,103 +36,20 @@
 #include <type_traits>
 
 #include "common.h"
-#include "backend.h"
-#include "cpu_tree.h"
+#include "cpu/tree.h"
 #include "minkq/queries.h"
 #include "scenes.h"
-#include "wide_bvh.h"
+#include "store.h"
+#include "studies/box_tests.h"
+#include "studies/trees.h"
+#include "studies/variants.h"
+#include "studies/wide_bvh.h"
 
 namespace ref = minkq::reference;
 using namespace minkq;
 using namespace minkq::bench;
 
 namespace {
-
-// The EE source before issue 8: query i is edge i over the whole tree; pairs with f <= e are
-// dropped at the leaf, so each unordered pair is reached twice and kept once.
-struct EdgeEdgeTwice {
-  EdgeEdgeQueries base;
-  static constexpr bool kOncePerPair = true;
-  QueryTarget target(int32_t i) const { return {i, -1}; }
-  QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  template <class Shape>
-  bool accept(int32_t e, int32_t f, const Box&) const {
-    if (f <= e) return false;
-    const Edge a = base.edges[e], b = base.edges[f];
-    if ((base.filters & kDropIncident) &&
-        (a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1]))
-      return false;
-    if (base.filters & kLeafExact)
-      return segment_segment_within(base.vertices[a.v[0]], base.vertices[a.v[1]], base.vertices[b.v[0]],
-                                    base.vertices[b.v[1]], base.r);
-    return true;
-  }
-  Pair pair(int32_t e, int32_t f) const { return {e, f}; }
-};
-
-// Each pair once, queries in edge id order: query i is edge i, pruned at its own leaf position.
-struct EdgeEdgeOnceByIdOrder {
-  EdgeEdgeQueries base;
-  const int32_t* position;  // sorted leaf position of each edge
-  static constexpr bool kOncePerPair = true;
-  QueryTarget target(int32_t i) const { return {i, position[i]}; }
-  QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  template <class Shape>
-  bool accept(int32_t e, int32_t f, const Box& f_box) const { return base.accept<Shape>(e, f, f_box); }
-  Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
-};
-
-// The box test before box_gap_within: the query's box padded by r, rounded outward, against
-// each box. Not symmetric, so an EE pair also needs it the other way round (the leaf filter
-// does that for every shape but the library's BoxShape).
-struct PaddedBoxShape {
-  Box box;
-  static PaddedBoxShape from(const QueryGeometry& q) { return {padded_segment_box(q.p0, q.p1, q.r)}; }
-  bool overlaps(const Box& b) const { return boxes_overlap(box, b); }
-  bool may_overlap(const Box& b) const { return boxes_overlap(box, b); }
-  // Not symmetric: the other edge's padded box against this box is the reverse test.
-  bool finer(const Box& b) const { return boxes_overlap(box, b); }
-  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
-  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const { return overlaps_each(*this, g, lanes); }
-};
-
-// A shape whose box tests run box by box: at leaf groups one box at a time (may_overlap_each)
-// instead of four at once, and, with kFineAtEveryNode, the mode's own test (overlaps) at every
-// node instead of only at primitive boxes. Same pairs as Shape.
-template <class Shape, bool kFineAtEveryNode>
-struct BoxByBox {
-  Shape shape;
-  static BoxByBox from(const QueryGeometry& q) { return {Shape::from(q)}; }
-  bool overlaps(const Box& b) const { return shape.overlaps(b); }
-  bool may_overlap(const Box& b) const { return kFineAtEveryNode ? shape.overlaps(b) : shape.may_overlap(b); }
-  bool finer(const Box& b) const { return shape.finer(b); }
-  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return may_overlap_each(*this, g, lanes); }
-  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const { return overlaps_each(*this, g, lanes); }
-};
-// The node tests before: the mode's own test at every node, not only at primitive boxes.
-template <class Shape>
-using FineAtEveryNode = BoxByBox<Shape, true>;
-// The leaf scan before: each leaf box tested alone, against four at a time in vector lanes
-// (overlaps_group; kept).
-template <class Shape>
-using LeafBoxByBox = BoxByBox<Shape, false>;
-// The leaf scan between the two: the box test on four leaf boxes at once, then the mode's
-// finer test box by box on those that passed (before the finer tests had vector lanes too).
-template <class Shape>
-struct FinerBoxByBox {
-  Shape shape;
-  static FinerBoxByBox from(const QueryGeometry& q) { return {Shape::from(q)}; }
-  bool overlaps(const Box& b) const { return shape.overlaps(b); }
-  bool may_overlap(const Box& b) const { return shape.may_overlap(b); }
-  bool finer(const Box& b) const { return shape.finer(b); }
-  unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return shape.may_overlap_group(g, lanes); }
-  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
-    unsigned bits = shape.may_overlap_group(g, lanes);
-    for (unsigned rest = bits; rest != 0; rest &= rest - 1u)
-      if (!shape.finer(group_box(g, lowest_bit(rest)))) bits &= ~(1u << lowest_bit(rest));
-    return bits;
-  }
-};
 
 struct Outcome {
   WorkCounts work;
@@ -157,7 +74,7 @@ Outcome run_each(int32_t n, int repeats, const QueryOne& query_one) {
     tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
       parts[size_t(b)].clear();
       work[size_t(b)] = WorkCounts{};
-      auto emit = [&](int32_t x, int32_t y) { parts[size_t(b)].push_back(uint64_t(uint32_t(x)) << 32 | uint32_t(y)); };
+      auto emit = [&](int32_t x, int32_t y) { parts[size_t(b)].push_back(pack_pair(x, y)); };
       for (int32_t i = b * 256; i < std::min(n, (b + 1) * 256); ++i) query_one(i, emit, work[size_t(b)]);
     });
   };
@@ -243,8 +160,8 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
   Outcome base[3];
   for (int32_t leaf : {1, 2, 4, 8, 16}) {
     CpuTree triangles, edges;
-    triangles.build(TriangleBoxes{v, t}, nt, leaf);
-    edges.build(EdgeBoxes{v, e}, ne, leaf);
+    triangles.build(TriangleBoxes{v, t}, nt, BuildConfig{leaf});
+    edges.build(EdgeBoxes{v, e}, ne, BuildConfig{leaf});
     const double node_bytes = 64.0 * double(triangles.nodes().size() + edges.nodes().size()) / double(nt);
     char label[160];
     std::snprintf(label, sizeof label, "leaf size %d%s: %.1f B of nodes / triangle", leaf,
@@ -392,97 +309,6 @@ std::string compare_fine_nodes_spread(int32_t n, double hr, int repeats, bool& o
          compare_fine_nodes_one<CapsuleExactShape>(name, tree.view(), capsules, n, "user", "capsule_exact", radius, repeats, ok);
 }
 
-// A top-down binned SAH build (the tree-quality alternative of issue 8; not the library's
-// build): each range of primitives is split where the summed half areas of the two sides,
-// weighted by their counts, are least (centres binned in 32 slabs per axis; the middle when
-// the centres coincide), until a side holds at most kLeafSize primitives. Nodes in preorder,
-// leaf ranges contiguous: the library's layout, traversal and refit serve it unchanged.
-template <class Boxes>
-CpuTree build_sah(Boxes boxes, int32_t n) {
-  constexpr int kBins = 32;
-  std::vector<Box> box(static_cast<size_t>(n));
-  std::vector<Vec3> centre(box.size());
-  std::vector<int32_t> order(box.size());
-  for (int32_t i = 0; i < n; ++i) {
-    box[size_t(i)] = boxes(i);
-    centre[size_t(i)] = box_centre(box[size_t(i)]);
-    order[size_t(i)] = i;
-  }
-  auto axis_of = [](const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; };
-  // Partitions order[first..last] and returns the last position of the left side.
-  auto split = [&](int32_t first, int32_t last) {
-    Box bounds = Box::empty();
-    for (int32_t p = first; p <= last; ++p) bounds = box_expand(bounds, centre[size_t(order[size_t(p)])]);
-    double best = INFINITY;
-    int best_axis = -1, best_bin = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const float lo = axis_of(bounds.lo, axis), extent = axis_of(bounds.hi, axis) - lo;
-      if (!(extent > 0.0f)) continue;
-      Box bin_box[kBins];
-      int32_t bin_count[kBins] = {};
-      std::fill(bin_box, bin_box + kBins, Box::empty());
-      for (int32_t p = first; p <= last; ++p) {
-        const int32_t id = order[size_t(p)];
-        const int b = std::min(kBins - 1, int((axis_of(centre[size_t(id)], axis) - lo) * (kBins / extent)));
-        bin_box[b] = box_union(bin_box[b], box[size_t(id)]);
-        ++bin_count[b];
-      }
-      double right_cost[kBins] = {};  // of bins b.. kBins - 1
-      Box right = Box::empty();
-      int32_t count = 0;
-      for (int b = kBins - 1; b > 0; --b) {
-        right = box_union(right, bin_box[b]);
-        count += bin_count[b];
-        right_cost[b] = count ? count * half_area(right) : -1.0;  // -1: empty side
-      }
-      Box left = Box::empty();
-      count = 0;
-      for (int b = 0; b + 1 < kBins; ++b) {
-        left = box_union(left, bin_box[b]);
-        count += bin_count[b];
-        if (count == 0 || right_cost[b + 1] < 0.0) continue;
-        const double cost = count * half_area(left) + right_cost[b + 1];
-        if (cost < best) best = cost, best_axis = axis, best_bin = b;
-      }
-    }
-    if (best_axis < 0) return first + (last - first) / 2;
-    const float lo = axis_of(bounds.lo, best_axis), extent = axis_of(bounds.hi, best_axis) - lo;
-    int32_t* middle = std::partition(order.data() + first, order.data() + last + 1, [&](int32_t id) {
-      return std::min(kBins - 1, int((axis_of(centre[size_t(id)], best_axis) - lo) * (kBins / extent))) <= best_bin;
-    });
-    return int32_t(middle - order.data()) - 1;
-  };
-  std::vector<BvhNode> nodes;
-  if (n == 1) nodes.push_back(one_leaf_root());
-  struct Range {
-    int32_t first, last, parent_slot;
-  };
-  std::vector<Range> stack;
-  if (n > 1) stack.push_back({0, n - 1, -1});
-  while (!stack.empty()) {
-    const Range range = stack.back();
-    stack.pop_back();
-    const int32_t self = int32_t(nodes.size());
-    if (range.parent_slot >= 0) {
-      BvhNode& parent = nodes[size_t(range.parent_slot >> 1)];
-      (range.parent_slot & 1 ? parent.right : parent.left) = self;
-    }
-    const int32_t s = split(range.first, range.last);
-    BvhNode node{};
-    node.parent = range.parent_slot;
-    node.split = s;
-    node.left = ~range.first;  // leaf ranges unless a child node links itself in
-    node.right = ~range.last;
-    nodes.push_back(node);
-    // Right first: the left subtree follows its parent in memory.
-    if (range.last - s > kLeafSize) stack.push_back({s + 1, range.last, self << 1 | 1});
-    if (s - range.first + 1 > kLeafSize) stack.push_back({range.first, s, self << 1});
-  }
-  CpuTree tree;
-  tree.adopt(std::move(nodes), std::move(order), boxes);
-  return tree;
-}
-
 // A scene's first and last frame in the core's types, its radius, and its vertices at the
 // last frame in Morton order (the VT query order); announces the scene on stderr.
 struct FirstAndLast {
@@ -524,8 +350,14 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
   struct Variant {
     Build build;
     bool refit;
-    CpuTree trees[2];  // triangles, edges
+    CpuTree trees[2];  // triangles, edges (Morton builds)
+    SahTree sah[2];    // the same (SAH build)
     double build_ms;
+    BvhView view(int kind) const { return build == kSah ? sah[kind].view() : trees[kind].view(); }
+    double growth_of(int kind) const {
+      return build == kSah ? growth(sah[kind].area_cost(), sah[kind].cost_at_build())
+                           : growth(trees[kind].area_cost(), trees[kind].cost_at_build());
+    }
   };
   std::vector<Variant> variants;
   for (const Build build : {kPerAxis, kCubes, kSah})
@@ -536,23 +368,28 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
       const Vec3* at = refit ? v0 : v;
       x.build_ms = now_ms();
       if (build == kSah) {
-        x.trees[0] = build_sah(TriangleBoxes{at, t}, nt);
-        x.trees[1] = build_sah(EdgeBoxes{at, e}, ne);
+        x.sah[0] = build_sah(TriangleBoxes{at, t}, nt);
+        x.sah[1] = build_sah(EdgeBoxes{at, e}, ne);
+      } else if (build == kCubes) {
+        x.trees[0].build(TriangleBoxes{at, t}, nt);
+        x.trees[1].build(EdgeBoxes{at, e}, ne);
       } else {
-        const MortonCells cells = build == kCubes ? MortonCells::kCubes : MortonCells::kPerAxis;
-        x.trees[0].build(TriangleBoxes{at, t}, nt, kLeafSize, cells);
-        x.trees[1].build(EdgeBoxes{at, e}, ne, kLeafSize, cells);
+        build_per_axis(x.trees[0], TriangleBoxes{at, t}, nt);
+        build_per_axis(x.trees[1], EdgeBoxes{at, e}, ne);
       }
       x.build_ms = now_ms() - x.build_ms;
-      if (refit) {
+      if (refit && build == kSah) {
+        x.sah[0].refit(TriangleBoxes{v, t});
+        x.sah[1].refit(EdgeBoxes{v, e});
+      } else if (refit) {
         x.trees[0].refit(TriangleBoxes{v, t});
         x.trees[1].refit(EdgeBoxes{v, e});
       }
     }
   const std::vector<std::vector<Outcome>> got = round_robin(variants.size(), 2, 3 * repeats, [&](size_t i, int kind, int reps) {
     const Variant& x = variants[i];
-    const EdgeEdgeQueries ee{v, e, x.trees[1].sorted_prims().data(), r, kDropIncident};
-    return kind == 0 ? run<BoxShape>(x.trees[0].view(), vt, nv, reps) : run<BoxShape>(x.trees[1].view(), ee, ne, reps);
+    const EdgeEdgeQueries ee{v, e, x.view(1).sorted_prims, r, kDropIncident};
+    return kind == 0 ? run<BoxShape>(x.view(0), vt, nv, reps) : run<BoxShape>(x.view(1), ee, ne, reps);
   });
   std::string out;
   for (size_t i = 0; i < variants.size(); ++i) {
@@ -564,7 +401,7 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
       const char* marks[3][2] = {{"", " (before)"}, {"", " (kept)"}, {"", ""}};  // [build][refit]
       std::snprintf(label, sizeof label, "%s, %s%s: growth %.2f, build both %.1f ms", builds[x.build],
                     x.refit ? "built at frame 0, refit" : "rebuilt at the last frame", marks[x.build][x.refit],
-                    growth(x.trees[kind].area_cost(), x.trees[kind].cost_at_build()), x.build_ms);
+                    x.growth_of(kind), x.build_ms);
       out += row(sc.name, kind ? "EE" : "VT", "box", label, got[i][size_t(kind)], kind ? ne : nv, got[0][size_t(kind)]);
     }
   }
@@ -587,7 +424,7 @@ Outcome run_wide(const WideTree<W> (&trees)[2], const VertexTriangleQueries& vt,
   return go(CapsuleExactShape{}, trees[1], ee, ne);
 }
 
-// Wide nodes (issue 8's untried lever; bench/wide_bvh.h, not the library's tree). Each
+// Wide nodes (issue 8's untried lever; bench/studies/wide_bvh.h, not the library's tree). Each
 // scene's two binary trees are built at the first frame with leaf ranges of 16 (the
 // library's), 4 or 1, collapsed there to 4- and 8-ary nodes, and refit to the last frame (the
 // wide nodes take the refit boxes), as a simulator's refit-only steps run them. VT sphere, EE
@@ -612,8 +449,8 @@ std::string compare_wide(const SceneFrames& sc, int repeats, bool& ok, std::stri
   std::vector<std::unique_ptr<Trees>> trees;
   for (const int32_t leaf : leaf_sizes) {
     Trees& x = *trees.emplace_back(std::make_unique<Trees>());
-    x.binary[0].build(TriangleBoxes{v0, t}, nt, leaf);
-    x.binary[1].build(EdgeBoxes{v0, e}, ne, leaf);
+    x.binary[0].build(TriangleBoxes{v0, t}, nt, BuildConfig{leaf});
+    x.binary[1].build(EdgeBoxes{v0, e}, ne, BuildConfig{leaf});
     for (int k = 0; k < 2; ++k) {
       x.wide4[k].collapse(x.binary[k]);
       x.wide8[k].collapse(x.binary[k]);
@@ -806,7 +643,6 @@ template <class Queries, class LeafTest>
 struct WithLeafTest {
   Queries candidates;
   LeafTest leaf_test;
-  static constexpr bool kOncePerPair = Queries::kOncePerPair;
   WithLeafTest(Queries source, LeafTest test) : candidates(source), leaf_test(test) { candidates.filters &= ~kLeafExact; }
   QueryTarget target(int32_t i) const { return candidates.target(i); }
   QueryGeometry geometry(int32_t q) const { return candidates.geometry(q); }
@@ -1049,7 +885,7 @@ int main(int argc, char** argv) {
       std::ostringstream o;
       o << "# Wide nodes: 4- and 8-ary trees collapsed from the binary one (issue 8)\n\nMachine: "
         << machine_line("cpu (core traversal, TBB)") << ". Load average (1 min) at start " << fmt(load_average(), 3)
-        << ". A study (bench/wide_bvh.h), not the library's tree. Every procedural scene and the twisted sheet; each "
+        << ". A study (bench/studies/wide_bvh.h), not the library's tree. Every procedural scene and the twisted sheet; each "
         << "scene's binary trees built at its first frame (leaf ranges of 16, the library's, or of 4 or 1), collapsed "
         << "there to W-ary nodes (the child with the largest box area opened until W children; child boxes stored "
         << "by axis, " << sizeof(WideNode<4>) << " B per 4-wide node, " << sizeof(WideNode<8>) << " B per 8-wide), "

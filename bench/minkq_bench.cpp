@@ -21,7 +21,7 @@
 #include <sstream>
 
 #include "common.h"
-#include "cpu_tree.h"
+#include "cpu/tree.h"
 #include "minkq/queries.h"
 #include "embree_vt.h"
 #include "minkq/predicates.h"

@@ -19,7 +19,7 @@
 #include <sstream>
 
 #include "common.h"
-#include "cpu_tree.h"
+#include "cpu/tree.h"
 #include "minkq/predicates.h"
 #include "minkq/queries.h"
 #include "minkq/shapes.h"
@@ -59,42 +59,20 @@ struct CapsuleUnitShape {
       len = sqrtf(d.x * d.x + d.y * d.y + d.z * d.z);
       u = len > 0.0f ? minkq::Vec3{d.x / len, d.y / len, d.z / len} : minkq::Vec3{0, 0, 0};
     }
-    const float t_max = minkq::next_up(len * (1.0f + 9.5367431640625e-07f));
+    const float t_max = minkq::next_up(len * (1.0f + minkq::kSlabWidening));
     return {minkq::padded_segment_box(p0, p1, r), p0, u, t_max, r};
   }
   // Its box inside the tree, the slab test at primitives (as the core's shapes).
   bool may_overlap(const minkq::Box& b) const { return minkq::boxes_overlap(box, b); }
   bool overlaps(const minkq::Box& b) const { return may_overlap(b) && finer(b); }
-  unsigned may_overlap_group(const minkq::BoxGroup& g, unsigned lanes) const {
-    return minkq::may_overlap_each(*this, g, lanes);
-  }
   unsigned overlaps_group(const minkq::BoxGroup& g, unsigned lanes) const { return minkq::overlaps_each(*this, g, lanes); }
-  bool finer(const minkq::Box& b) const {
-    float t_near = 0.0f, t_far = t_max;
-    for (int axis = 0; axis < 3; ++axis) {
-      const float lo = minkq::next_down(minkq::component(b.lo, axis) - r);
-      const float hi = minkq::next_up(minkq::component(b.hi, axis) + r);
-      const float o = minkq::component(p0, axis), uk = minkq::component(u, axis);
-      if (uk == 0.0f) {
-        if (o < lo || o > hi) return false;
-        continue;
-      }
-      float t0 = (lo - o) / uk, t1 = (hi - o) / uk;
-      if (t0 > t1) std::swap(t0, t1);
-      t0 = t0 - fabsf(t0) * 9.5367431640625e-07f - FLT_MIN;
-      t1 = t1 + fabsf(t1) * 9.5367431640625e-07f + FLT_MIN;
-      t_near = fmaxf(t_near, t0);
-      t_far = fminf(t_far, t1);
-    }
-    return t_near <= t_far;
-  }
+  bool finer(const minkq::Box& b) const { return minkq::segment_slabs_overlap(p0, u, t_max, r, b); }
 };
 
 // The core's shape through the same bench traversal (a cross-check of the C API's capsule_ray).
 struct CoreRayShape {
   minkq::CapsuleRayShape s;
   bool may_overlap(const minkq::Box& b) const { return s.may_overlap(b); }
-  unsigned may_overlap_group(const minkq::BoxGroup& g, unsigned lanes) const { return s.may_overlap_group(g, lanes); }
   unsigned overlaps_group(const minkq::BoxGroup& g, unsigned lanes) const { return s.overlaps_group(g, lanes); }
   bool overlaps(const minkq::Box& b) const { return s.overlaps(b); }
   bool finer(const minkq::Box& b) const { return s.finer(b); }
@@ -114,8 +92,7 @@ PairSet ee_pairs_with(const ref::Mesh& m, MakeShape make) {
       const auto shape = make(v[e[q].v[0]], v[e[q].v[1]]);
       auto on_leaf = [&](int32_t f, const minkq::Box&) {
         if (f <= q) return;
-        const minkq::Edge a = e[q], c = e[f];
-        if (a.v[0] == c.v[0] || a.v[0] == c.v[1] || a.v[1] == c.v[0] || a.v[1] == c.v[1]) return;
+        if (minkq::share_vertex(e[q], e[f])) return;
         parts[size_t(b)].push_back(pack(q, f));
       };
       minkq::NoWork work;

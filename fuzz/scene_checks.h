@@ -19,6 +19,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -197,13 +198,13 @@ void shape_of_mode(int mode, bool points, Fn&& fn) {
 }
 
 // The candidate set a mode defines: the shape's node test applied to every primitive box,
-// AND the leaf filter.
+// AND the leaf filter; EE (the edges against themselves) over the pairs q < p only.
 template <class Shape, class Queries, class Boxes>
 Pairs definition_set(const Queries& queries, int32_t num_queries, const Boxes& boxes, int32_t num_prims) {
   Pairs out;
   for (int32_t q = 0; q < num_queries; ++q) {
     const Shape shape = Shape::from(queries.geometry(q));
-    for (int32_t p = Queries::kOncePerPair ? q + 1 : 0; p < num_prims; ++p)
+    for (int32_t p = std::is_same<Queries, EdgeEdgeQueries>::value ? q + 1 : 0; p < num_prims; ++p)
       if (shape.overlaps(boxes(p)) && queries.template accept<Shape>(q, p)) out.push_back({q, p});
   }
   return out;

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <functional>
 
-#include "backend.h"
-#include "cpu_tree.h"
+#include "store.h"
+#include "cpu/tree.h"
 #include "minkq/queries.h"
 #include "test_util.h"
 

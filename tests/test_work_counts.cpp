@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "capi_util.h"
-#include "minkq/bvh.h"
+#include "minkq/traversal.h"
 #include "test_util.h"
 
 namespace minkq {

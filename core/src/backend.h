@@ -1,11 +1,12 @@
 // Internal interface between the C API front end (capi/minkq.cpp: validation, topology,
-// digests) and a backend (CPU or CUDA) that owns the arrays and runs build, refit and queries.
+// digests) and a backend (cpu/, cuda/) that owns the arrays and runs build, refit and queries.
+// Both backends serve it with the same two stores (store.h) over their own executor.
 #pragma once
 
 #include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -119,66 +120,13 @@ std::unique_ptr<Backend> make_cuda_backend(int ordinal);
 int cuda_device_count();  // 0 where built without CUDA or no device/driver
 bool built_with_cuda();
 
-// Calls fn with a default-constructed value of the shape type that `mode` selects, for point
-// queries (VT, user spheres: kPoints) or segment and box queries; only the shapes a kind can
-// use are compiled for it. Points are zero-length capsules: capsule_ray tests the box, and
-// capsule_exact the sphere. The front end rejects sphere mode for segments and any non-box mode
-// for box queries before calling.
-template <bool kPoints, class Fn>
-void with_shape(Mode mode, Fn&& fn) {
-  switch (mode) {
-    case Mode::kBox: return fn(BoxShape{});
-    case Mode::kSphere:
-      if constexpr (kPoints) return fn(SphereShape{});
-      break;
-    case Mode::kCapsuleRay:
-      if constexpr (kPoints) return fn(BoxShape{}); else return fn(CapsuleRayShape{});
-    case Mode::kCapsuleExact:
-      if constexpr (kPoints) return fn(SphereShape{}); else return fn(CapsuleExactShape{});
-  }
-  fail(Status::kInternal, "mode not available for these queries");
+// `values` (host memory) packed into a vector of records of type T (float records: Vec3, Box).
+template <class T>
+std::vector<T> gather_host(const Strided& values) {
+  std::vector<T> out(static_cast<size_t>(values.count));
+  const char* base = static_cast<const char*>(values.data);
+  for (int64_t i = 0; i < values.count; ++i) std::memcpy(&out[size_t(i)], base + size_t(i) * values.stride, sizeof(T));
+  return out;
 }
-
-// The queries of one request for a pass: the request's kind, the tree, the query source and
-// where the pairs go, with the node test as a type.
-template <class Shape_, class Queries>
-struct QueryPass {
-  using Shape = Shape_;
-  QueryKind kind;
-  BvhView bvh;
-  Queries queries;
-  int32_t num_queries;
-  PairOutput out;
-};
-
-// Calls fn with the QueryPass of a request (its shape chosen by with_shape).
-template <bool kPoints, class Queries, class Fn>
-void with_pass(const QueryRequest& request, const BvhView& bvh, const Queries& queries, int32_t num_queries,
-               const PairOutput& out, Fn&& fn) {
-  with_shape<kPoints>(request.mode, [&](auto shape) {
-    fn(QueryPass<decltype(shape), Queries>{request.kind, bvh, queries, num_queries, out});
-  });
-}
-
-// Calls run(Work{}) with the work type a call's passes need: the counted traversal if any pass
-// counts (the others' counts are then dropped), else the uncounted one.
-template <size_t N, class Run>
-auto with_work(const std::array<WorkCounts*, N>& works, Run&& run) {
-  for (WorkCounts* w : works)
-    if (w) return run(WorkCounts{});
-  return run(NoWork{});
-}
-
-// A tree's area cost (sum of node_area over the root's half area) now over its value at its
-// last build. A tree without area (its boxes on one axis-parallel line or at one point, or no
-// nodes) costs 0: the ratio is then 1 while it stays so, and infinite once it has area.
-inline double growth(double cost_now, double cost_at_build) {
-  if (cost_at_build > 0.0) return cost_now / cost_at_build;
-  return cost_now > 0.0 ? HUGE_VAL : 1.0;
-}
-
-// Gathers strided float3 records into a packed host vector (host memory only).
-std::vector<Vec3> gather_vec3(const Strided& values);
-std::vector<Box> gather_boxes(const Strided& values);
 
 }  // namespace minkq

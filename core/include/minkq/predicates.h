@@ -63,15 +63,10 @@ MINKQ_HD Box padded_segment_box(Vec3 p0, Vec3 p1, float r) {
 // outward rounding covers it.
 MINKQ_HD Box box_gap_bound(Vec3 lo, Vec3 hi, float r) { return padded_segment_box(lo, hi, next_up(r)); }
 
-// The prototype's capsule node test: the segment p0 + t*d, t in [0, 1] (d = p1 - p0), against
-// the box inflated by r in every axis (a superset of the capsule's Minkowski region).
-// The inflated box is rounded outward; each slab's t-interval is widened by 2^-20 relative
-// (covering the 3u error of (bound - o) / d with d itself rounded) plus FLT_MIN absolute
-// (t is dimensionless, so this is not a length tolerance). Accepts every box within r of the
-// segment; accepts only boxes whose r-inflation the segment reaches within t in
-// [-2^-19, 1 + 2^-19].
-MINKQ_HD bool capsule_ray_overlaps_box(Vec3 p0, Vec3 d, float r, const Box& b) {
-  float t_near = 0.0f, t_far = 1.0f;
+// The slab test of a ray p0 + t*d, t in [0, t_end], against the box b inflated by r: each
+// axis's t-interval, with the rounding and widening stated below, intersected.
+MINKQ_HD bool segment_slabs_overlap(Vec3 p0, Vec3 d, float t_end, float r, const Box& b) {
+  float t_near = 0.0f, t_far = t_end;
   for (int axis = 0; axis < 3; ++axis) {
     const float lo = next_down(component(b.lo, axis) - r);
     const float hi = next_up(component(b.hi, axis) + r);
@@ -88,6 +83,17 @@ MINKQ_HD bool capsule_ray_overlaps_box(Vec3 p0, Vec3 d, float r, const Box& b) {
     t_far = min_num(t_far, t1);
   }
   return t_near <= t_far;
+}
+
+// The prototype's capsule node test: the segment p0 + t*d, t in [0, 1] (d = p1 - p0), against
+// the box inflated by r in every axis (a superset of the capsule's Minkowski region).
+// The inflated box is rounded outward; each slab's t-interval is widened by 2^-20 relative
+// (covering the 3u error of (bound - o) / d with d itself rounded) plus FLT_MIN absolute
+// (t is dimensionless, so this is not a length tolerance). Accepts every box within r of the
+// segment; accepts only boxes whose r-inflation the segment reaches within t in
+// [-2^-19, 1 + 2^-19].
+MINKQ_HD bool capsule_ray_overlaps_box(Vec3 p0, Vec3 d, float r, const Box& b) {
+  return segment_slabs_overlap(p0, d, 1.0f, r, b);
 }
 
 // Signed excess of coordinate x beyond [lo, hi]: negative below, positive above, 0 inside.
@@ -284,11 +290,10 @@ MINKQ_HD bool segment_segment_distance_within(Vec3 p0, Vec3 p1, Vec3 q0, Vec3 q1
 // ---- Separation screen for EE: a cheap proof that the leaf test rejects ------------------
 // Two sets whose projections onto an axis lie a gap g apart are at least g apart. Along the
 // axis v joining the two segments' centres (any axis serves, so the computed v is as good as
-// the exact one) the gap costs three dot products, a root and a division, against about 30 ns
-// for the full distance; on cloth it settles about half the box candidates that are not
-// contacts, and EE contacts come 1.07-1.27x faster (bench/results/contacts.md; the same screen
-// for VT, along p minus the triangle's centroid, gained nothing there and is not used). It
-// answers "apart" only when the computed gap exceeds r + 2^-18 * T, T >= S a bound on the
+// the exact one) the gap costs three dot products, a root and a division, far less than the
+// full distance, and on cloth it settles many of the box candidates that are not contacts
+// (bench/README.md links the contacts study, which also tried the same screen for VT and did
+// not keep it). It answers "apart" only when the computed gap exceeds r + 2^-18 * T, T >= S a bound on the
 // operands' size (S as above): the computed gap is off by at most about 2^-49 * T (a few
 // roundings of terms no larger than T), so the true distance then exceeds r + 2^-19 * S,
 // beyond every pair the full test accepts. The leaf set is therefore exactly the full test's,

@@ -3,7 +3,7 @@
 // and to the one traversal; backends call it per query and supply only emit(first, second).
 #pragma once
 
-#include "minkq/bvh.h"
+#include "minkq/traversal.h"
 #include "minkq/shapes.h"
 
 namespace minkq {
@@ -22,7 +22,7 @@ MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
   return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
 }
 
-// Filter bits, numbered as the C API's flags.
+// Filter bits of a query (capi/minkq.cpp sets them from the C flags one by one).
 constexpr uint32_t kDropIncident = 1u;  // VT: vertex of the triangle; EE: edges sharing a vertex
 constexpr uint32_t kLeafExact = 2u;     // primitive distance test at the leaves
 
@@ -75,7 +75,6 @@ struct VertexTriangleQueries {
   const int32_t* order;  // or nullptr: vertex i is query i
   float r;
   uint32_t filters;
-  static constexpr bool kOncePerPair = false;
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], r}; }
   // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
@@ -105,7 +104,6 @@ struct EdgeEdgeQueries {
   const int32_t* sorted_edges;  // the edge tree's leaf order
   float r;
   uint32_t filters;
-  static constexpr bool kOncePerPair = true;  // a candidate set defined on pairs e < f
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], r};
@@ -136,7 +134,6 @@ struct UserQueries {
   const Vec3* p0;
   const Vec3* p1;
   float r;
-  static constexpr bool kOncePerPair = false;
   MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
   template <class Shape>

@@ -1,16 +1,30 @@
-// Query shapes: each is a box test (a BoxShape, box_test()) and finer(b), the test a finer mode
-// adds to it: overlaps(b) = box_test().overlaps(b) && finer(b) is the mode's test, may_overlap(b) the
-// box test alone, applied to internal and leaf-range boxes, overlaps_group(g, lanes) the
-// mode's test on a group of four leaf boxes (on the host in 4-float lanes, box test and finer
-// test alike), and may_overlap_group(g, lanes) the box test so (wide-node studies in bench/);
-// traversal (bvh.h) is written once for all.
-// Finer modes are the coarser test AND a tighter one, so the candidate sets nest by
-// construction in float: capsule_exact <= capsule_ray <= box, sphere <= box.
-// The finer tests run only on primitive boxes: on the cloth scenes they pruned 0-4% of the
-// internal nodes the box test visits, at 2-5x its cost (bench/results/ablation.md), so inside
-// the tree every shape uses its box test. The candidate set is the same either way: a
-// primitive is a candidate when overlaps(its box), and may_overlap accepts every box that
-// contains one overlaps accepts.
+// Query shapes: what a query tests a box with. Every shape is one of the C API's node-test
+// modes (Mode) over a QueryGeometry (a segment grown by r, a point when p0 == p1, or a box),
+// and the one traversal (traversal.h) is written against this contract alone:
+//
+//   static Shape from(const QueryGeometry&)  the shape of one query.
+//   bool may_overlap(const Box& b)           the test of internal-node and leaf-range boxes:
+//                                            monotone under box inclusion (if it rejects b,
+//                                            it rejects every box inside b) and true wherever
+//                                            overlaps is true.
+//   bool overlaps(const Box& b)              the mode's whole test of a primitive's box: a
+//                                            primitive is a candidate exactly when it holds.
+//   bool finer(const Box& b)                 what overlaps adds to may_overlap: overlaps(b) ==
+//                                            may_overlap(b) && finer(b). A single-primitive
+//                                            leaf range, whose box already passed may_overlap,
+//                                            runs only this.
+//   unsigned overlaps_group(const BoxGroup& g, unsigned lanes)
+//                                            overlaps on the boxes of g in the lanes asked for,
+//                                            as a bit mask: bit k set iff lane k is asked for
+//                                            and overlaps(group_box(g, k)). Every verdict must
+//                                            be overlaps' own, bit for bit.
+//
+// With these, traversal reports exactly the primitives whose box the shape overlaps, whatever
+// the tree (tests/test_queries.cpp checks it against the test applied to every primitive).
+// Each finer mode is the box test AND a tighter one (BoxThenFiner), so the candidate sets nest
+// by construction in float: capsule_exact <= capsule_ray <= box, sphere <= box. Inside the
+// tree every shape uses its box test: the finer tests run only on primitive boxes, where they
+// cost less than the candidates they remove (bench/README.md links the study).
 #pragma once
 
 #include "minkq/predicates.h"
@@ -26,19 +40,8 @@ struct QueryGeometry {
   float r;
 };
 
-// may_overlap box by box over the lanes asked for: BoxShape's lane test in CUDA code, and
-// shapes without a lane test (bench studies).
-template <class Shape>
-MINKQ_HD unsigned may_overlap_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
-  unsigned bits = 0;
-  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
-    const int k = lowest_bit(rest);
-    bits |= unsigned(shape.may_overlap(group_box(g, k))) << k;
-  }
-  return bits;
-}
-// overlaps the same way: the finer shapes' leaf test in CUDA code (a thread reads only the
-// boxes it tests), and bench studies.
+// overlaps box by box over the lanes asked for: the shapes' leaf test in CUDA code (a thread
+// reads only the boxes it tests).
 template <class Shape>
 MINKQ_HD unsigned overlaps_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
   unsigned bits = 0;
@@ -103,7 +106,7 @@ struct BoxShape {
   // no more than it tests). The same float subtractions and comparisons either way.
   MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
 #if defined(__CUDACC__)
-    return may_overlap_each(*this, g, lanes);  // may_overlap is overlaps here
+    return overlaps_each(*this, g, lanes);
 #else
     using simd4::load;
     const simd4::M4 pass = (load(g.lo[0]) - hi.x <= r) & (lo.x - load(g.hi[0]) <= r) & (load(g.lo[1]) - hi.y <= r) &
@@ -111,7 +114,6 @@ struct BoxShape {
     return lanes & simd4::mask_bits(pass);
 #endif
   }
-  MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const { return overlaps_group(g, lanes); }
 };
 
 // What a finer mode's shape (Shape) derives from its two tests: box_test(), its BoxShape, and
@@ -122,14 +124,11 @@ template <class Shape>
 struct BoxThenFiner {
   MINKQ_HD bool overlaps(const Box& b) const { return shape().box_test().overlaps(b) && shape().finer(b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return shape().box_test().overlaps(b); }
-  MINKQ_HD unsigned may_overlap_group(const BoxGroup& g, unsigned lanes) const {
-    return shape().box_test().overlaps_group(g, lanes);
-  }
   MINKQ_HD unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
 #if defined(__CUDACC__)
     return overlaps_each(shape(), g, lanes);
 #else
-    return shape().finer_group(g, may_overlap_group(g, lanes));
+    return shape().finer_group(g, shape().box_test().overlaps_group(g, lanes));
 #endif
   }
 

@@ -15,8 +15,9 @@
 #include <cstring>
 #include <vector>
 
-#include "cpu_tree.h"
-#include "minkq/shapes.h"
+#include "cpu/tree.h"
+#include "minkq/traversal.h"
+#include "studies/box_tests.h"
 
 namespace minkq::bench {
 
@@ -150,16 +151,16 @@ class WideTree {
 };
 
 // Bit k set where child k passes the shape's box test, four children at a time
-// (may_overlap_group: 4-float lanes on the host).
+// (may_overlap_group: 4-float lanes for the library's shapes).
 template <int W, class Shape>
 inline unsigned box_test_lanes(const WideNode<W>& node, const Shape& shape) {
   unsigned bits = 0;
-  for (int g = 0; g < W / 4; ++g) bits |= shape.may_overlap_group(node.boxes[g], 0xfu) << (4 * g);
+  for (int g = 0; g < W / 4; ++g) bits |= may_overlap_group(shape, node.boxes[g], 0xfu) << (4 * g);
   return bits;
 }
 
-// traverse() of bvh.h over wide nodes; kLanes: the child boxes tested 4 at a time, else the
-// shape's may_overlap child by child. Leaf ranges are visited as the library does (bvh.h).
+// traverse() of traversal.h over wide nodes; kLanes: the child boxes tested 4 at a time, else the
+// shape's may_overlap child by child. Leaf ranges are visited as the library does (traversal.h).
 // Work counts: nodes_visited = wide records read, node_tests = non-empty child boxes past
 // `after` (tested) plus leaf boxes scanned.
 template <int W, bool kLanes, class Shape, class OnLeaf, class Work>

@@ -1,9 +1,10 @@
-// The CPU tree: bvh.h's per-element build and refit steps run in parallel with TBB. Shared by
-// the CPU backend and the BVH invariant tests.
+// The CPU tree: tree.h's per-element build and refit steps run in parallel with TBB, the
+// counterpart of cuda/tree.cuh (the same steps, so the trees are bit-identical). Used by the
+// CPU executor (cpu/backend.cpp) and, through the minkq_internal target, by the tree tests and
+// the benchmarks' studies.
 #pragma once
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
@@ -11,39 +12,58 @@
 #include <utility>
 #include <vector>
 
-#include "minkq/bvh.h"
+#include "cpu/runtime.h"
+#include "minkq/tree.h"
 
 namespace minkq {
 
-template <class Fn>
-void parallel_for_each(int64_t n, Fn&& fn) {
-  tbb::parallel_for(tbb::blocked_range<int64_t>(0, n, 1024), [&](const tbb::blocked_range<int64_t>& range) {
-    for (int64_t i = range.begin(); i != range.end(); ++i) fn(i);
-  });
-}
-
-// Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id (as CUB's
-// stable radix sort of the CUDA backend), with the sorted keys.
+// The bounds of the centres of boxes(0..n-1) (min and max are exact: any order gives them).
 template <class Boxes>
-void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::vector<int32_t>& ids,
-                    MortonCells cells = MortonCells::kCubes) {
-  keys.assign(size_t(n), 0);
-  ids.assign(size_t(n), 0);
-  if (n == 0) return;
-  const Box centre_bounds = tbb::parallel_reduce(
+Box centre_bounds(Boxes boxes, int32_t n) {
+  return tbb::parallel_reduce(
       tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),
       [&](const tbb::blocked_range<int32_t>& range, Box acc) {
         for (int32_t i = range.begin(); i != range.end(); ++i) acc = box_expand(acc, box_centre(boxes(i)));
         return acc;
       },
       [](Box a, Box b) { return box_union(a, b); });
-  const MortonFrame frame = morton_frame(centre_bounds, cells);
+}
+
+// Ids 0..n-1 sorted by key_of(id), ties broken by id (as CUB's stable radix sort of the CUDA
+// backend), with the sorted keys.
+template <class KeyOf>
+void sort_by_key(int32_t n, const KeyOf& key_of, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
   std::vector<std::pair<uint64_t, int32_t>> keyed(static_cast<size_t>(n));
-  parallel_for_each(n, [&](int64_t i) { keyed[i] = {morton_code(frame, box_centre(boxes(int32_t(i)))), int32_t(i)}; });
+  parallel_for_each(n, [&](int64_t i) { keyed[i] = {key_of(int32_t(i)), int32_t(i)}; });
   tbb::parallel_sort(keyed.begin(), keyed.end());
+  keys.assign(size_t(n), 0);
+  ids.assign(size_t(n), 0);
   parallel_for_each(n, [&](int64_t i) {
     keys[i] = keyed[i].first;
     ids[i] = keyed[i].second;
+  });
+}
+
+// Ids 0..n-1 sorted by the Morton code of their box centres (ties by id), with the keys.
+template <class Boxes>
+void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
+  if (n == 0) {
+    keys.clear();
+    ids.clear();
+    return;
+  }
+  const MortonFrame frame = morton_frame(centre_bounds(boxes, n));
+  sort_by_key(n, [&](int32_t i) { return morton_code(frame, box_centre(boxes(i))); }, keys, ids);
+}
+
+// tree.h's bottom-up refit from every child slot of `nodes` in parallel (the arrival counters,
+// one per node, zeroed first): the leaf groups and every node's child boxes from boxes().
+template <class Boxes>
+void refit_slots(Boxes boxes, std::vector<BvhNode>& nodes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
+                 std::vector<int32_t>& arrivals) {
+  std::fill(arrivals.begin(), arrivals.end(), 0);
+  parallel_for_each(int64_t(nodes.size()) * 2, [&](int64_t slot) {
+    refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes.data(), arrivals.data());
   });
 }
 
@@ -53,14 +73,28 @@ class CpuTree {
   // Primitive at each sorted leaf position.
   const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
-  // leaf_size: primitives per leaf range at most (1 to kLeafSize; other sizes, and other
-  // Morton cells, for studies).
+  // Builds the tree over boxes(0..n-1): sorted by the Morton codes of their centres, then
+  // the hierarchy over the sorted codes.
   template <class Boxes>
-  void build(Boxes boxes, int32_t n, int32_t leaf_size = kLeafSize, MortonCells cells = MortonCells::kCubes) {
+  void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
+    std::vector<uint64_t> keys;
+    std::vector<int32_t> order;
+    if (n > 1) sort_by_morton(boxes, n, keys, order);
+    build_sorted(boxes, keys, std::move(order), n, config);
+  }
+
+  // The same over primitives already in leaf order: sorted_prims[p] is the primitive at leaf
+  // position p and keys[p] its 63-bit key, ascending (ties in position order); for n <= 1
+  // both may be empty. build() is this with Morton codes.
+  template <class Boxes>
+  void build_sorted(Boxes boxes, const std::vector<uint64_t>& keys, std::vector<int32_t> sorted_prims, int32_t n,
+                    const BuildConfig& config = {}) {
+    const int32_t leaf_size = config.leaf_size;
     n_ = n;
     cost_at_build_ = 0.0;
     nodes_.clear();
-    sorted_prims_.assign(size_t(n), 0);
+    sorted_prims_ = std::move(sorted_prims);
+    sorted_prims_.resize(size_t(n), 0);
     leaf_groups_.assign(size_t(box_group_count(n)), BoxGroup{});
     arrivals_.clear();
     if (n == 0) return;
@@ -71,8 +105,6 @@ class CpuTree {
       cost_at_build_ = area_cost();
       return;
     }
-    std::vector<uint64_t> keys;
-    sort_by_morton(boxes, n, keys, sorted_prims_, cells);
     std::vector<KarrasNode> karras(size_t(n - 1));
     parallel_for_each(n - 1, [&](int64_t i) { karras[i] = karras_node(int32_t(i), keys.data(), n); });
     std::vector<int32_t> new_index(size_t(n - 1));
@@ -91,37 +123,13 @@ class CpuTree {
     cost_at_build_ = area_cost();
   }
 
-  // A tree laid out elsewhere (bench/ablation.cpp's SAH build, a study): node records with
-  // their links and splits, and the primitive at each leaf position; refit fills the boxes.
-  template <class Boxes>
-  void adopt(std::vector<BvhNode> nodes, std::vector<int32_t> sorted_prims, Boxes boxes) {
-    n_ = int32_t(sorted_prims.size());
-    nodes_ = std::move(nodes);
-    sorted_prims_ = std::move(sorted_prims);
-    leaf_groups_.assign(size_t(box_group_count(n_)), BoxGroup{});
-    arrivals_.assign(nodes_.size(), 0);
-    refit(boxes);
-    cost_at_build_ = area_cost();
-  }
-
   template <class Boxes>
   void refit(Boxes boxes) {
-    std::fill(arrivals_.begin(), arrivals_.end(), 0);
-    parallel_for_each(int64_t(nodes_.size()) * 2, [&](int64_t slot) {
-      refit_from_slot(int32_t(slot), boxes, sorted_prims_.data(), leaf_groups_.data(), nodes_.data(), arrivals_.data());
-    });
+    refit_slots(boxes, nodes_, sorted_prims_.data(), leaf_groups_.data(), arrivals_);
   }
 
-  // The sum of node_area over the nodes, over the root box's half area (0 without area):
-  // summed in node order, so the same on every run.
-  double area_cost() const {
-    if (nodes_.empty()) return 0.0;
-    const double root = root_half_area(nodes_[0]);
-    if (!(root > 0.0)) return 0.0;
-    double sum = 0.0;
-    for (const BvhNode& node : nodes_) sum += node_area(node);
-    return sum / root;
-  }
+  // The tree's area cost (tree.h's area_cost).
+  double area_cost() const { return minkq::area_cost(nodes_.data(), int64_t(nodes_.size())); }
   // area_cost() right after the last build.
   double cost_at_build() const { return cost_at_build_; }
 

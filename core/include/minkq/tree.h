@@ -1,6 +1,8 @@
-// Linear BVH (Karras 2012) over primitive boxes, with subtrees of up to kLeafSize primitives
-// collapsed into leaf ranges: flat arrays of PODs, identical on CPU and GPU. Each step is a
-// per-element __host__ __device__ function; a backend only loops over it.
+// The tree: a linear BVH (Karras 2012) over primitive boxes, with subtrees of up to a leaf size
+// of primitives collapsed into leaf ranges. Flat arrays of PODs, identical on CPU and GPU:
+// the node layout, Morton codes, the hierarchy from sorted keys, the bottom-up refit and the
+// area cost, each step a per-element __host__ __device__ function that a backend's tree
+// (core/src/cpu/tree.h, core/src/cuda/tree.cuh) only loops over. traversal.h walks it.
 #pragma once
 
 #include "minkq/hd.h"
@@ -23,9 +25,15 @@ struct BvhNode {
 static_assert(sizeof(BvhNode) == 64, "node record must stay one 64-byte line");
 
 // Primitives per leaf range at most: the bottom levels of the binary tree become a short scan
-// of contiguous leaf boxes (fewer node records to read and to store). The library's trees use
-// kLeafSize (bench/results/ablation.md compares sizes); 1 gives the plain binary tree.
+// of contiguous leaf boxes (fewer node records to read and to store). 1 gives the plain binary
+// tree; bench/README.md links the study of sizes.
 constexpr int32_t kLeafSize = 16;
+
+// How a backend's tree is built: the one option is the leaf size, 1 to kLeafSize (the
+// default, which every scene of the C API uses). The pairs a query finds do not depend on it.
+struct BuildConfig {
+  int32_t leaf_size = kLeafSize;
+};
 constexpr int32_t kNoChild = INT32_MIN;
 // Keys are 63 Morton bits plus a 32-bit index tie-break; each level down lengthens the shared
 // key prefix, so depth <= 96 and a traversal stack of 128 entries never overflows.
@@ -59,23 +67,17 @@ MINKQ_HD uint32_t quantize_21(float value, float lo, float scale) {
   return uint32_t(q);
 }
 
-// The shape of the cells a Morton code orders. Cubes (the library's): a query's radius is the
-// same in every axis, so each axis is split as often as its extent warrants. Per axis (the
-// usual LBVH frame, for studies): every axis stretched to the full 21 bits, which splits a
-// thin axis as often as the longest one; on a wrung sheet (1.5 long, 0.4 across) its refit
-// tree visited 2.4x the nodes per VT query of the cubes' (bench/results/trees.md).
-enum class MortonCells { kCubes, kPerAxis };
-
-// 63-bit Morton code of a box's centre within the bounds of all centres.
+// 63-bit Morton code of a box's centre within the bounds of all centres, over cubic cells: a
+// query's radius is the same in every axis, so each axis is split as often as its extent
+// warrants (the usual per-axis frame would split a thin axis as often as the longest one).
 struct MortonFrame {
   Vec3 lo;
-  Vec3 scale;
+  Vec3 scale;  // 2^21 / extent per axis, 0 for a flat axis
 };
-MINKQ_HD MortonFrame morton_frame(const Box& centre_bounds, MortonCells cells = MortonCells::kCubes) {
+MINKQ_HD float morton_scale(float extent) { return extent > 0.0f ? 2097152.0f / extent : 0.0f; }
+MINKQ_HD MortonFrame morton_frame(const Box& centre_bounds) {
   const Vec3 extent = centre_bounds.hi - centre_bounds.lo;
-  auto scale_of = [](float e) { return e > 0.0f ? 2097152.0f / e : 0.0f; };  // 0: a flat axis
-  if (cells == MortonCells::kPerAxis) return {centre_bounds.lo, {scale_of(extent.x), scale_of(extent.y), scale_of(extent.z)}};
-  const float scale = scale_of(max_num(max_num(extent.x, extent.y), extent.z));
+  const float scale = morton_scale(max_num(max_num(extent.x, extent.y), extent.z));
   return {centre_bounds.lo, {scale, scale, scale}};
 }
 MINKQ_HD Vec3 box_centre(const Box& b) { return 0.5f * (b.lo + b.hi); }
@@ -249,110 +251,15 @@ MINKQ_HD double root_half_area(const BvhNode& root) {
   return half_area(root.right != kNoChild ? box_union(root.left_box, root.right_box) : root.left_box);
 }
 
-// ---- Traversal ---------------------------------------------------------------------------------
-
-// Work of a traversal, counted when asked for (WorkCounts) and compiled out when not (NoWork).
-// The counts depend only on the tree and the queries, so they are equal on every backend.
-struct WorkCounts {
-  uint64_t nodes_visited = 0;    // internal node records read
-  uint64_t node_tests = 0;       // child boxes tested against the query shape
-  uint64_t primitive_tests = 0;  // primitives whose box passed, handed to the leaf filter
-  uint64_t candidates = 0;       // pairs emitted
-  MINKQ_HD void visit_node() { ++nodes_visited; }
-  MINKQ_HD void test_node() { ++node_tests; }
-  MINKQ_HD void test_primitive() { ++primitive_tests; }
-  MINKQ_HD void emit_candidate() { ++candidates; }
-  MINKQ_HD void add(const WorkCounts& o) {
-    nodes_visited += o.nodes_visited;
-    node_tests += o.node_tests;
-    primitive_tests += o.primitive_tests;
-    candidates += o.candidates;
-  }
-};
-struct NoWork {
-  MINKQ_HD void visit_node() {}
-  MINKQ_HD void test_node() {}
-  MINKQ_HD void test_primitive() {}
-  MINKQ_HD void emit_candidate() {}
-};
-
-// Leaf positions max(first, after + 1)..last, a group of four at a time: on_leaf(prim, box) for
-// each whose box passes overlaps (four at once: overlaps_group).
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape, int32_t first,
-                          int32_t last, int32_t after, OnLeaf& on_leaf, Work& work) {
-  for (int64_t p = first > after ? first : after + 1; p <= last; p = (p | 3) + 1) {
-    const int64_t base = p & ~int64_t(3);
-    const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
-    const BoxGroup& group = leaf_groups[base >> 2];
-    unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
-    for (int k = from; k <= to; ++k) work.test_node();
-    for (; hits != 0; hits &= hits - 1u) {
-      const int k = lowest_bit(hits);
-      on_leaf(sorted_prims[base + k], group_box(group, k));
-    }
-  }
-}
-
-// A leaf range whose box passed may_overlap. One leaf: its box is the range's and passed the
-// box test; only the finer one is left.
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape,
-                               int32_t first, int32_t last, int32_t after, const Box& range_box, OnLeaf& on_leaf,
-                               Work& work) {
-  if (first == last) {
-    if (shape.finer(range_box)) on_leaf(sorted_prims[first], range_box);
-    return;
-  }
-  scan_leaves(leaf_groups, sorted_prims, shape, first, last, after, on_leaf, work);
-}
-
-// The one traversal: every query shape supplies overlaps(const Box&), its test,
-// may_overlap(const Box&), the test of internal and leaf-range boxes, overlaps_group, its test
-// on a group of four leaf boxes, and finer(const Box&), what overlaps adds to may_overlap
-// (see shapes.h);
-// on_leaf(prim, box) is called for every primitive whose box the shape overlaps, provided
-// may_overlap accepts every ancestor box (it is monotone under box inclusion and accepts
-// wherever overlaps does: true of each shape here; tests/test_queries.cpp checks traversal
-// against the test applied to every primitive). Only leaves at sorted
-// positions after `after` are reached: a self-query from the leaf at position i passes i and
-// meets each pair once; other queries pass -1. A node is entered only when its last position
-// is past `after` (the root: n - 1 > after), so only the left child (last = split) can fail.
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
-  if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
-  auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, first, last, after, range_box, on_leaf, work);
-  };
-  int32_t stack[kTraversalStack];
-  int sp = 0;
-  int32_t node = 0;
-  while (true) {
-    const BvhNode& n = bvh.nodes[node];
-    work.visit_node();
-    int32_t next = -1;
-    if (n.split > after) {
-      work.test_node();
-      if (shape.may_overlap(n.left_box)) {
-        if (n.left < 0) visit_range(~n.left, n.split, n.left_box); else next = n.left;
-      }
-    }
-    if (n.right != kNoChild) {
-      work.test_node();
-      if (shape.may_overlap(n.right_box)) {
-        if (n.right < 0) {
-          visit_range(n.split + 1, ~n.right, n.right_box);
-        } else if (next < 0) {
-          next = n.right;
-        } else {
-          stack[sp++] = n.right;
-        }
-      }
-    }
-    if (next >= 0) { node = next; continue; }
-    if (sp == 0) return;
-    node = stack[--sp];
-  }
+// A tree's area cost on the host: the sum of node_area over its nodes (in node order, so the
+// same on every run) over the root box's half area; 0 without nodes or area.
+inline double area_cost(const BvhNode* nodes, int64_t num_nodes) {
+  if (num_nodes == 0) return 0.0;
+  const double root = root_half_area(nodes[0]);
+  if (!(root > 0.0)) return 0.0;
+  double sum = 0.0;
+  for (int64_t i = 0; i < num_nodes; ++i) sum += node_area(nodes[i]);
+  return sum / root;
 }
 
 }  // namespace minkq

@@ -1,0 +1,88 @@
+// The CPU backend's pass runner: the queries of one call's passes in one TBB loop over fixed
+// blocks, the counterpart of cuda/passes.cuh's single kernel launch.
+#pragma once
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <type_traits>
+#include <vector>
+
+#include "backend.h"
+#include "cpu/runtime.h"
+
+namespace minkq::cpu {
+
+// Queries per block: each block runs its queries in order into its own buffer.
+constexpr int32_t kBlock = 256;
+
+template <class Work, class Pass>
+void run_block(const Pass& pass, int32_t block, std::vector<int32_t>& part, Work& work) {
+  auto emit = [&part](int32_t first, int32_t second) {
+    part.push_back(first);
+    part.push_back(second);
+  };
+  const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
+  for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, emit, work);
+}
+
+// Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
+// total, writing nothing if it exceeds the capacity.
+inline uint64_t write_pass(const std::vector<int32_t>* parts, int32_t blocks, const PairOutput& out) {
+  uint64_t total = 0;
+  for (int32_t b = 0; b < blocks; ++b) total += parts[b].size() / 2;
+  if (total > out.capacity) return total;
+  int32_t* cursor = out.pairs;
+  for (int32_t b = 0; b < blocks; ++b) {
+    if (!parts[b].empty()) std::memcpy(cursor, parts[b].data(), parts[b].size() * sizeof(int32_t));
+    cursor += parts[b].size();
+  }
+  if (out.canonical) {
+    std::vector<uint64_t> packed(total);
+    parallel_for_each(int64_t(total), [&](int64_t i) { packed[i] = pack_pair(out.pairs[2 * i], out.pairs[2 * i + 1]); });
+    tbb::parallel_sort(packed.begin(), packed.end());
+    parallel_for_each(int64_t(total), [&](int64_t i) {
+      const Pair pair = unpack_pair(packed[i]);
+      out.pairs[2 * i] = pair.first;
+      out.pairs[2 * i + 1] = pair.second;
+    });
+  }
+  return total;
+}
+
+// Runs the passes' queries in one parallel loop over fixed blocks (each block within one pass),
+// each block into its own buffer, then concatenates each pass's blocks in order: the output
+// order is deterministic whatever the thread count. Returns each pass's total.
+template <class Work, class... Pass>
+std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                 const Pass&... passes) {
+  constexpr size_t kPasses = sizeof...(Pass);
+  const std::array<int32_t, kPasses> num_queries{passes.num_queries...};
+  std::array<int32_t, kPasses + 1> first_block{};
+  for (size_t k = 0; k < kPasses; ++k) first_block[k + 1] = first_block[k] + (num_queries[k] + kBlock - 1) / kBlock;
+  const int32_t blocks = first_block[kPasses];
+  std::vector<std::vector<int32_t>> parts(static_cast<size_t>(blocks));
+  std::vector<Work> block_work(static_cast<size_t>(blocks));
+  tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
+    size_t k = 0;
+    auto run_if_owner = [&](const auto& pass) {
+      if (b >= first_block[k] && b < first_block[k + 1]) run_block(pass, b - first_block[k], parts[b], block_work[b]);
+      ++k;
+    };
+    (run_if_owner(passes), ...);
+  });
+  const std::array<PairOutput, kPasses> outs{passes.out...};
+  std::array<uint64_t, kPasses> totals{};
+  for (size_t k = 0; k < kPasses; ++k) {
+    if constexpr (std::is_same<Work, WorkCounts>::value)
+      if (works[k])
+        for (int32_t b = first_block[k]; b < first_block[k + 1]; ++b) works[k]->add(block_work[b]);
+    totals[k] = write_pass(parts.data() + first_block[k], first_block[k + 1] - first_block[k], outs[k]);
+  }
+  return totals;
+}
+
+}  // namespace minkq::cpu

@@ -1,0 +1,144 @@
+// The CUDA backend: the stores of store.h over the CUDA executor (device buffers, CudaTree,
+// the one-launch pass runner, each call on the store's device), and the backend's own input
+// checks. The one translation unit of CUDA code: runtime.cuh, tree.cuh and passes.cuh are
+// included here only.
+#include <cuda_runtime.h>
+
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "backend.h"
+#include "cuda/passes.cuh"
+#include "cuda/runtime.cuh"
+#include "cuda/tree.cuh"
+#include "store.h"
+
+namespace minkq {
+namespace {
+
+using namespace cuda;
+
+// store.h's executor on a CUDA device. Every call selects the device for its duration
+// (scope()); a store's construction and teardown hold it from hold() on, so the members are
+// allocated and freed on it even when a constructor fails; device_ (destroyed after every
+// member of the store) gives the caller's device back, or release() at the end of a
+// constructor. finish() synchronises the stream: a call's errors belong to that call.
+class CudaExecutor {
+ public:
+  using Device = int;  // the ordinal
+  template <class T>
+  using Array = DeviceBuffer<T>;
+  using Tree = CudaTree;
+
+  explicit CudaExecutor(int ordinal) : ordinal_(ordinal) {}
+  DeviceScope scope() const { return DeviceScope(ordinal_); }
+  void hold() { check(device_.enter(ordinal_), "cudaGetDevice / cudaSetDevice"); }
+  void release() noexcept { device_.leave(); }
+  void hold_for_teardown() noexcept { device_.enter(ordinal_); }  // a destructor cannot report
+  void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }
+
+  template <class T>
+  void gather(const Strided& values, DeviceBuffer<T>& dst) {
+    gather_to_device(values, dst);
+  }
+  template <class T>
+  void upload(DeviceBuffer<T>& dst, std::vector<T>&& host) {
+    cuda::upload(dst, host.data(), host.size());
+  }
+  template <class T>
+  void download(T* host_out, const DeviceBuffer<T>& src, size_t count) {
+    copy(host_out, src.data(), count * sizeof(T), cudaMemcpyDeviceToHost);
+  }
+  template <class Boxes>
+  void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<int32_t>& ids) {
+    DeviceBuffer<uint64_t> keys;
+    cuda::sort_by_morton(boxes, n, keys, ids);
+  }
+  template <class Work, class... Pass>
+  std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                   const Pass&... passes) {
+    return cuda::run_passes<Work>(ws_, works, passes...);
+  }
+
+ private:
+  int ordinal_;
+  DeviceSwitch device_;  // declared before ws_: destroyed after it
+  QueryWorkspace ws_;
+};
+
+class CudaBackend final : public Backend {
+ public:
+  CudaBackend(int ordinal, const std::string& device_name)
+      : ordinal_(ordinal), name_("cuda:" + std::to_string(ordinal) + " (" + device_name + ")"),
+        host_(make_cpu_backend()) {}
+
+  std::string name() const override { return name_; }
+  bool is_cuda() const override { return true; }
+
+  int64_t first_non_finite(const Strided& values, int floats) override {
+    if (values.memory == Memory::kHost) return host_->first_non_finite(values, floats);
+    const DeviceScope device(ordinal_);
+    if (values.count == 0) return -1;
+    DeviceBuffer<unsigned long long> first(1);
+    const unsigned long long none = std::numeric_limits<unsigned long long>::max();
+    copy(first.data(), &none, sizeof(none), cudaMemcpyHostToDevice);
+    launch("first_non_finite_kernel launch", first_non_finite_kernel, values.count, kThreads,
+           static_cast<const char*>(values.data), values.stride, values.count, floats, is_aligned4(values),
+           first.data());
+    unsigned long long result = none;
+    copy(&result, first.data(), sizeof(result), cudaMemcpyDeviceToHost);
+    return result == none ? -1 : int64_t(result);
+  }
+
+  void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) override {
+    if (memory == Memory::kHost) return host_->copy_to_host(dst, src, bytes, memory);
+    const DeviceScope device(ordinal_);
+    copy(dst, src, bytes, cudaMemcpyDeviceToHost);
+  }
+
+  std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
+                                               std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
+    return std::make_unique<MeshStoreOn<CudaExecutor>>(ordinal_, vertices, std::move(triangles), std::move(edges),
+                                                       triangle_tree, edge_tree);
+  }
+  std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
+    return std::make_unique<BoxStoreOn<CudaExecutor>>(ordinal_, boxes);
+  }
+
+ private:
+  int ordinal_;
+  std::string name_;
+  std::unique_ptr<Backend> host_;  // host-memory inputs are checked and copied as on the CPU
+};
+
+}  // namespace
+
+bool built_with_cuda() { return true; }
+
+int cuda_device_count() {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) {
+    cudaGetLastError();  // no driver or no device: not an error for a count
+    return 0;
+  }
+  return count;
+}
+
+std::unique_ptr<Backend> make_cuda_backend(int ordinal) {
+  int count = 0;
+  const cudaError_t error = cudaGetDeviceCount(&count);
+  if (error != cudaSuccess) {
+    cudaGetLastError();
+    fail(Status::kUnsupported, std::string("no usable CUDA device: ") + cudaGetErrorString(error));
+  }
+  if (ordinal < 0 || ordinal >= count)
+    fail(Status::kUnsupported, "no CUDA device cuda:" + std::to_string(ordinal) + " (" + std::to_string(count) +
+                                   " device" + (count == 1 ? "" : "s") + " found)");
+  const DeviceScope device(ordinal);  // creates the device's context now, not in the first call
+  cudaDeviceProp properties;
+  check(cudaGetDeviceProperties(&properties, ordinal), "cudaGetDeviceProperties");
+  return std::make_unique<CudaBackend>(ordinal, properties.name);
+}
+
+}  // namespace minkq

@@ -1,0 +1,207 @@
+// The CUDA backend's runtime helpers: error checks, the current-device switch, owning device
+// buffers, copies on the backend's stream, the one-thread-per-element launch, strided gathers
+// from host or device memory, and CUB's size-then-run calls. The counterpart of cpu/runtime.h.
+// Included by cuda/backend.cu only (one translation unit holds every kernel).
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "backend.h"
+
+namespace minkq::cuda {
+
+// All work runs on the per-thread default stream, so scenes used from different host threads
+// do not serialise on the legacy stream; every host read of device results synchronises it.
+inline const cudaStream_t kStream = cudaStreamPerThread;
+constexpr int kThreads = 256;  // element-wise kernels
+
+// ---- Errors and memory ------------------------------------------------------------------------
+
+inline void check(cudaError_t error, const char* call) {
+  if (error == cudaSuccess) return;
+  cudaGetLastError();  // clear a non-sticky error so it is not reported again by a later call
+  fail(error == cudaErrorMemoryAllocation ? Status::kOutOfMemory : Status::kDevice,
+       std::string(call) + " failed: " + cudaGetErrorString(error));
+}
+
+// Makes a device the calling thread's current one and gives the caller's device back on
+// leave() or destruction, so an application driving another GPU from the same thread is not
+// moved to ours.
+class DeviceSwitch {
+ public:
+  DeviceSwitch() = default;
+  DeviceSwitch(const DeviceSwitch&) = delete;
+  DeviceSwitch& operator=(const DeviceSwitch&) = delete;
+  ~DeviceSwitch() { leave(); }
+  // Returns the runtime's error (a destructor cannot report it; other callers check it); on
+  // one, nothing is switched.
+  cudaError_t enter(int ordinal) noexcept {
+    leave();
+    int previous = 0;
+    if (const cudaError_t error = cudaGetDevice(&previous); error != cudaSuccess) return error;
+    if (previous != ordinal)
+      if (const cudaError_t error = cudaSetDevice(ordinal); error != cudaSuccess) return error;
+    previous_ = previous, ordinal_ = ordinal;
+    return cudaSuccess;
+  }
+  void leave() noexcept {
+    if (previous_ != ordinal_) cudaSetDevice(previous_);  // cannot be reported
+    previous_ = ordinal_ = -1;
+  }
+
+ private:
+  int previous_ = -1, ordinal_ = -1;
+};
+
+// The device of one library call, declared before the call's device buffers so that it
+// outlives them.
+class DeviceScope {
+ public:
+  explicit DeviceScope(int ordinal) { check(switch_.enter(ordinal), "cudaGetDevice / cudaSetDevice"); }
+
+ private:
+  DeviceSwitch switch_;
+};
+
+// Owns one cudaMalloc allocation of `size` elements (none when empty).
+template <class T>
+class DeviceBuffer {
+ public:
+  DeviceBuffer() = default;
+  explicit DeviceBuffer(size_t count) { ensure(count); }
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+  DeviceBuffer(DeviceBuffer&& other) noexcept
+      : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
+  DeviceBuffer& operator=(DeviceBuffer&& other) noexcept {
+    std::swap(data_, other.data_);
+    std::swap(size_, other.size_);
+    return *this;
+  }
+  ~DeviceBuffer() { release(); }
+
+  // Room for at least `count` elements; the contents are not kept when it has to grow.
+  void ensure(size_t count) {
+    if (count <= size_) return;
+    if (count > std::numeric_limits<size_t>::max() / sizeof(T))
+      fail(Status::kOutOfMemory, "device allocation size overflows");
+    release();  // free first: growing must not need the old and the new block at once
+    T* data = nullptr;  // kept only on success: a failed cudaMalloc leaves nothing to free
+    check(cudaMalloc(reinterpret_cast<void**>(&data), count * sizeof(T)), "cudaMalloc");
+    data_ = data;
+    size_ = count;
+  }
+  T* data() const { return data_; }
+  size_t size() const { return size_; }
+
+ private:
+  void release() {
+    if (data_) cudaFree(data_);  // a destructor cannot report; a failed free only leaks
+    data_ = nullptr;
+    size_ = 0;
+  }
+  T* data_ = nullptr;
+  size_t size_ = 0;
+};
+
+// cudaMemcpy on our stream, complete on return (the host may reuse or read its side at once).
+inline void copy(void* dst, const void* src, size_t bytes, cudaMemcpyKind kind) {
+  if (bytes == 0) return;
+  check(cudaMemcpyAsync(dst, src, bytes, kind, kStream), "cudaMemcpyAsync");
+  check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");
+}
+
+template <class T>
+void zero(DeviceBuffer<T>& buffer, size_t count) {
+  if (count) check(cudaMemsetAsync(buffer.data(), 0, count * sizeof(T), kStream), "cudaMemsetAsync");
+}
+
+template <class T>
+void upload(DeviceBuffer<T>& dst, const T* src, size_t count) {
+  dst.ensure(count);
+  copy(dst.data(), src, count * sizeof(T), cudaMemcpyHostToDevice);
+}
+
+// One thread per element i < n.
+template <class Kernel, class... Args>
+void launch(const char* name, Kernel kernel, int64_t n, int threads, Args... args) {
+  if (n <= 0) return;
+  kernel<<<unsigned((n + threads - 1) / threads), threads, 0, kStream>>>(args...);
+  check(cudaGetLastError(), name);
+}
+
+__device__ inline int64_t global_index() { return int64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
+
+// ---- Strided input ------------------------------------------------------------------------
+
+// Float k of a record. Caller-supplied strides need only be 4-aligned; anything less aligned
+// is read byte by byte.
+__device__ inline float load_float(const char* record, int k, bool aligned) {
+  if (aligned) return reinterpret_cast<const float*>(record)[k];
+  unsigned char bytes[4];
+  for (int b = 0; b < 4; ++b) bytes[b] = static_cast<unsigned char>(record[4 * k + b]);
+  float f;
+  memcpy(&f, bytes, 4);
+  return f;
+}
+
+inline bool is_aligned4(const Strided& values) {
+  return (reinterpret_cast<uintptr_t>(values.data) % 4 == 0) && values.stride % 4 == 0;
+}
+
+static __global__ void gather_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
+                              float* out) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  const char* record = base + size_t(i) * stride;
+  for (int k = 0; k < floats; ++k) out[i * floats + k] = load_float(record, k, aligned);
+}
+
+static __global__ void first_non_finite_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
+                                        unsigned long long* first) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  const char* record = base + size_t(i) * stride;
+  for (int k = 0; k < floats; ++k)
+    if (!isfinite(load_float(record, k, aligned))) {
+      atomicMin(first, static_cast<unsigned long long>(i));
+      return;
+    }
+}
+
+// Packs strided Vec3 or Box records (host or device memory) into a device array.
+template <class T>
+void gather_to_device(const Strided& values, DeviceBuffer<T>& dst) {
+  static_assert(std::is_same<T, Vec3>::value || std::is_same<T, Box>::value, "float records only");
+  const size_t count = size_t(values.count);
+  dst.ensure(count);
+  if (count == 0) return;
+  if (values.memory == Memory::kHost) {
+    if (values.stride == sizeof(T)) return upload(dst, static_cast<const T*>(values.data), count);
+    const std::vector<T> packed = gather_host<T>(values);
+    return upload(dst, packed.data(), count);
+  }
+  if (values.stride == sizeof(T)) return copy(dst.data(), values.data, count * sizeof(T), cudaMemcpyDeviceToDevice);
+  launch("gather_kernel launch", gather_kernel, values.count, kThreads, static_cast<const char*>(values.data),
+         values.stride, values.count, int(sizeof(T) / sizeof(float)), is_aligned4(values),
+         reinterpret_cast<float*>(dst.data()));
+}
+
+// A CUB device algorithm, call(storage, bytes): called once without storage to size its
+// temporary storage (grown in `temp`, kept by the caller for reuse), then to run.
+template <class CubCall>
+void run_cub(DeviceBuffer<char>& temp, const char* what, const CubCall& call) {
+  size_t bytes = 0;
+  check(call(nullptr, bytes), what);
+  temp.ensure(bytes > 0 ? bytes : 1);  // a null storage pointer would only size again
+  check(call(temp.data(), bytes), what);
+}
+
+
+}  // namespace minkq::cuda

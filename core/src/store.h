@@ -1,0 +1,259 @@
+// The scene stores, written once for both backends: a mesh store (vertices, topology, the
+// triangle and edge trees, VT and EE queries) and a box store (user boxes, their tree, user
+// queries). What differs between the CPU and CUDA backends is supplied by an executor, X:
+//
+//   X::Device                      what the executor is constructed from (CUDA: the ordinal).
+//   X::Array<T>                    an owning array in the executor's memory, with data().
+//   X::Tree                        the backend's tree: build(boxes, n), refit(boxes),
+//                                  area_cost(), cost_at_build(), view().
+//   scope()                        an object held for the duration of each call (CUDA: the
+//                                  device made current, and the caller's given back after).
+//   hold() / release()             the same across construction; hold_for_teardown() (which
+//                                  cannot fail) before the members are destroyed.
+//   finish()                       completes the call's work and reports its errors.
+//   gather(values, Array<T>&)      packs strided Vec3 or Box records (host or, on CUDA, device
+//                                  memory) into an array.
+//   upload(Array<T>&, vector<T>)   takes host topology over.
+//   download(T* host, Array<T>, n) copies n records to the host.
+//   sort_by_morton(boxes, n, Array<int32_t>& ids)
+//                                  ids 0..n-1 in the Morton order of the boxes' centres.
+//   run_passes<Work>(works, passes...)
+//                                  runs the QueryPasses of one call (one parallel loop, or one
+//                                  kernel launch) and returns each pass's exact pair count,
+//                                  its pairs written, and sorted when asked, where they fit.
+//
+// cpu/backend.cpp and cuda/backend.cu define the two executors; a query's pairs, counts and
+// work counters are the same on both.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "backend.h"
+
+namespace minkq {
+
+// Calls fn with a default-constructed value of the shape type that `mode` selects, for point
+// queries (VT, user spheres: kPoints) or segment and box queries; only the shapes a kind can
+// use are compiled for it. Points are zero-length capsules: capsule_ray tests the box, and
+// capsule_exact the sphere. The front end rejects sphere mode for segments and any non-box mode
+// for box queries before calling.
+template <bool kPoints, class Fn>
+void with_shape(Mode mode, Fn&& fn) {
+  switch (mode) {
+    case Mode::kBox: return fn(BoxShape{});
+    case Mode::kSphere:
+      if constexpr (kPoints) return fn(SphereShape{});
+      break;
+    case Mode::kCapsuleRay:
+      if constexpr (kPoints) return fn(BoxShape{}); else return fn(CapsuleRayShape{});
+    case Mode::kCapsuleExact:
+      if constexpr (kPoints) return fn(SphereShape{}); else return fn(CapsuleExactShape{});
+  }
+  fail(Status::kInternal, "mode not available for these queries");
+}
+
+// The queries of one request for a pass: the request's kind, the tree, the query source and
+// where the pairs go, with the node test as a type.
+template <class Shape_, class Queries>
+struct QueryPass {
+  using Shape = Shape_;
+  QueryKind kind;
+  BvhView bvh;
+  Queries queries;
+  int32_t num_queries;
+  PairOutput out;
+};
+
+// Calls fn with the QueryPass of a request (its shape chosen by with_shape).
+template <bool kPoints, class Queries, class Fn>
+void with_pass(const QueryRequest& request, const BvhView& bvh, const Queries& queries, int32_t num_queries,
+               const PairOutput& out, Fn&& fn) {
+  with_shape<kPoints>(request.mode, [&](auto shape) {
+    fn(QueryPass<decltype(shape), Queries>{request.kind, bvh, queries, num_queries, out});
+  });
+}
+
+// Runs the passes of one call on executor x with the work type they need: the counted
+// traversal if any pass counts (the others' counts are then dropped), else the uncounted one.
+template <class X, class... Pass>
+std::array<uint64_t, sizeof...(Pass)> run_counted(X& x, const std::array<WorkCounts*, sizeof...(Pass)>& works,
+                                                  const Pass&... passes) {
+  for (WorkCounts* w : works)
+    if (w) return x.template run_passes<WorkCounts>(works, passes...);
+  return x.template run_passes<NoWork>(works, passes...);
+}
+
+// A tree's area cost (sum of node_area over the root's half area) now over its value at its
+// last build. A tree without area (its boxes on one axis-parallel line or at one point, or no
+// nodes) costs 0: the ratio is then 1 while it stays so, and infinite once it has area.
+inline double growth(double cost_now, double cost_at_build) {
+  if (cost_at_build > 0.0) return cost_now / cost_at_build;
+  return cost_now > 0.0 ? HUGE_VAL : 1.0;
+}
+template <class Tree>
+double tree_growth_of(const Tree& tree) {
+  return growth(tree.area_cost(), tree.cost_at_build());
+}
+
+template <class X>
+class MeshStoreOn final : public MeshStore {
+  template <class T>
+  using Array = typename X::template Array<T>;
+
+ public:
+  MeshStoreOn(typename X::Device device, const Strided& vertices, std::vector<Triangle> triangles,
+              std::vector<Edge> edges, bool triangle_tree, bool edge_tree)
+      : x_(device), num_vertices_(int32_t(vertices.count)), num_triangles_(int32_t(triangles.size())),
+        num_edges_(int32_t(edges.size())), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
+    x_.hold();
+    x_.gather(vertices, vertices_);
+    if (has_triangle_tree_) x_.upload(triangles_, std::move(triangles));
+    x_.upload(edges_, std::move(edges));
+    build_trees();
+    x_.finish();
+    x_.release();
+  }
+  ~MeshStoreOn() override { x_.hold_for_teardown(); }
+
+  void copy_edges(Edge* host_out) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.download(host_out, edges_, size_t(num_edges_));
+  }
+
+  void refit(const Strided& vertices) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.gather(vertices, vertices_);
+    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
+    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
+    x_.finish();
+  }
+
+  void rebuild(const Strided& vertices) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.gather(vertices, vertices_);
+    build_trees();
+    x_.finish();
+  }
+
+  double tree_growth() override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    double g = has_triangle_tree_ ? tree_growth_of(triangle_tree_) : 0.0;
+    if (has_edge_tree_) g = std::max(g, tree_growth_of(edge_tree_));
+    return g;
+  }
+
+  uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    uint64_t total = 0;
+    auto run = [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; };
+    if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
+    return total;
+  }
+
+  std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    std::array<uint64_t, 2> totals{};
+    with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
+      with_ee_pass(ee.request, ee.out,
+                   [&](const auto& ee_pass) { totals = run_counted(x_, {vt.work, ee.work}, vt_pass, ee_pass); });
+    });
+    return totals;
+  }
+
+ private:
+  // Calls fn with the QueryPass of a VT request, or of an EE request.
+  template <class Fn>
+  void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
+                                        request.filters};
+    with_pass<true>(request, triangle_tree_.view(), queries, num_vertices_, out, fn);
+  }
+  template <class Fn>
+  void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const BvhView edge_tree = edge_tree_.view();
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree.sorted_prims, request.r, request.filters};
+    with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
+  }
+
+  // The trees the flags ask for, and the VT query order, from the current vertices.
+  void build_trees() {
+    if (has_triangle_tree_) {
+      triangle_tree_.build(triangle_boxes(), num_triangles_);
+      x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
+    }
+    if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
+  }
+  TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data()}; }
+  EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data()}; }
+
+  X x_;  // first: holds its device while the members below are created and destroyed
+  Array<Vec3> vertices_;
+  Array<Triangle> triangles_;  // only with a triangle tree
+  Array<Edge> edges_;
+  Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
+  int32_t num_vertices_, num_triangles_, num_edges_;
+  bool has_triangle_tree_, has_edge_tree_;
+  typename X::Tree triangle_tree_, edge_tree_;
+};
+
+template <class X>
+class BoxStoreOn final : public Store {
+  template <class T>
+  using Array = typename X::template Array<T>;
+
+ public:
+  BoxStoreOn(typename X::Device device, const Strided& boxes) : x_(device), num_boxes_(int32_t(boxes.count)) {
+    x_.hold();
+    x_.gather(boxes, boxes_);
+    tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
+    x_.finish();
+    x_.release();
+  }
+  ~BoxStoreOn() override { x_.hold_for_teardown(); }
+
+  void refit(const Strided& boxes) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.gather(boxes, boxes_);
+    tree_.refit(GivenBoxes{boxes_.data()});
+    x_.finish();
+  }
+
+  void rebuild(const Strided& boxes) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.gather(boxes, boxes_);
+    tree_.build(GivenBoxes{boxes_.data()}, num_boxes_);
+    x_.finish();
+  }
+
+  double tree_growth() override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    return tree_growth_of(tree_);
+  }
+
+  uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.gather(request.first, query_first_);
+    x_.gather(request.second, query_second_);
+    const UserQueries queries{query_first_.data(), request.second.count == 0 ? nullptr : query_second_.data(),
+                              request.r};
+    const int32_t n = int32_t(request.first.count);
+    uint64_t total = 0;
+    auto run = [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; };
+    if (request.kind == QueryKind::kUserSpheres) with_pass<true>(request, tree_.view(), queries, n, out, run);
+    else with_pass<false>(request, tree_.view(), queries, n, out, run);
+    return total;
+  }
+
+ private:
+  X x_;  // first: holds its device while the members below are created and destroyed
+  Array<Box> boxes_;
+  int32_t num_boxes_;
+  typename X::Tree tree_;
+  Array<Vec3> query_first_, query_second_;  // the last queries' points, kept to be reused
+};
+
+}  // namespace minkq
