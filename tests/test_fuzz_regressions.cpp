@@ -1,13 +1,13 @@
 // Every failure the fuzzers (fuzz/) found, as a regression test, plus a replay of scenes in the
 // format the differential fuzzer prints ("paste into tests/test_fuzz_regressions.cpp"). The
-// scene checks are the fuzzer's own (fuzz/scene_checks.h: definition, chain, oracle, refit,
+// scene checks are the fuzzer's own (testing/scene_checks.h: definition, chain, oracle, refit,
 // buffers, and every CUDA device against the CPU where one exists), without the Embree part.
 // fuzz/RESULTS.md lists each bug with the test that covers it.
 #include <gtest/gtest.h>
 
 #include <cstring>
 
-#include "../fuzz/scene_checks.h"
+#include "scene_checks.h"
 
 namespace minkq {
 namespace {

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "../fuzz/scene_checks.h"
+#include "scene_checks.h"
 #include "capi_util.h"
 #include "contact_checks.h"
 #include "minkq/queries.h"
@@ -74,7 +74,7 @@ void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* labe
   }
 
   if (!check_definition) return;
-  // The brute-force definitions the differential fuzzer uses (fuzz/scene_checks.h).
+  // The brute-force definitions the differential fuzzer uses (testing/scene_checks.h).
   const fuzz::MeshGeometry g(mesh.xyz, mesh.tris, edges);
   const uint32_t filters = drop_incident ? kDropIncident : 0u;
   const auto vt = g.vt(r, filters), vt_exact = g.vt(r, filters | kLeafExact);
