@@ -14,7 +14,7 @@
 
 #include "harness.h"
 #include "minkq.h"
-#include "minkq_handles.hpp"
+#include "minkq.hpp"
 #include "minkq_reference.h"
 
 namespace minkq::bench {

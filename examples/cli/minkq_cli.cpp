@@ -1,7 +1,7 @@
 // minkq: the command-line tool. `demo` measures every query mode on a built-in scene against
 // the reference oracle; `query` runs one mode on a mesh file and prints comparable digests.
 #include "minkq.h"
-#include "minkq_handles.hpp"
+#include "minkq.hpp"
 #include "minkq_reference.h"
 
 #include <algorithm>
@@ -58,7 +58,7 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Owning handles, check(), open_device() and new_result() (capi/minkq_handles.hpp).
+// Owning handles, check(), open_device() and new_result() (capi/minkq.hpp).
 using namespace minkq::cxx;
 
 // "--name value" or "--name=value" options, and "--name" switches, after the positional
