@@ -15,6 +15,7 @@
 #include "harness.h"
 #include "minkq.h"
 #include "minkq.hpp"
+#include "minkq/queries.h"
 #include "minkq_reference.h"
 
 namespace minkq::bench {
@@ -29,9 +30,9 @@ inline Scene create_scene(minkq_device* device, const std::vector<float>& xyz, c
   return new_mesh_scene(device, xyz.data(), xyz.size() / 3, tris.data(), tris.size() / 3, flags);
 }
 
-// Pairs packed as (a << 32 | b), sorted: set operations by merge.
+// Pairs packed by minkq::pack_pair (first << 32 | second), sorted: set operations by merge.
 using PairSet = std::vector<uint64_t>;
-inline uint64_t pack(int32_t a, int32_t b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
+inline uint64_t pack(int32_t a, int32_t b) { return pack_pair(a, b); }
 
 inline PairSet to_set(const int32_t* pairs, uint64_t count) {
   PairSet s(count);

@@ -169,13 +169,16 @@ std::vector<minkq::Edge> derive_edges(const std::vector<minkq::Triangle>& triang
   keys.reserve(triangles.size() * 3);
   for (const auto& t : triangles)
     for (int k = 0; k < 3; ++k) {
-      const uint32_t a = uint32_t(t.v[k]), b = uint32_t(t.v[(k + 1) % 3]);
-      keys.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
+      const int32_t a = t.v[k], b = t.v[(k + 1) % 3];  // non-negative (require_indices ran)
+      keys.push_back(minkq::pack_pair(std::min(a, b), std::max(a, b)));
     }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<minkq::Edge> edges(keys.size());
-  for (size_t i = 0; i < keys.size(); ++i) edges[i] = {{int32_t(keys[i] >> 32), int32_t(keys[i] & 0xffffffffu)}};
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const minkq::Pair pair = minkq::unpack_pair(keys[i]);
+    edges[i] = {{pair.first, pair.second}};
+  }
   return edges;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "capi_util.h"
+#include "minkq/queries.h"
 #include "test_util.h"
 
 #if defined(MINKQ_TEST_HAVE_CUDART)
@@ -79,12 +80,13 @@ Outcome scene_query(minkq_scene* scene, minkq_query_kind kind, minkq_mode mode, 
 // Lexicographic order, for comparing outputs that were not asked to be canonical.
 std::vector<int32_t> sorted_pairs(const std::vector<int32_t>& raw) {
   std::vector<uint64_t> keys(raw.size() / 2);
-  for (size_t i = 0; i < keys.size(); ++i) keys[i] = uint64_t(uint32_t(raw[2 * i])) << 32 | uint32_t(raw[2 * i + 1]);
+  for (size_t i = 0; i < keys.size(); ++i) keys[i] = pack_pair(raw[2 * i], raw[2 * i + 1]);
   std::sort(keys.begin(), keys.end());
   std::vector<int32_t> out(raw.size());
   for (size_t i = 0; i < keys.size(); ++i) {
-    out[2 * i] = int32_t(keys[i] >> 32);
-    out[2 * i + 1] = int32_t(keys[i] & 0xffffffffu);
+    const Pair pair = unpack_pair(keys[i]);
+    out[2 * i] = pair.first;
+    out[2 * i + 1] = pair.second;
   }
   return out;
 }
