@@ -438,22 +438,26 @@ inline LD pair_scale(const double (*points)[3], int n) {
   return s;
 }
 
-// Leaf-exact pairs beyond the true contacts must lie within r + 2^-19 * S.
+// Leaf-exact pairs beyond the true contacts must lie within r + 2^-19 * S: whether the extra
+// (a, b), at oracle distance d between its points p, does; a failure is reported.
+inline bool extra_within_bound(Report& report, int32_t a, int32_t b, LD d, const double (*p)[3], float r,
+                               const std::string& what) {
+  const LD bound = LD(r) + std::ldexp(pair_scale(p, 4), -19);
+  if (d <= bound) return true;
+  char text[160];
+  std::snprintf(text, sizeof text, ": leaf-exact extra (%d,%d) at distance %.9Lg beyond r + 2^-19 S = %.9Lg", a, b, d,
+                bound);
+  report.fail(what + text);
+  return false;
+}
+
 inline void check_vt_extras(Report& report, const Pairs& extras, const std::vector<float>& xyz,
                             const std::vector<int32_t>& tris, float r, const std::string& what) {
   for (const auto& [v, t] : extras) {
     double p[4][3];
     point_of(xyz, v, p[0]);
     for (int k = 0; k < 3; ++k) point_of(xyz, tris[3 * size_t(t) + k], p[k + 1]);
-    const LD d = reference::point_triangle_distance(p[0], p[1], p[2], p[3]);
-    const LD bound = LD(r) + std::ldexp(pair_scale(p, 4), -19);
-    if (!(d <= bound)) {
-      char text[160];
-      std::snprintf(text, sizeof text, ": leaf-exact extra (%d,%d) at distance %.9Lg beyond r + 2^-19 S = %.9Lg", v, t, d,
-                    bound);
-      report.fail(what + text);
-      return;
-    }
+    if (!extra_within_bound(report, v, t, reference::point_triangle_distance(p[0], p[1], p[2], p[3]), p, r, what)) return;
   }
 }
 
@@ -465,15 +469,8 @@ inline void check_ee_extras(Report& report, const Pairs& extras, const std::vect
     point_of(xyz, edges[2 * size_t(e) + 1], p[1]);
     point_of(xyz, edges[2 * size_t(f)], p[2]);
     point_of(xyz, edges[2 * size_t(f) + 1], p[3]);
-    const LD d = reference::segment_segment_distance(p[0], p[1], p[2], p[3]);
-    const LD bound = LD(r) + std::ldexp(pair_scale(p, 4), -19);
-    if (!(d <= bound)) {
-      char text[160];
-      std::snprintf(text, sizeof text, ": leaf-exact extra (%d,%d) at distance %.9Lg beyond r + 2^-19 S = %.9Lg", e, f, d,
-                    bound);
-      report.fail(what + text);
+    if (!extra_within_bound(report, e, f, reference::segment_segment_distance(p[0], p[1], p[2], p[3]), p, r, what))
       return;
-    }
   }
 }
 
