@@ -63,7 +63,7 @@ struct Scene : cxx::Scene {
 
   // Runs a query (canonical order) and returns its pairs; fails the test on any error.
   Pairs query(minkq_query_kind kind, minkq_mode mode, float r, uint32_t flags = 0, uint64_t* digest = nullptr) {
-    minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_CANONICAL | (digest ? MINKQ_QUERY_DIGEST : 0u), r};
+    minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_CANONICAL | (digest ? uint32_t(MINKQ_QUERY_DIGEST) : 0u), r};
     minkq_query_info info{};
     minkq_status status = minkq_scene_query(get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info);
     std::vector<int32_t> raw;
