@@ -14,31 +14,25 @@
 
 #include "harness.h"
 #include "minkq.h"
-#include "minkq_handles.hpp"
+#include "minkq.hpp"
+#include "minkq/queries.h"
 #include "minkq_reference.h"
 
 namespace minkq::bench {
 
-// Owning handles, check(), open_device() and new_result(), shared with the CLI.
+// Owning handles, check(), open_device(), new_result() and new_bvh() (capi/minkq.hpp).
 using namespace minkq::cxx;
 
 // A VT + EE scene with incident pairs dropped, edges derived by the library (the numbering of
 // reference::derive_edges).
 inline Scene create_scene(minkq_device* device, const std::vector<float>& xyz, const std::vector<int32_t>& tris,
                         uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT) {
-  minkq_scene_desc desc{};
-  desc.flags = flags;
-  desc.vertices = {xyz.data(), 3 * sizeof(float), xyz.size() / 3, MINKQ_MEMORY_HOST};
-  desc.triangles = {tris.data(), 3 * sizeof(int32_t), tris.size() / 3, MINKQ_MEMORY_HOST};
-  desc.edges = {nullptr, 0, 0, MINKQ_MEMORY_HOST};
-  minkq_scene* s = nullptr;
-  check(minkq_scene_create(device, &desc, &s), "minkq_scene_create");
-  return Scene(s);
+  return new_mesh_scene(device, xyz.data(), xyz.size() / 3, tris.data(), tris.size() / 3, flags);
 }
 
-// Pairs packed as (a << 32 | b), sorted: set operations by merge.
+// Pairs packed by minkq::pack_pair (first << 32 | second), sorted: set operations by merge.
 using PairSet = std::vector<uint64_t>;
-inline uint64_t pack(int32_t a, int32_t b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
+inline uint64_t pack(int32_t a, int32_t b) { return pack_pair(a, b); }
 
 inline PairSet to_set(const int32_t* pairs, uint64_t count) {
   PairSet s(count);

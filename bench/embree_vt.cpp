@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "minkq/predicates.h"
+#include "minkq/queries.h"
 
 namespace minkq::bench {
 
@@ -31,8 +32,8 @@ bool on_primitive(RTCPointQueryFunctionArguments* args) {
   const QueryUser& u = *static_cast<const QueryUser*>(args->userPtr);
   const uint32_t t = args->primID;
   const uint32_t a = u.tris[3 * t], b = u.tris[3 * t + 1], c = u.tris[3 * t + 2];
-  const uint32_t v = uint32_t(u.vertex);
-  if (a == v || b == v || c == v) return false;  // incident: dropped, as MINKQ_SCENE_DROP_INCIDENT
+  // Incident: dropped, as MINKQ_SCENE_DROP_INCIDENT.
+  if (minkq::has_vertex({{int32_t(a), int32_t(b), int32_t(c)}}, u.vertex)) return false;
   auto at = [&](uint32_t i) { return minkq::Vec3{u.xyz[3 * i], u.xyz[3 * i + 1], u.xyz[3 * i + 2]}; };
   if (minkq::point_triangle_within(u.p, at(a), at(b), at(c), u.r)) {
     u.out->push_back(u.vertex);
@@ -85,7 +86,7 @@ uint64_t EmbreeVT::query(float r, std::vector<int32_t>& out) {
   parts_.resize(size_t(blocks));
   // Embree prunes with r padded by 2^-20 relative (its float sphere-box test is not
   // conservative); the callback's exact test decides. The smallest subnormal keeps r = 0 usable.
-  const float padded = minkq::next_up(r * (1.0f + 9.5367431640625e-07f)) + 1.40129846e-45f;
+  const float padded = minkq::next_up(r * (1.0f + minkq::kSlabWidening)) + 1.40129846e-45f;
   tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
     std::vector<int32_t>& part = parts_[size_t(b)];
     part.clear();

@@ -85,9 +85,7 @@ void synthetic(minkq_device* dev, const std::vector<double>& ratios, int n, int 
       for (int k = 0; k < 3; ++k) boxes.push_back(float(c[k] - h));
       for (int k = 0; k < 3; ++k) boxes.push_back(float(c[k] + h));
     }
-    minkq_bvh* raw = nullptr;
-    check(minkq_bvh_create(dev, {boxes.data(), 24, size_t(n), MINKQ_MEMORY_HOST}, &raw), "minkq_bvh_create");
-    Bvh bvh(raw);
+    Bvh bvh = new_bvh(dev, host_buffer(boxes.data(), size_t(n), 24));
     std::vector<float> points, p0, p1;
     const double len = 2 * std::sqrt(3.0) * h;
     for (int i = 0; i < queries; ++i) {

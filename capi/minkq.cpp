@@ -20,6 +20,43 @@
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "digests hash little-endian int32 pairs in place");
 static_assert(sizeof(minkq::Triangle) == 12 && sizeof(minkq::Edge) == 8 && sizeof(minkq::Box) == 24, "layouts");
 
+// The C++ enums cross this file by static_cast (statuses out; memory kinds and modes in), so
+// each must keep its C counterpart's values.
+namespace {
+template <class Cxx, class C>
+constexpr bool same(Cxx cxx, C c) {
+  return static_cast<long long>(cxx) == static_cast<long long>(c);
+}
+}  // namespace
+static_assert(same(minkq::Status::kSuccess, MINKQ_SUCCESS) &&
+                  same(minkq::Status::kInvalidArgument, MINKQ_ERROR_INVALID_ARGUMENT) &&
+                  same(minkq::Status::kNonFinite, MINKQ_ERROR_NON_FINITE) &&
+                  same(minkq::Status::kIndexOutOfRange, MINKQ_ERROR_INDEX_OUT_OF_RANGE) &&
+                  same(minkq::Status::kSizeOverflow, MINKQ_ERROR_SIZE_OVERFLOW) &&
+                  same(minkq::Status::kCapacity, MINKQ_ERROR_CAPACITY) &&
+                  same(minkq::Status::kUnsupported, MINKQ_ERROR_UNSUPPORTED) &&
+                  same(minkq::Status::kOutOfMemory, MINKQ_ERROR_OUT_OF_MEMORY) &&
+                  same(minkq::Status::kDevice, MINKQ_ERROR_DEVICE) && same(minkq::Status::kInternal, MINKQ_ERROR_INTERNAL),
+              "minkq::Status (core/src/backend.h) must equal minkq_status value by value");
+static_assert(same(minkq::Memory::kHost, MINKQ_MEMORY_HOST) && same(minkq::Memory::kDevice, MINKQ_MEMORY_DEVICE),
+              "minkq::Memory (core/src/backend.h) must equal minkq_memory");
+static_assert(same(minkq::Mode::kBox, MINKQ_MODE_BOX) && same(minkq::Mode::kSphere, MINKQ_MODE_SPHERE) &&
+                  same(minkq::Mode::kCapsuleRay, MINKQ_MODE_CAPSULE_RAY) &&
+                  same(minkq::Mode::kCapsuleExact, MINKQ_MODE_CAPSULE_EXACT),
+              "minkq::Mode (core/include/minkq/shapes.h) must equal minkq_mode");
+// Scene query kinds are chosen by name below (the user-box kinds by minkq_shape); they are
+// numbered alike all the same.
+static_assert(same(minkq::QueryKind::kVertexTriangle, MINKQ_QUERY_VT) && same(minkq::QueryKind::kEdgeEdge, MINKQ_QUERY_EE),
+              "minkq::QueryKind (core/src/backend.h) must number VT and EE as minkq_query_kind");
+// The filter bits are set one C flag at a time (checked_scene_request): MINKQ_SCENE_DROP_INCIDENT
+// gives kDropIncident, MINKQ_QUERY_LEAF_EXACT gives kLeafExact. They are not the C flags'
+// values (kLeafExact is 2, MINKQ_QUERY_LEAF_EXACT 1), so what must hold is that they are two
+// distinct bits.
+static_assert(minkq::kDropIncident != 0 && minkq::kLeafExact != 0 && (minkq::kDropIncident & minkq::kLeafExact) == 0 &&
+                  (minkq::kDropIncident & (minkq::kDropIncident - 1)) == 0 &&
+                  (minkq::kLeafExact & (minkq::kLeafExact - 1)) == 0,
+              "kDropIncident and kLeafExact (core/include/minkq/queries.h) must be two distinct bits");
+
 using minkq::Failure;
 using minkq::fail;
 using minkq::Status;
@@ -169,13 +206,16 @@ std::vector<minkq::Edge> derive_edges(const std::vector<minkq::Triangle>& triang
   keys.reserve(triangles.size() * 3);
   for (const auto& t : triangles)
     for (int k = 0; k < 3; ++k) {
-      const uint32_t a = uint32_t(t.v[k]), b = uint32_t(t.v[(k + 1) % 3]);
-      keys.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
+      const int32_t a = t.v[k], b = t.v[(k + 1) % 3];  // non-negative (require_indices ran)
+      keys.push_back(minkq::pack_pair(std::min(a, b), std::max(a, b)));
     }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<minkq::Edge> edges(keys.size());
-  for (size_t i = 0; i < keys.size(); ++i) edges[i] = {{int32_t(keys[i] >> 32), int32_t(keys[i] & 0xffffffffu)}};
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const minkq::Pair pair = minkq::unpack_pair(keys[i]);
+    edges[i] = {{pair.first, pair.second}};
+  }
   return edges;
 }
 

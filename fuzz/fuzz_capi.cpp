@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "minkq.h"
+#include "minkq.hpp"
 
 extern "C" {
 minkq_buffer shim_buffer(const void* data, size_t byte_stride, size_t count, int memory);
@@ -293,16 +294,21 @@ void check_pairs(const char* call, const int32_t* pairs, uint64_t count, size_t 
   if (std::adjacent_find(list.begin(), list.end()) != list.end()) failure(std::string(call) + ": duplicate pairs");
 }
 
-// The digest of a fixed query: a scene's state, compared before and after a failed refit.
-uint64_t scene_state(const SceneSlot& s) {
+// A result for the fuzzer's own trusted queries (not the calls under test).
+minkq::cxx::Result own_result() {
   minkq_result* r = nullptr;
   if (minkq_result_create(&r) != MINKQ_SUCCESS) failure("minkq_result_create");
+  return minkq::cxx::Result(r);
+}
+
+// The digest of a fixed query: a scene's state, compared before and after a failed refit.
+uint64_t scene_state(const SceneSlot& s) {
+  const minkq::cxx::Result r = own_result();
   minkq_query_desc d;
   shim_query_desc(&d, (s.flags & MINKQ_SCENE_VT) ? MINKQ_QUERY_VT : MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_DIGEST,
                   0.5f);
-  const minkq_status st = minkq_scene_query_result(s.handle, &d, r);
-  const uint64_t digest = minkq_result_digest(r) ^ minkq_result_count(r);
-  minkq_result_release(r);
+  const minkq_status st = minkq_scene_query_result(s.handle, &d, r.get());
+  const uint64_t digest = minkq_result_digest(r.get()) ^ minkq_result_count(r.get());
   if (st != MINKQ_SUCCESS) failure("state query failed: " + name(st));
   return digest;
 }
@@ -578,12 +584,10 @@ class Session {
 
   // The count and digest of a query through the library-owned result (trusted after checks).
   bool reference_count(minkq_scene* scene, const minkq_query_desc& d, uint64_t* count, std::vector<int32_t>* pairs) {
-    minkq_result* r = nullptr;
-    if (minkq_result_create(&r) != MINKQ_SUCCESS) failure("minkq_result_create");
-    const minkq_status st = minkq_scene_query_result(scene, &d, r);
-    *count = minkq_result_count(r);
-    if (pairs) pairs->assign(minkq_result_pairs(r), minkq_result_pairs(r) + 2 * *count);
-    minkq_result_release(r);
+    const minkq::cxx::Result r = own_result();
+    const minkq_status st = minkq_scene_query_result(scene, &d, r.get());
+    *count = minkq_result_count(r.get());
+    if (pairs) pairs->assign(minkq_result_pairs(r.get()), minkq_result_pairs(r.get()) + 2 * *count);
     return st == MINKQ_SUCCESS;
   }
 

@@ -23,7 +23,7 @@ using namespace minkq::fuzz;
 
 struct Harness {
   std::unique_ptr<tbb::global_control> threads;
-  std::vector<minkq_device*> devices;
+  std::vector<minkq::cxx::Device> devices;
   std::unique_ptr<EmbreeReference> embree;
   Stats stats;
   uint64_t inputs = 0;
@@ -63,7 +63,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   inject_fault() = std::getenv("MINKQ_FUZZ_INJECT") != nullptr;
   if (const char* every = std::getenv("MINKQ_FUZZ_STATS_EVERY")) harness->every = std::strtoull(every, nullptr, 10);
   std::fprintf(stderr, "minkq_fuzz_differential: devices:");
-  for (minkq_device* d : harness->devices) std::fprintf(stderr, " [%s]", minkq_device_name(d));
+  for (const auto& d : harness->devices) std::fprintf(stderr, " [%s]", minkq_device_name(d.get()));
   std::fprintf(stderr, "; reference: Embree %d.%d.%d (isa=sse2)\n", RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
                RTC_VERSION_PATCH);
   std::atexit(at_exit);

@@ -1,4 +1,5 @@
-// RAII helpers over the C API for the test suites, and pair-set utilities.
+// Test-side helpers over the C API: handles (capi/minkq.hpp's) whose creation fails the test
+// instead of throwing, a scene that runs canonical queries, and pair-set utilities.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -9,56 +10,66 @@
 #include <vector>
 
 #include "minkq.h"
+#include "minkq.hpp"
 #include "minkq_reference.h"
 
 namespace minkq::test {
 
 using Pairs = std::vector<std::pair<int32_t, int32_t>>;
+using cxx::host_buffer;
 
-inline minkq_buffer host_buffer(const void* data, size_t count, size_t stride = 0) {
-  return minkq_buffer{data, stride, count, MINKQ_MEMORY_HOST};
+// Adopts what create(&raw) made; a failed creation fails the test and leaves the handle empty.
+template <class Handle, class Create>
+Handle created(Create&& create) {
+  typename Handle::pointer raw = nullptr;
+  const minkq_status status = create(&raw);
+  EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
+  return Handle(raw);
 }
 
-struct Device {
-  minkq_device* handle = nullptr;
-  explicit Device(const char* spec = "cpu") {
-    const minkq_status status = minkq_device_create(spec, &handle);
-    EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
-  }
-  ~Device() { minkq_device_release(handle); }
-  Device(const Device&) = delete;
-  Device& operator=(const Device&) = delete;
+struct Device : cxx::Device {
+  explicit Device(const char* spec = "cpu")
+      : cxx::Device(created<cxx::Device>([&](minkq_device** out) { return minkq_device_create(spec, out); })) {}
 };
 
-struct Scene {
-  minkq_scene* handle = nullptr;
-  Scene(minkq_device* device, const reference::Mesh& mesh, uint32_t flags) {
-    minkq_scene_desc desc{};
-    desc.flags = flags;
-    desc.vertices = host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3);
-    desc.triangles = host_buffer(mesh.tris.data(), mesh.tris.size() / 3);
-    const minkq_status status = minkq_scene_create(device, &desc, &handle);
-    EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
-  }
-  ~Scene() { minkq_scene_release(handle); }
-  Scene(const Scene&) = delete;
-  Scene& operator=(const Scene&) = delete;
+inline cxx::Scene new_scene(minkq_device* device, const minkq_scene_desc& desc) {
+  return created<cxx::Scene>([&](minkq_scene** out) { return minkq_scene_create(device, &desc, out); });
+}
+
+inline cxx::Scene new_scene(minkq_device* device, const reference::Mesh& mesh, uint32_t flags) {
+  minkq_scene_desc desc{};
+  desc.flags = flags;
+  desc.vertices = host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3);
+  desc.triangles = host_buffer(mesh.tris.data(), mesh.tris.size() / 3);
+  return new_scene(device, desc);
+}
+
+inline cxx::Bvh new_bvh(minkq_device* device, minkq_buffer boxes) {
+  return created<cxx::Bvh>([&](minkq_bvh** out) { return minkq_bvh_create(device, boxes, out); });
+}
+
+inline cxx::Result new_result() {
+  return created<cxx::Result>([](minkq_result** out) { return minkq_result_create(out); });
+}
+
+struct Scene : cxx::Scene {
+  Scene(minkq_device* device, const reference::Mesh& mesh, uint32_t flags) : cxx::Scene(new_scene(device, mesh, flags)) {}
 
   std::vector<int32_t> edges() const {
-    std::vector<int32_t> out(2 * minkq_scene_edge_count(handle));
-    EXPECT_EQ(minkq_scene_edges(handle, out.data(), out.size() / 2), MINKQ_SUCCESS);
+    std::vector<int32_t> out(2 * minkq_scene_edge_count(get()));
+    EXPECT_EQ(minkq_scene_edges(get(), out.data(), out.size() / 2), MINKQ_SUCCESS);
     return out;
   }
 
   // Runs a query (canonical order) and returns its pairs; fails the test on any error.
   Pairs query(minkq_query_kind kind, minkq_mode mode, float r, uint32_t flags = 0, uint64_t* digest = nullptr) {
-    minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_CANONICAL | (digest ? MINKQ_QUERY_DIGEST : 0u), r};
+    minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_CANONICAL | (digest ? uint32_t(MINKQ_QUERY_DIGEST) : 0u), r};
     minkq_query_info info{};
-    minkq_status status = minkq_scene_query(handle, &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info);
+    minkq_status status = minkq_scene_query(get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info);
     std::vector<int32_t> raw;
     if (status == MINKQ_ERROR_CAPACITY) {
       raw.resize(2 * info.count);
-      status = minkq_scene_query(handle, &desc, raw.data(), info.count, MINKQ_MEMORY_HOST, &info);
+      status = minkq_scene_query(get(), &desc, raw.data(), info.count, MINKQ_MEMORY_HOST, &info);
     }
     EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
     if (digest) *digest = info.digest;
@@ -71,13 +82,11 @@ struct Scene {
 // Runs a query with MINKQ_QUERY_STATS into a result; returns its work counts.
 inline minkq_query_stats work_of(minkq_scene* scene, minkq_query_kind kind, minkq_mode mode, float r,
                                  uint32_t flags = 0) {
-  minkq_result* result = nullptr;
-  EXPECT_EQ(minkq_result_create(&result), MINKQ_SUCCESS);
+  const cxx::Result result = new_result();
   const minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_STATS, r};
-  EXPECT_EQ(minkq_scene_query_result(scene, &desc, result), MINKQ_SUCCESS) << minkq_last_error_message();
-  const minkq_query_stats stats = minkq_result_stats(result);
-  EXPECT_EQ(stats.candidates, minkq_result_count(result));
-  minkq_result_release(result);
+  EXPECT_EQ(minkq_scene_query_result(scene, &desc, result.get()), MINKQ_SUCCESS) << minkq_last_error_message();
+  const minkq_query_stats stats = minkq_result_stats(result.get());
+  EXPECT_EQ(stats.candidates, minkq_result_count(result.get()));
   return stats;
 }
 

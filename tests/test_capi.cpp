@@ -32,7 +32,7 @@ struct Fixture : ::testing::Test {
   }
   minkq_status create(const minkq_scene_desc& d) {
     minkq_scene* scene = nullptr;
-    const minkq_status status = minkq_scene_create(device.handle, &d, &scene);
+    const minkq_status status = minkq_scene_create(device.get(), &d, &scene);
     if (status == MINKQ_SUCCESS) EXPECT_NE(scene, nullptr); else EXPECT_EQ(scene, nullptr);
     minkq_scene_release(scene);
     return status;
@@ -89,15 +89,15 @@ TEST_F(Fixture, null_pointers_strides_flags_and_sizes_are_rejected) {
   d.vertices.memory = MINKQ_MEMORY_DEVICE;
   EXPECT_EQ(create(d), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("device memory"), std::string::npos);
-  EXPECT_EQ(minkq_scene_create(device.handle, nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_create(device.get(), nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
   minkq_scene* scene = nullptr;
   EXPECT_EQ(minkq_scene_create(nullptr, &d, &scene), MINKQ_ERROR_INVALID_ARGUMENT);
 }
 
 TEST_F(Fixture, bad_radius_mode_kind_and_flags_are_rejected) {
-  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
+  test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
   minkq_query_info info{};
-  auto run = [&](minkq_query_desc q) { return minkq_scene_query(scene.handle, &q, nullptr, 0, MINKQ_MEMORY_HOST, &info); };
+  auto run = [&](minkq_query_desc q) { return minkq_scene_query(scene.get(), &q, nullptr, 0, MINKQ_MEMORY_HOST, &info); };
   EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0, -1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("radius -1 is negative"), std::string::npos) << message();
   EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0, std::nanf("")}), MINKQ_ERROR_NON_FINITE);
@@ -107,18 +107,18 @@ TEST_F(Fixture, bad_radius_mode_kind_and_flags_are_rejected) {
   EXPECT_EQ(run({MINKQ_QUERY_VT, MINKQ_MODE_BOX, 1u << 9, 1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(run({MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, 1.0f}), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("without MINKQ_SCENE_EE"), std::string::npos) << message();
-  EXPECT_EQ(minkq_scene_edge_count(scene.handle), 0u);  // a VT-only scene derives no edges
-  test::Scene both(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  EXPECT_EQ(minkq_scene_edge_count(scene.get()), 0u);  // a VT-only scene derives no edges
+  test::Scene both(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   minkq_query_desc sphere_ee{MINKQ_QUERY_EE, MINKQ_MODE_SPHERE, 0, 1.0f};
-  EXPECT_EQ(minkq_scene_query(both.handle, &sphere_ee, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_query(both.get(), &sphere_ee, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
   minkq_query_desc ok{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f};
-  EXPECT_EQ(minkq_scene_query(both.handle, &ok, nullptr, 0, MINKQ_MEMORY_HOST, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(minkq_scene_query(both.handle, &ok, nullptr, 5, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_query(both.get(), &ok, nullptr, 0, MINKQ_MEMORY_HOST, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_query(both.get(), &ok, nullptr, 5, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_INVALID_ARGUMENT);
 }
 
 TEST_F(Fixture, vt_ee_call_checks_each_query_and_buffer_by_name) {
-  test::Scene vt_only(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
-  test::Scene both(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  test::Scene vt_only(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
+  test::Scene both(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f}, ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, 1.0f};
   std::vector<int32_t> a(64), b(64);
   minkq_query_info vt_info{}, ee_info{};
@@ -130,43 +130,43 @@ TEST_F(Fixture, vt_ee_call_checks_each_query_and_buffer_by_name) {
     EXPECT_EQ(status, expected) << words;
     EXPECT_NE(message().find(words), std::string::npos) << message();
   };
-  expect(run(vt_only.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(vt_only.get(), &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "EE query on a scene created without MINKQ_SCENE_EE");
   expect(run(nullptr, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "scene is NULL");
-  expect(run(both.handle, nullptr, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), nullptr, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "vt_query is NULL");
-  expect(run(both.handle, &ee, &vt, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &ee, &vt, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "vt_query->kind is not MINKQ_QUERY_VT");
-  expect(run(both.handle, &vt, &vt, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &vt, &vt, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "ee_query->kind is not MINKQ_QUERY_EE");
   const minkq_query_desc ee_sphere{MINKQ_QUERY_EE, MINKQ_MODE_SPHERE, 0, 1.0f};
-  expect(run(both.handle, &vt, &ee_sphere, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
+  expect(run(both.get(), &vt, &ee_sphere, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
          MINKQ_ERROR_INVALID_ARGUMENT, "sphere mode needs point queries");
   const minkq_query_desc ee_bad_radius{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, -2.0f};
-  expect(run(both.handle, &vt, &ee_bad_radius, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
+  expect(run(both.get(), &vt, &ee_bad_radius, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
          MINKQ_ERROR_INVALID_ARGUMENT, "radius -2 is negative");
   const minkq_query_desc vt_bad_flags{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 1u << 9, 1.0f};
-  expect(run(both.handle, &vt_bad_flags, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
+  expect(run(both.get(), &vt_bad_flags, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info),
          MINKQ_ERROR_INVALID_ARGUMENT, "vt_query->flags has unknown bits");
-  expect(run(both.handle, &vt, &ee, nullptr, 3, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &vt, &ee, nullptr, 3, b.data(), 32, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "vt_pairs is NULL but vt_capacity is 3");
-  expect(run(both.handle, &vt, &ee, a.data(), 32, nullptr, 4, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &vt, &ee, a.data(), 32, nullptr, 4, &vt_info, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "ee_pairs is NULL but ee_capacity is 4");
-  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, nullptr, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &vt, &ee, a.data(), 32, b.data(), 32, nullptr, &ee_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "vt_info is NULL");
-  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, nullptr), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, nullptr), MINKQ_ERROR_INVALID_ARGUMENT,
          "ee_info is NULL");
-  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &vt_info), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(run(both.get(), &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &vt_info), MINKQ_ERROR_INVALID_ARGUMENT,
          "vt_info and ee_info are the same");
-  expect(run(both.handle, &vt, &ee, a.data(), 32, b.data(), SIZE_MAX, &vt_info, &ee_info), MINKQ_ERROR_SIZE_OVERFLOW,
+  expect(run(both.get(), &vt, &ee, a.data(), 32, b.data(), SIZE_MAX, &vt_info, &ee_info), MINKQ_ERROR_SIZE_OVERFLOW,
          "ee_capacity");
-  expect(minkq_scene_query_vt_ee(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, MINKQ_MEMORY_DEVICE, &vt_info,
+  expect(minkq_scene_query_vt_ee(both.get(), &vt, &ee, a.data(), 32, b.data(), 32, MINKQ_MEMORY_DEVICE, &vt_info,
                                  &ee_info),
          MINKQ_ERROR_INVALID_ARGUMENT, "vt_pairs is in device memory but the device is cpu");
-  expect(minkq_scene_query_vt_ee_result(both.handle, &vt, &ee, nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT,
+  expect(minkq_scene_query_vt_ee_result(both.get(), &vt, &ee, nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT,
          "vt_result is NULL");
-  EXPECT_EQ(run(both.handle, &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_SUCCESS) << message();
+  EXPECT_EQ(run(both.get(), &vt, &ee, a.data(), 32, b.data(), 32, &vt_info, &ee_info), MINKQ_SUCCESS) << message();
   EXPECT_GT(vt_info.count, 0u);
   EXPECT_GT(ee_info.count, 0u);
 }
@@ -186,7 +186,7 @@ TEST_F(Fixture, scene_edges_come_back_derived_in_lexicographic_order_or_as_given
         d.flags = flags;
         if (give) d.edges = host_buffer(given.data(), given.size() / 2);
         minkq_scene* scene = nullptr;
-        ASSERT_EQ(minkq_scene_create(dev.handle, &d, &scene), MINKQ_SUCCESS) << message();
+        ASSERT_EQ(minkq_scene_create(dev.get(), &d, &scene), MINKQ_SUCCESS) << message();
         const std::vector<int32_t> expected = give ? given : (flags & MINKQ_SCENE_EE) ? derived : std::vector<int32_t>{};
         EXPECT_EQ(minkq_scene_triangle_count(scene), 2u);
         ASSERT_EQ(minkq_scene_edge_count(scene), expected.size() / 2);
@@ -205,26 +205,26 @@ TEST_F(Fixture, scene_edges_come_back_derived_in_lexicographic_order_or_as_given
 }
 
 TEST_F(Fixture, capacity_reports_the_exact_count_and_writes_nothing_past_the_buffer) {
-  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const test::Pairs all = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);
   ASSERT_GT(all.size(), 3u);
   minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, 0.1f};
   for (size_t capacity : {size_t(0), size_t(1), all.size() - 1}) {
     std::vector<int32_t> buffer(2 * capacity + 16, -77);
     minkq_query_info info{};
-    EXPECT_EQ(minkq_scene_query(scene.handle, &q, buffer.data(), capacity, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_CAPACITY);
+    EXPECT_EQ(minkq_scene_query(scene.get(), &q, buffer.data(), capacity, MINKQ_MEMORY_HOST, &info), MINKQ_ERROR_CAPACITY);
     EXPECT_EQ(info.count, all.size());
     EXPECT_NE(message().find(std::to_string(all.size()) + " pairs found"), std::string::npos) << message();
     for (size_t i = 2 * capacity; i < buffer.size(); ++i) ASSERT_EQ(buffer[i], -77) << "written past the buffer";
   }
   std::vector<int32_t> exact(2 * all.size());
   minkq_query_info info{};
-  EXPECT_EQ(minkq_scene_query(scene.handle, &q, exact.data(), all.size(), MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
+  EXPECT_EQ(minkq_scene_query(scene.get(), &q, exact.data(), all.size(), MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
   EXPECT_EQ(info.count, all.size());
 }
 
 TEST_F(Fixture, digest_is_xxh64_of_the_canonical_little_endian_pairs) {
-  test::Scene scene(device.handle, reference::random_soup(300, 7, 1.0), MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  test::Scene scene(device.get(), reference::random_soup(300, 7, 1.0), MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   uint64_t digest = 0;
   const test::Pairs pairs = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, 0.05f, 0, &digest);
   ASSERT_FALSE(pairs.empty());
@@ -236,7 +236,7 @@ TEST_F(Fixture, digest_is_xxh64_of_the_canonical_little_endian_pairs) {
   minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, 0, 0.05f};
   std::vector<int32_t> raw(2 * pairs.size());
   minkq_query_info info{};
-  ASSERT_EQ(minkq_scene_query(scene.handle, &q, raw.data(), pairs.size(), MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_scene_query(scene.get(), &q, raw.data(), pairs.size(), MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
   test::Pairs unordered;
   for (size_t i = 0; i < pairs.size(); ++i) unordered.push_back({raw[2 * i], raw[2 * i + 1]});
   std::sort(unordered.begin(), unordered.end());
@@ -244,37 +244,37 @@ TEST_F(Fixture, digest_is_xxh64_of_the_canonical_little_endian_pairs) {
 }
 
 TEST_F(Fixture, failed_refit_keeps_the_previous_positions) {
-  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const test::Pairs before = scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0.1f);
   std::vector<float> moved = xyz;
   moved[5] = std::numeric_limits<float>::infinity();
-  EXPECT_EQ(minkq_scene_refit(scene.handle, host_buffer(moved.data(), 6)), MINKQ_ERROR_NON_FINITE);
+  EXPECT_EQ(minkq_scene_refit(scene.get(), host_buffer(moved.data(), 6)), MINKQ_ERROR_NON_FINITE);
   EXPECT_NE(message().find("vertex 1"), std::string::npos) << message();
-  EXPECT_EQ(minkq_scene_refit(scene.handle, host_buffer(moved.data(), 5)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_refit(scene.get(), host_buffer(moved.data(), 5)), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("refit with 5 vertices but the scene has 6"), std::string::npos) << message();
   EXPECT_EQ(scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0.1f), before);
 }
 
 TEST_F(Fixture, failed_rebuild_keeps_the_previous_positions_and_growth_checks_its_arguments) {
-  test::Scene scene(device.handle, reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
+  test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const test::Pairs before = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);
   std::vector<float> moved = xyz;
   moved[7] = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_EQ(minkq_scene_rebuild(scene.handle, host_buffer(moved.data(), 6)), MINKQ_ERROR_NON_FINITE);
+  EXPECT_EQ(minkq_scene_rebuild(scene.get(), host_buffer(moved.data(), 6)), MINKQ_ERROR_NON_FINITE);
   EXPECT_NE(message().find("vertex 2 has a non-finite coordinate"), std::string::npos) << message();
-  EXPECT_EQ(minkq_scene_rebuild(scene.handle, host_buffer(moved.data(), 5)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_rebuild(scene.get(), host_buffer(moved.data(), 5)), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("rebuild with 5 vertices but the scene has 6"), std::string::npos) << message();
   EXPECT_EQ(minkq_scene_rebuild(nullptr, host_buffer(xyz.data(), 6)), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("scene is NULL"), std::string::npos) << message();
   EXPECT_EQ(minkq_scene_refit(nullptr, host_buffer(xyz.data(), 6)), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("scene is NULL"), std::string::npos) << message();
-  EXPECT_EQ(minkq_scene_rebuild(scene.handle, host_buffer(nullptr, 6)), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_rebuild(scene.get(), host_buffer(nullptr, 6)), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f), before);
   double growth = 0.0;
-  EXPECT_EQ(minkq_scene_tree_growth(scene.handle, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_tree_growth(scene.get(), nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("out_growth is NULL"), std::string::npos) << message();
   EXPECT_EQ(minkq_scene_tree_growth(nullptr, &growth), MINKQ_ERROR_INVALID_ARGUMENT);
-  ASSERT_EQ(minkq_scene_tree_growth(scene.handle, &growth), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_scene_tree_growth(scene.get(), &growth), MINKQ_SUCCESS);
   EXPECT_EQ(growth, 1.0);
 }
 
@@ -306,7 +306,7 @@ TEST(UserBvh, every_shape_matches_its_definition) {
   std::vector<Box> boxes(800);
   for (Box& b : boxes) b = rng.box(rng.vec3(0, 10), 0.3f);
   minkq_bvh* bvh = nullptr;
-  ASSERT_EQ(minkq_bvh_create(device.handle, host_buffer(boxes.data(), boxes.size()), &bvh), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_bvh_create(device.get(), host_buffer(boxes.data(), boxes.size()), &bvh), MINKQ_SUCCESS);
   std::vector<Vec3> a(300), b(300);
   for (size_t i = 0; i < a.size(); ++i) { a[i] = rng.vec3(0, 10); b[i] = a[i] + rng.vec3(-1, 1); }
   const float r = 0.2f;

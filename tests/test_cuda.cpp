@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "capi_util.h"
+#include "minkq/queries.h"
 #include "test_util.h"
 
 #if defined(MINKQ_TEST_HAVE_CUDART)
@@ -32,32 +33,16 @@ constexpr uint32_t kBoth = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
   GTEST_SKIP() << "no CUDA device: minkq_cuda_device_count() == 0 (built without CUDA, no driver or " \
                   "no GPU)"
 
-struct SceneDeleter {
-  void operator()(minkq_scene* s) const { minkq_scene_release(s); }
-};
-struct BvhDeleter {
-  void operator()(minkq_bvh* b) const { minkq_bvh_release(b); }
-};
-using ScenePtr = std::unique_ptr<minkq_scene, SceneDeleter>;
-using BvhPtr = std::unique_ptr<minkq_bvh, BvhDeleter>;
-
-ScenePtr make_scene(minkq_device* device, const minkq_scene_desc& desc) {
-  minkq_scene* scene = nullptr;
-  EXPECT_EQ(minkq_scene_create(device, &desc, &scene), MINKQ_SUCCESS) << minkq_last_error_message();
-  return ScenePtr(scene);
-}
-
-ScenePtr make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags, minkq_buffer vertices) {
+// Scenes and BVHs whose failed creation fails the test (capi_util.h).
+cxx::Scene make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags, minkq_buffer vertices) {
   minkq_scene_desc desc{};
   desc.flags = flags;
   desc.vertices = vertices;
   desc.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
-  return make_scene(device, desc);
+  return test::new_scene(device, desc);
 }
 
-ScenePtr make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags) {
-  return make_scene(device, mesh, flags, host_buffer(mesh.xyz.data(), mesh.vertex_count()));
-}
+cxx::Scene make_scene(minkq_device* device, const Mesh& mesh, uint32_t flags) { return test::new_scene(device, mesh, flags); }
 
 // One query's outcome: exact count, digest and the pairs (2 int32 each, host memory).
 struct Outcome {
@@ -95,12 +80,13 @@ Outcome scene_query(minkq_scene* scene, minkq_query_kind kind, minkq_mode mode, 
 // Lexicographic order, for comparing outputs that were not asked to be canonical.
 std::vector<int32_t> sorted_pairs(const std::vector<int32_t>& raw) {
   std::vector<uint64_t> keys(raw.size() / 2);
-  for (size_t i = 0; i < keys.size(); ++i) keys[i] = uint64_t(uint32_t(raw[2 * i])) << 32 | uint32_t(raw[2 * i + 1]);
+  for (size_t i = 0; i < keys.size(); ++i) keys[i] = pack_pair(raw[2 * i], raw[2 * i + 1]);
   std::sort(keys.begin(), keys.end());
   std::vector<int32_t> out(raw.size());
   for (size_t i = 0; i < keys.size(); ++i) {
-    out[2 * i] = int32_t(keys[i] >> 32);
-    out[2 * i + 1] = int32_t(keys[i] & 0xffffffffu);
+    const Pair pair = unpack_pair(keys[i]);
+    out[2 * i] = pair.first;
+    out[2 * i + 1] = pair.second;
   }
   return out;
 }
@@ -178,9 +164,9 @@ class Cuda : public ::testing::Test {
 
 TEST_F(Cuda, device_is_named_and_missing_ordinals_are_unsupported) {
   test::Device cuda("cuda");
-  ASSERT_NE(cuda.handle, nullptr);
-  EXPECT_EQ(minkq_device_backend(cuda.handle), MINKQ_BACKEND_CUDA);
-  EXPECT_EQ(std::string(minkq_device_name(cuda.handle)).rfind("cuda:0 (", 0), 0u) << minkq_device_name(cuda.handle);
+  ASSERT_NE(cuda.get(), nullptr);
+  EXPECT_EQ(minkq_device_backend(cuda.get()), MINKQ_BACKEND_CUDA);
+  EXPECT_EQ(std::string(minkq_device_name(cuda.get())).rfind("cuda:0 (", 0), 0u) << minkq_device_name(cuda.get());
   minkq_device* missing = nullptr;
   const std::string spec = "cuda:" + std::to_string(minkq_cuda_device_count());
   EXPECT_EQ(minkq_device_create(spec.c_str(), &missing), MINKQ_ERROR_UNSUPPORTED);
@@ -193,7 +179,7 @@ TEST_F(Cuda, every_mode_matches_cpu_with_and_without_leaf_test) {
   for (const auto& [name, mesh] : Scenes(seed).meshes)
     for (bool drop : {false, true}) {
       const uint32_t flags = kBoth | (drop ? MINKQ_SCENE_DROP_INCIDENT : 0u);
-      ScenePtr a = make_scene(cpu.handle, mesh, flags), b = make_scene(cuda.handle, mesh, flags);
+      cxx::Scene a = make_scene(cpu.get(), mesh, flags), b = make_scene(cuda.get(), mesh, flags);
       ASSERT_TRUE(a && b);
       const double edge = reference::mean_edge_length(mesh);
       for (double factor : {0.1, 1.0})
@@ -205,7 +191,7 @@ TEST_F(Cuda, refit_matches_cpu_after_moving_vertices) {
   test::Device cpu("cpu"), cuda("cuda");
   test::Random rng(seed);
   for (const auto& [name, mesh] : Scenes(seed).meshes) {
-    ScenePtr a = make_scene(cpu.handle, mesh, kBoth), b = make_scene(cuda.handle, mesh, kBoth);
+    cxx::Scene a = make_scene(cpu.get(), mesh, kBoth), b = make_scene(cuda.get(), mesh, kBoth);
     ASSERT_TRUE(a && b);
     const float r = float(0.5 * reference::mean_edge_length(mesh));
     for (int step = 0; step < 3; ++step) {
@@ -232,7 +218,7 @@ TEST_F(Cuda, refit_matches_cpu_after_moving_vertices) {
 TEST_F(Cuda, rebuild_and_tree_growth_match_cpu) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh flat = reference::twisted_sheet(40, 0.0), wrung = reference::twisted_sheet(40, 3.0);
-  ScenePtr a = make_scene(cpu.handle, flat, kBoth), b = make_scene(cuda.handle, flat, kBoth);
+  cxx::Scene a = make_scene(cpu.get(), flat, kBoth), b = make_scene(cuda.get(), flat, kBoth);
   ASSERT_TRUE(a && b);
   const float r = float(0.5 * reference::mean_edge_length(wrung));
   const minkq_buffer moved = host_buffer(wrung.xyz.data(), wrung.vertex_count());
@@ -255,7 +241,7 @@ TEST_F(Cuda, rebuild_and_tree_growth_match_cpu) {
 TEST_F(Cuda, capacity_returns_the_exact_count_and_writes_nothing_past_the_buffer) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::random_soup(3000, seed, 0.08);
-  ScenePtr a = make_scene(cpu.handle, mesh, kBoth), b = make_scene(cuda.handle, mesh, kBoth);
+  cxx::Scene a = make_scene(cpu.get(), mesh, kBoth), b = make_scene(cuda.get(), mesh, kBoth);
   ASSERT_TRUE(a && b);
   const minkq_query_desc desc{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST,
                               float(reference::mean_edge_length(mesh))};
@@ -300,11 +286,8 @@ Outcome bvh_query(minkq_bvh* bvh, minkq_shape shape, minkq_mode mode, float r, c
   });
 }
 
-BvhPtr make_bvh(minkq_device* device, const std::vector<Box>& boxes) {
-  minkq_bvh* bvh = nullptr;
-  EXPECT_EQ(minkq_bvh_create(device, host_buffer(boxes.data(), boxes.size()), &bvh), MINKQ_SUCCESS)
-      << minkq_last_error_message();
-  return BvhPtr(bvh);
+cxx::Bvh make_bvh(minkq_device* device, const std::vector<Box>& boxes) {
+  return test::new_bvh(device, host_buffer(boxes.data(), boxes.size()));
 }
 
 TEST_F(Cuda, user_box_queries_match_cpu_for_every_shape_and_after_refit) {
@@ -316,7 +299,7 @@ TEST_F(Cuda, user_box_queries_match_cpu_for_every_shape_and_after_refit) {
     return boxes;
   };
   std::vector<Box> boxes = random_boxes(4000, 0.02f);
-  BvhPtr a = make_bvh(cpu.handle, boxes), b = make_bvh(cuda.handle, boxes);
+  cxx::Bvh a = make_bvh(cpu.get(), boxes), b = make_bvh(cuda.get(), boxes);
   ASSERT_TRUE(a && b);
   const int nq = 3000;
   std::vector<Vec3> p0(nq), p1(nq), lo(nq), hi(nq);
@@ -352,7 +335,7 @@ TEST_F(Cuda, single_box_and_tiny_scenes_match_cpu) {
   for (int n : {1, 2, 3}) {
     std::vector<Box> boxes;
     for (int i = 0; i < n; ++i) boxes.push_back({{float(i), 0, 0}, {float(i) + 0.5f, 1, 1}});
-    BvhPtr a = make_bvh(cpu.handle, boxes), b = make_bvh(cuda.handle, boxes);
+    cxx::Bvh a = make_bvh(cpu.get(), boxes), b = make_bvh(cuda.get(), boxes);
     ASSERT_TRUE(a && b);
     const std::vector<Vec3> centres = {{0.25f, 0.5f, 0.5f}, {1.7f, 0.5f, 0.5f}, {9, 9, 9}};
     expect_same(bvh_query(a.get(), MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0.3f, centres, {}),
@@ -393,17 +376,17 @@ TEST_F(Cuda, device_memory_vertices_with_any_stride_match_host_input) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::twisted_sheet(40, 3.0);
   const float r = float(0.5 * reference::mean_edge_length(mesh));
-  ScenePtr reference_scene = make_scene(cpu.handle, mesh, kBoth);
+  cxx::Scene reference_scene = make_scene(cpu.get(), mesh, kBoth);
   for (size_t stride : {size_t(12), size_t(16), size_t(14)}) {
     DeviceMemory vertices = device_vertices(mesh.xyz, stride);
-    ScenePtr scene = make_scene(cuda.handle, mesh, kBoth, device_buffer(vertices.ptr, mesh.vertex_count(), stride));
+    cxx::Scene scene = make_scene(cuda.get(), mesh, kBoth, device_buffer(vertices.ptr, mesh.vertex_count(), stride));
     ASSERT_TRUE(scene);
     compare_all_modes(reference_scene.get(), scene.get(), r, "device vertices stride " + std::to_string(stride));
     // Refit from device memory too: move every vertex, on both sides.
     Mesh moved = mesh;
     reference::transform(moved, 1.5, 0.25);
     DeviceMemory moved_vertices = device_vertices(moved.xyz, stride);
-    ScenePtr moved_cpu = make_scene(cpu.handle, moved, kBoth);
+    cxx::Scene moved_cpu = make_scene(cpu.get(), moved, kBoth);
     ASSERT_EQ(minkq_scene_refit(scene.get(), device_buffer(moved_vertices.ptr, mesh.vertex_count(), stride)),
               MINKQ_SUCCESS)
         << minkq_last_error_message();
@@ -424,7 +407,7 @@ TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
     desc.vertices = device_buffer(vertices.ptr, mesh.vertex_count(), stride);
     desc.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
     minkq_scene* scene = nullptr;
-    EXPECT_EQ(minkq_scene_create(cuda.handle, &desc, &scene), MINKQ_ERROR_NON_FINITE);
+    EXPECT_EQ(minkq_scene_create(cuda.get(), &desc, &scene), MINKQ_ERROR_NON_FINITE);
     EXPECT_EQ(scene, nullptr);
     const std::string message = minkq_last_error_message();
     EXPECT_NE(message.find("vertex " + std::to_string(bad) + " "), std::string::npos) << message;
@@ -435,7 +418,7 @@ TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
 TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::random_soup(3000, seed, 0.08);
-  ScenePtr a = make_scene(cpu.handle, mesh, kBoth), b = make_scene(cuda.handle, mesh, kBoth);
+  cxx::Scene a = make_scene(cpu.get(), mesh, kBoth), b = make_scene(cuda.get(), mesh, kBoth);
   ASSERT_TRUE(a && b);
   const float r = float(reference::mean_edge_length(mesh));
   for (const ModeCase& m : kModes) {
@@ -475,8 +458,8 @@ TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {
 TEST_F(Cuda, vt_and_ee_in_one_call_match_cpu_into_host_and_device_buffers) {
   test::Device cpu("cpu"), cuda("cuda");
   for (const auto& [name, mesh] : Scenes(seed).meshes) {
-    ScenePtr a = make_scene(cpu.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
-    ScenePtr b = make_scene(cuda.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    cxx::Scene a = make_scene(cpu.get(), mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    cxx::Scene b = make_scene(cuda.get(), mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
     ASSERT_TRUE(a && b);
     const double edge = reference::mean_edge_length(mesh);
     const uint32_t all = MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS;
@@ -537,7 +520,7 @@ TEST_F(Cuda, user_queries_from_device_memory_match_host_queries) {
   test::Random rng(seed);
   std::vector<Box> boxes(3000);
   for (Box& box : boxes) box = rng.box(rng.vec3(0.0f, 1.0f), 0.02f);
-  BvhPtr a = make_bvh(cpu.handle, boxes), b = make_bvh(cuda.handle, boxes);
+  cxx::Bvh a = make_bvh(cpu.get(), boxes), b = make_bvh(cuda.get(), boxes);
   ASSERT_TRUE(a && b);
   std::vector<Vec3> p0(2000), p1(2000);
   for (size_t i = 0; i < p0.size(); ++i) {

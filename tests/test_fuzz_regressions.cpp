@@ -1,45 +1,40 @@
 // Every failure the fuzzers (fuzz/) found, as a regression test, plus a replay of scenes in the
 // format the differential fuzzer prints ("paste into tests/test_fuzz_regressions.cpp"). The
-// scene checks are the fuzzer's own (fuzz/scene_checks.h: definition, chain, oracle, refit,
+// scene checks are the fuzzer's own (testing/scene_checks.h: definition, chain, oracle, refit,
 // buffers, and every CUDA device against the CPU where one exists), without the Embree part.
 // fuzz/RESULTS.md lists each bug with the test that covers it.
 #include <gtest/gtest.h>
 
 #include <cstring>
 
-#include "../fuzz/scene_checks.h"
+#include "capi_util.h"
+#include "scene_checks.h"
 
 namespace minkq {
 namespace {
 
 // Runs the differential fuzzer's checks on a scene; fails the test with its report.
 void replay(const fuzz::MeshScene& s) {
-  std::vector<minkq_device*> devices = fuzz::open_devices();
+  const std::vector<cxx::Device> devices = fuzz::open_devices();
   ASSERT_FALSE(devices.empty()) << minkq_last_error_message();
   fuzz::Report report;
   fuzz::Stats stats;
   fuzz::check_mesh_scene(devices, s, nullptr, report, stats);
-  fuzz::release_devices(devices);
   EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
   EXPECT_EQ(stats.mesh_scenes, 1u);
 }
 
 void replay(const fuzz::BoxScene& s) {
-  std::vector<minkq_device*> devices = fuzz::open_devices();
+  const std::vector<cxx::Device> devices = fuzz::open_devices();
   ASSERT_FALSE(devices.empty()) << minkq_last_error_message();
   fuzz::Report report;
   fuzz::Stats stats;
   fuzz::check_box_scene(devices, s, nullptr, report, stats);
-  fuzz::release_devices(devices);
   EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
   EXPECT_EQ(stats.box_scenes, 1u);
 }
 
-struct Device {
-  minkq_device* handle = nullptr;
-  Device() { EXPECT_EQ(minkq_device_create("cpu", &handle), MINKQ_SUCCESS); }
-  ~Device() { minkq_device_release(handle); }
-};
+using test::Device;
 
 // Stores an out-of-range value in an enum-typed field the way a C caller can (C enums are
 // integers); the test itself never loads the field as the C++ enum type.
@@ -67,7 +62,7 @@ TEST(FuzzRegressions, enum_fields_out_of_range_are_rejected) {
   desc.vertices = {xyz, 0, 3, MINKQ_MEMORY_HOST};
   desc.triangles = {tri, 0, 1, MINKQ_MEMORY_HOST};
   minkq_scene* scene = nullptr;
-  ASSERT_EQ(minkq_scene_create(device.handle, &desc, &scene), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_scene_create(device.get(), &desc, &scene), MINKQ_SUCCESS);
   minkq_query_info info{};
   for (uint32_t bad : {4u, 99u, 0x80000000u, 0xffffffffu}) {
     minkq_query_desc q{MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, 1.0f};
@@ -85,7 +80,7 @@ TEST(FuzzRegressions, enum_fields_out_of_range_are_rejected) {
 
   const float box[6] = {0, 0, 0, 1, 1, 1};
   minkq_bvh* bvh = nullptr;
-  ASSERT_EQ(minkq_bvh_create(device.handle, {box, 0, 1, MINKQ_MEMORY_HOST}, &bvh), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_bvh_create(device.get(), {box, 0, 1, MINKQ_MEMORY_HOST}, &bvh), MINKQ_SUCCESS);
   const float point[3] = {0.5f, 0.5f, 2.0f};
   for (uint32_t bad : {3u, 17u, 0xfffffffeu}) {
     minkq_bvh_query_desc q{MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0, 1.0f, {point, 0, 1, MINKQ_MEMORY_HOST}, {}};
@@ -105,7 +100,7 @@ TEST(FuzzRegressions, box_queries_with_a_nonzero_radius_are_rejected) {
   Device device;
   const float box[6] = {0, 0, 0, 1, 1, 1};
   minkq_bvh* bvh = nullptr;
-  ASSERT_EQ(minkq_bvh_create(device.handle, {box, 0, 1, MINKQ_MEMORY_HOST}, &bvh), MINKQ_SUCCESS);
+  ASSERT_EQ(minkq_bvh_create(device.get(), {box, 0, 1, MINKQ_MEMORY_HOST}, &bvh), MINKQ_SUCCESS);
   const float lo[3] = {1.5f, 0, 0}, hi[3] = {2, 1, 1};
   minkq_query_info info{};
   minkq_bvh_query_desc q{MINKQ_SHAPE_BOX, MINKQ_MODE_BOX, 0, 0.75f, {lo, 0, 1, MINKQ_MEMORY_HOST},

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "../fuzz/scene_checks.h"
+#include "scene_checks.h"
 #include "capi_util.h"
 #include "contact_checks.h"
 #include "minkq/queries.h"
@@ -27,7 +27,7 @@ constexpr uint32_t kBoth = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
 void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* label, bool check_definition = true) {
   SCOPED_TRACE(std::string(label) + " r=" + std::to_string(r) + (drop_incident ? " drop_incident" : ""));
   test::Device device;
-  test::Scene scene(device.handle, mesh, kBoth | (drop_incident ? MINKQ_SCENE_DROP_INCIDENT : 0u));
+  test::Scene scene(device.get(), mesh, kBoth | (drop_incident ? MINKQ_SCENE_DROP_INCIDENT : 0u));
   const std::vector<int32_t> edges = scene.edges();
   ASSERT_EQ(edges, reference::derive_edges(mesh.tris));
   Mesh with_edges = mesh;
@@ -74,7 +74,7 @@ void check_scene(const Mesh& mesh, float r, bool drop_incident, const char* labe
   }
 
   if (!check_definition) return;
-  // The brute-force definitions the differential fuzzer uses (fuzz/scene_checks.h).
+  // The brute-force definitions the differential fuzzer uses (testing/scene_checks.h).
   const fuzz::MeshGeometry g(mesh.xyz, mesh.tris, edges);
   const uint32_t filters = drop_incident ? kDropIncident : 0u;
   const auto vt = g.vt(r, filters), vt_exact = g.vt(r, filters | kLeafExact);
@@ -147,11 +147,11 @@ TEST_F(Queries, scaling_by_powers_of_two_gives_identical_pairs) {
   const Mesh mesh = reference::twisted_sheet(20, 2.0);
   const float r = float(0.3 * reference::mean_edge_length(mesh));
   test::Device device;
-  test::Scene base(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  test::Scene base(device.get(), mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
   for (int exponent : {-10, 10, -30, 30}) {
     Mesh scaled = mesh;
     reference::transform(scaled, std::ldexp(1.0, exponent), 0.0);
-    test::Scene other(device.handle, scaled, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    test::Scene other(device.get(), scaled, kBoth | MINKQ_SCENE_DROP_INCIDENT);
     const float rs = std::ldexp(r, exponent);
     for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
       for (uint32_t flags : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)})
@@ -169,14 +169,14 @@ TEST_F(Queries, scaling_by_decimal_factors_changes_only_pairs_at_the_boundary) {
   const double edge = reference::mean_edge_length(mesh);
   const float r = float(0.3 * edge);
   test::Device device;
-  test::Scene base(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  test::Scene base(device.get(), mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
   const Pairs vt = base.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, r, MINKQ_QUERY_LEAF_EXACT);
   const Pairs ee = base.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, r, MINKQ_QUERY_LEAF_EXACT);
   for (double factor : {1e-3, 1e3}) {
     Mesh scaled = mesh;
     reference::transform(scaled, factor, 0.0);
     check_scene(scaled, float(r * factor), true, "decimal scale", false);
-    test::Scene other(device.handle, scaled, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    test::Scene other(device.get(), scaled, kBoth | MINKQ_SCENE_DROP_INCIDENT);
     const Pairs vt_s = other.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, float(r * factor), MINKQ_QUERY_LEAF_EXACT);
     const Pairs ee_s = other.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, float(r * factor), MINKQ_QUERY_LEAF_EXACT);
     const std::vector<int32_t> edges = reference::derive_edges(mesh.tris);
@@ -204,12 +204,12 @@ TEST_F(Queries, refit_matches_a_fresh_build_and_the_oracle) {
   Mesh mesh = reference::twisted_sheet(20, 1.0);
   const float r = float(0.5 * reference::mean_edge_length(mesh));
   test::Device device;
-  test::Scene scene(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  test::Scene scene(device.get(), mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
   for (int step = 0; step < 3; ++step) {
     for (float& x : mesh.xyz) x += rng.uniform(-0.02f, 0.02f);
-    ASSERT_EQ(minkq_scene_refit(scene.handle, test::host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3)), MINKQ_SUCCESS)
+    ASSERT_EQ(minkq_scene_refit(scene.get(), test::host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3)), MINKQ_SUCCESS)
         << minkq_last_error_message();
-    test::Scene fresh(device.handle, mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+    test::Scene fresh(device.get(), mesh, kBoth | MINKQ_SCENE_DROP_INCIDENT);
     for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
       EXPECT_EQ(scene.query(MINKQ_QUERY_VT, mode, r), fresh.query(MINKQ_QUERY_VT, mode, r));
     for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
@@ -233,16 +233,16 @@ TEST_F(Queries, rebuild_changes_no_pair_and_resets_tree_growth) {
   for (float& x : wrung.xyz) x += rng.uniform(-1e-3f, 1e-3f);  // fresh positions each run
   const float r = float(0.5 * reference::mean_edge_length(wrung));
   test::Device device;
-  test::Scene refit(device.handle, flat, kBoth | MINKQ_SCENE_DROP_INCIDENT);
-  test::Scene rebuilt(device.handle, flat, kBoth | MINKQ_SCENE_DROP_INCIDENT);
-  EXPECT_EQ(tree_growth(refit.handle), 1.0);
+  test::Scene refit(device.get(), flat, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  test::Scene rebuilt(device.get(), flat, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  EXPECT_EQ(tree_growth(refit.get()), 1.0);
   const minkq_buffer moved = test::host_buffer(wrung.xyz.data(), wrung.xyz.size() / 3);
-  ASSERT_EQ(minkq_scene_refit(refit.handle, moved), MINKQ_SUCCESS) << minkq_last_error_message();
-  ASSERT_EQ(minkq_scene_rebuild(rebuilt.handle, moved), MINKQ_SUCCESS) << minkq_last_error_message();
-  const double grown = tree_growth(refit.handle);
+  ASSERT_EQ(minkq_scene_refit(refit.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  ASSERT_EQ(minkq_scene_rebuild(rebuilt.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+  const double grown = tree_growth(refit.get());
   EXPECT_GT(grown, 1.5);  // the flat sheet's boxes stretched over the turns
-  EXPECT_EQ(tree_growth(rebuilt.handle), 1.0);
-  test::Scene fresh(device.handle, wrung, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  EXPECT_EQ(tree_growth(rebuilt.get()), 1.0);
+  test::Scene fresh(device.get(), wrung, kBoth | MINKQ_SCENE_DROP_INCIDENT);
   for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE}) {
     const Pairs expected = fresh.query(MINKQ_QUERY_VT, mode, r);
     EXPECT_EQ(refit.query(MINKQ_QUERY_VT, mode, r), expected);
@@ -260,13 +260,13 @@ TEST_F(Queries, rebuild_changes_no_pair_and_resets_tree_growth) {
   Mesh flat_big = flat, wrung_big = wrung;
   for (float& x : flat_big.xyz) x *= 1024.0f;
   for (float& x : wrung_big.xyz) x *= 1024.0f;
-  test::Scene big(device.handle, flat_big, kBoth | MINKQ_SCENE_DROP_INCIDENT);
-  ASSERT_EQ(minkq_scene_refit(big.handle, test::host_buffer(wrung_big.xyz.data(), wrung_big.xyz.size() / 3)),
+  test::Scene big(device.get(), flat_big, kBoth | MINKQ_SCENE_DROP_INCIDENT);
+  ASSERT_EQ(minkq_scene_refit(big.get(), test::host_buffer(wrung_big.xyz.data(), wrung_big.xyz.size() / 3)),
             MINKQ_SUCCESS);
-  EXPECT_EQ(tree_growth(big.handle), grown);
+  EXPECT_EQ(tree_growth(big.get()), grown);
   // Back to the build positions: the refit tree is the built one again.
-  ASSERT_EQ(minkq_scene_refit(refit.handle, test::host_buffer(flat.xyz.data(), flat.xyz.size() / 3)), MINKQ_SUCCESS);
-  EXPECT_EQ(tree_growth(refit.handle), 1.0);
+  ASSERT_EQ(minkq_scene_refit(refit.get(), test::host_buffer(flat.xyz.data(), flat.xyz.size() / 3)), MINKQ_SUCCESS);
+  EXPECT_EQ(tree_growth(refit.get()), 1.0);
 }
 
 TEST_F(Queries, strided_vertices_give_the_same_pairs) {
@@ -275,13 +275,13 @@ TEST_F(Queries, strided_vertices_give_the_same_pairs) {
   std::vector<float> padded(nv * 5, -1.0f);
   for (size_t i = 0; i < nv; ++i) std::memcpy(&padded[5 * i + 1], &mesh.xyz[3 * i], 12);
   test::Device device;
-  test::Scene packed(device.handle, mesh, kBoth);
+  test::Scene packed(device.get(), mesh, kBoth);
   minkq_scene_desc desc{};
   desc.flags = kBoth;
   desc.vertices = {padded.data() + 1, 20, nv, MINKQ_MEMORY_HOST};
   desc.triangles = test::host_buffer(mesh.tris.data(), mesh.tris.size() / 3);
   minkq_scene* strided = nullptr;
-  ASSERT_EQ(minkq_scene_create(device.handle, &desc, &strided), MINKQ_SUCCESS) << minkq_last_error_message();
+  ASSERT_EQ(minkq_scene_create(device.get(), &desc, &strided), MINKQ_SUCCESS) << minkq_last_error_message();
   const float r = 0.05f;
   minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, MINKQ_QUERY_DIGEST, r};
   minkq_result* result = nullptr;
@@ -298,7 +298,7 @@ TEST_F(Queries, strided_vertices_give_the_same_pairs) {
 TEST_F(Queries, empty_and_single_element_scenes) {
   test::Device device;
   Mesh empty;
-  test::Scene none(device.handle, empty, kBoth);
+  test::Scene none(device.get(), empty, kBoth);
   EXPECT_TRUE(none.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 1.0f).empty());
   EXPECT_TRUE(none.query(MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, 1.0f).empty());
   Mesh one;
@@ -342,14 +342,14 @@ TEST_F(Queries, vt_and_ee_in_one_call_give_what_each_gives_alone) {
   const Mesh soup = reference::random_soup(800, seed, 0.1), sheet = reference::twisted_sheet(24, 3.0);
   for (const auto& [mesh, flags] : {std::pair{&soup, kBoth}, std::pair{&sheet, kBoth | MINKQ_SCENE_DROP_INCIDENT}}) {
     test::Device device;
-    test::Scene scene(device.handle, *mesh, flags);
+    test::Scene scene(device.get(), *mesh, flags);
     const double edge = reference::mean_edge_length(*mesh);
     const float vt_r = float(0.5 * edge), ee_r = float(0.25 * edge);  // unequal: a mix-up shows
     auto alone = [&](const minkq_query_desc& q) {
       QueryOutput out{};
-      out.status = minkq_scene_query(scene.handle, &q, nullptr, 0, MINKQ_MEMORY_HOST, &out.info);
+      out.status = minkq_scene_query(scene.get(), &q, nullptr, 0, MINKQ_MEMORY_HOST, &out.info);
       out.pairs.resize(2 * out.info.count);
-      out.status = minkq_scene_query(scene.handle, &q, out.pairs.data(), out.info.count, MINKQ_MEMORY_HOST, &out.info);
+      out.status = minkq_scene_query(scene.get(), &q, out.pairs.data(), out.info.count, MINKQ_MEMORY_HOST, &out.info);
       return out;
     };
     for (minkq_mode vt_mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
@@ -369,7 +369,7 @@ TEST_F(Queries, vt_and_ee_in_one_call_give_what_each_gives_alone) {
             vt_fused.pairs.resize(vt_alone.pairs.size());
             ee_fused.pairs.resize(ee_alone.pairs.size());
             vt_fused.status = ee_fused.status = minkq_scene_query_vt_ee(
-                scene.handle, &vt, &ee, vt_fused.pairs.data(), vt_alone.info.count, ee_fused.pairs.data(),
+                scene.get(), &vt, &ee, vt_fused.pairs.data(), vt_alone.info.count, ee_fused.pairs.data(),
                 ee_alone.info.count, MINKQ_MEMORY_HOST, &vt_fused.info, &ee_fused.info);
             expect_same_output(vt_alone, vt_fused, vt_flags, what + " (VT)");
             expect_same_output(ee_alone, ee_fused, ee_flags, what + " (EE)");
@@ -382,7 +382,7 @@ TEST_F(Queries, vt_and_ee_in_one_call_give_what_each_gives_alone) {
 TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
   const Mesh mesh = reference::random_soup(500, seed, 0.1);
   test::Device device;
-  test::Scene scene(device.handle, mesh, kBoth);
+  test::Scene scene(device.get(), mesh, kBoth);
   const float r = float(0.5 * reference::mean_edge_length(mesh));
   const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, MINKQ_QUERY_DIGEST, r};
   const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, r};
@@ -393,7 +393,7 @@ TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
   std::vector<int32_t> vt_pairs(2 * vt_all.size()), ee_pairs(2 * ee_all.size() + 8, -77);
   minkq_query_info vt_info{}, ee_info{};
   const size_t ee_capacity = ee_all.size() - 1;
-  EXPECT_EQ(minkq_scene_query_vt_ee(scene.handle, &vt, &ee, vt_pairs.data(), vt_all.size(), ee_pairs.data(),
+  EXPECT_EQ(minkq_scene_query_vt_ee(scene.get(), &vt, &ee, vt_pairs.data(), vt_all.size(), ee_pairs.data(),
                                     ee_capacity, MINKQ_MEMORY_HOST, &vt_info, &ee_info),
             MINKQ_ERROR_CAPACITY);
   const std::string message = minkq_last_error_message();
@@ -404,7 +404,7 @@ TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
   for (size_t i = 0; i < vt_all.size(); ++i) ASSERT_EQ(vt_all[i], std::make_pair(vt_pairs[2 * i], vt_pairs[2 * i + 1]));
   for (size_t i = 2 * ee_capacity; i < ee_pairs.size(); ++i) ASSERT_EQ(ee_pairs[i], -77) << "written past the buffer";
   // VT short too: the message names VT first.
-  EXPECT_EQ(minkq_scene_query_vt_ee(scene.handle, &vt, &ee, nullptr, 0, nullptr, 0, MINKQ_MEMORY_HOST, &vt_info,
+  EXPECT_EQ(minkq_scene_query_vt_ee(scene.get(), &vt, &ee, nullptr, 0, nullptr, 0, MINKQ_MEMORY_HOST, &vt_info,
                                     &ee_info),
             MINKQ_ERROR_CAPACITY);
   EXPECT_EQ(std::string(minkq_last_error_message()).rfind("VT: ", 0), 0u) << minkq_last_error_message();
@@ -415,7 +415,7 @@ TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
   ASSERT_EQ(minkq_result_create(&vt_result), MINKQ_SUCCESS);
   ASSERT_EQ(minkq_result_create(&ee_result), MINKQ_SUCCESS);
   for (int round = 0; round < 2; ++round) {  // grows both, then reuses them
-    ASSERT_EQ(minkq_scene_query_vt_ee_result(scene.handle, &vt, &ee, vt_result, ee_result), MINKQ_SUCCESS)
+    ASSERT_EQ(minkq_scene_query_vt_ee_result(scene.get(), &vt, &ee, vt_result, ee_result), MINKQ_SUCCESS)
         << minkq_last_error_message();
     ASSERT_EQ(minkq_result_count(vt_result), vt_all.size());
     ASSERT_EQ(minkq_result_count(ee_result), ee_all.size());
@@ -423,7 +423,7 @@ TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
     const int32_t* ee_got = minkq_result_pairs(ee_result);
     for (size_t i = 0; i < ee_all.size(); ++i) ASSERT_EQ(ee_all[i], std::make_pair(ee_got[2 * i], ee_got[2 * i + 1]));
   }
-  EXPECT_EQ(minkq_scene_query_vt_ee_result(scene.handle, &vt, &ee, vt_result, vt_result), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_query_vt_ee_result(scene.get(), &vt, &ee, vt_result, vt_result), MINKQ_ERROR_INVALID_ARGUMENT);
   minkq_result_release(vt_result);
   minkq_result_release(ee_result);
 }

@@ -1,7 +1,7 @@
 // minkq: the command-line tool. `demo` measures every query mode on a built-in scene against
 // the reference oracle; `query` runs one mode on a mesh file and prints comparable digests.
 #include "minkq.h"
-#include "minkq_handles.hpp"
+#include "minkq.hpp"
 #include "minkq_reference.h"
 
 #include <algorithm>
@@ -58,7 +58,7 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Owning handles, check(), open_device() and new_result() (capi/minkq_handles.hpp).
+// Owning handles, check(), open_device(), new_result() and new_mesh_scene() (capi/minkq.hpp).
 using namespace minkq::cxx;
 
 // "--name value" or "--name=value" options, and "--name" switches, after the positional
@@ -112,14 +112,7 @@ double parse_number(const std::string& option, const std::string& text) {
 
 // A VT + EE scene with incident pairs dropped; edges are derived by the library.
 Scene make_scene(minkq_device* device, const ref::Mesh& m) {
-  minkq_scene_desc desc{};
-  desc.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
-  desc.vertices = {m.xyz.data(), 3 * sizeof(float), m.vertex_count(), MINKQ_MEMORY_HOST};
-  desc.triangles = {m.tris.data(), 3 * sizeof(int32_t), m.triangle_count(), MINKQ_MEMORY_HOST};
-  desc.edges = {nullptr, 0, 0, MINKQ_MEMORY_HOST};
-  minkq_scene* s = nullptr;
-  check(minkq_scene_create(device, &desc, &s), "minkq_scene_create");
-  return Scene(s);
+  return new_mesh_scene(device, m.xyz.data(), m.vertex_count(), m.tris.data(), m.triangle_count());
 }
 
 ref::Pairs result_pairs(const minkq_result* r) {

@@ -2,7 +2,7 @@
 // tests (tests/test_fuzz_regressions.cpp): every mode through the C API, against
 //   - the mode's definition applied to every primitive (brute force, minkq's own shape tests),
 //   - an independent traversal computing the same definition (the Embree reference, fuzz only),
-//   - the long-double contact oracle of core/reference (zero false negatives, leaf-exact
+//   - the long-double contact oracle of testing/oracle (zero false negatives, leaf-exact
 //     extras within r + 2^-19 * S),
 //   - the containment chain, the pair-buffer contract (canonical order, digest, no duplicates,
 //     nothing written past the count) and refit == fresh build,
@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "minkq.h"
+#include "minkq.hpp"
 #include "minkq/queries.h"
 #include "minkq_reference.h"
 
@@ -438,22 +439,26 @@ inline LD pair_scale(const double (*points)[3], int n) {
   return s;
 }
 
-// Leaf-exact pairs beyond the true contacts must lie within r + 2^-19 * S.
+// Leaf-exact pairs beyond the true contacts must lie within r + 2^-19 * S: whether the extra
+// (a, b), at oracle distance d between its points p, does; a failure is reported.
+inline bool extra_within_bound(Report& report, int32_t a, int32_t b, LD d, const double (*p)[3], float r,
+                               const std::string& what) {
+  const LD bound = LD(r) + std::ldexp(pair_scale(p, 4), -19);
+  if (d <= bound) return true;
+  char text[160];
+  std::snprintf(text, sizeof text, ": leaf-exact extra (%d,%d) at distance %.9Lg beyond r + 2^-19 S = %.9Lg", a, b, d,
+                bound);
+  report.fail(what + text);
+  return false;
+}
+
 inline void check_vt_extras(Report& report, const Pairs& extras, const std::vector<float>& xyz,
                             const std::vector<int32_t>& tris, float r, const std::string& what) {
   for (const auto& [v, t] : extras) {
     double p[4][3];
     point_of(xyz, v, p[0]);
     for (int k = 0; k < 3; ++k) point_of(xyz, tris[3 * size_t(t) + k], p[k + 1]);
-    const LD d = reference::point_triangle_distance(p[0], p[1], p[2], p[3]);
-    const LD bound = LD(r) + std::ldexp(pair_scale(p, 4), -19);
-    if (!(d <= bound)) {
-      char text[160];
-      std::snprintf(text, sizeof text, ": leaf-exact extra (%d,%d) at distance %.9Lg beyond r + 2^-19 S = %.9Lg", v, t, d,
-                    bound);
-      report.fail(what + text);
-      return;
-    }
+    if (!extra_within_bound(report, v, t, reference::point_triangle_distance(p[0], p[1], p[2], p[3]), p, r, what)) return;
   }
 }
 
@@ -465,15 +470,8 @@ inline void check_ee_extras(Report& report, const Pairs& extras, const std::vect
     point_of(xyz, edges[2 * size_t(e) + 1], p[1]);
     point_of(xyz, edges[2 * size_t(f)], p[2]);
     point_of(xyz, edges[2 * size_t(f) + 1], p[3]);
-    const LD d = reference::segment_segment_distance(p[0], p[1], p[2], p[3]);
-    const LD bound = LD(r) + std::ldexp(pair_scale(p, 4), -19);
-    if (!(d <= bound)) {
-      char text[160];
-      std::snprintf(text, sizeof text, ": leaf-exact extra (%d,%d) at distance %.9Lg beyond r + 2^-19 S = %.9Lg", e, f, d,
-                    bound);
-      report.fail(what + text);
+    if (!extra_within_bound(report, e, f, reference::segment_segment_distance(p[0], p[1], p[2], p[3]), p, r, what))
       return;
-    }
   }
 }
 
@@ -611,84 +609,86 @@ inline MeshSets check_mesh_positions(minkq_scene* scene, const MeshScene& s, con
 }
 
 // The whole mesh-scene check on devices[0] (the CPU), then the same sets on every further device.
-inline void check_mesh_scene(const std::vector<minkq_device*>& devices, const MeshScene& s,
+inline void check_mesh_scene(const std::vector<cxx::Device>& devices, const MeshScene& s,
                              IndependentSets* independent, Report& report, Stats& stats) {
   const uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | (s.drop_incident ? uint32_t(MINKQ_SCENE_DROP_INCIDENT) : 0u);
-  auto create = [&](minkq_device* device, const std::vector<float>& xyz, minkq_scene** out) {
+  // A scene of the given positions on a device; empty (and reported) where creation fails.
+  auto create = [&](const cxx::Device& device, const std::vector<float>& xyz) {
     minkq_scene_desc desc{};
     desc.flags = flags;
     desc.vertices = {xyz.empty() ? nullptr : xyz.data(), 0, xyz.size() / 3, MINKQ_MEMORY_HOST};
     desc.triangles = {s.tris.empty() ? nullptr : s.tris.data(), 0, s.tris.size() / 3, MINKQ_MEMORY_HOST};
     desc.edges = {s.edges.empty() ? nullptr : s.edges.data(), 0, s.edges.size() / 2, MINKQ_MEMORY_HOST};
-    const minkq_status status = minkq_scene_create(device, &desc, out);
-    if (status != MINKQ_SUCCESS) report.fail(std::string("minkq_scene_create on ") + minkq_device_name(device) + ": " +
-                                             status_text(status));
-    return status == MINKQ_SUCCESS;
+    minkq_scene* out = nullptr;
+    const minkq_status status = minkq_scene_create(device.get(), &desc, &out);
+    if (status != MINKQ_SUCCESS)
+      report.fail(std::string("minkq_scene_create on ") + minkq_device_name(device.get()) + ": " + status_text(status));
+    return cxx::Scene(out);
   };
-  minkq_scene* scene = nullptr;
-  if (!create(devices[0], s.xyz, &scene)) return;
-  minkq_result* result = nullptr;
-  if (minkq_result_create(&result) != MINKQ_SUCCESS) report.fail("minkq_result_create");
+  const cxx::Scene scene = create(devices[0], s.xyz);
+  if (!scene) return;
+  minkq_result* raw_result = nullptr;
+  if (minkq_result_create(&raw_result) != MINKQ_SUCCESS) report.fail("minkq_result_create");
+  const cxx::Result result(raw_result);
 
   // The edge numbering: given edges as they are, else every distinct triangle edge, sorted.
-  std::vector<int32_t> edges(2 * minkq_scene_edge_count(scene));
-  if (minkq_scene_edges(scene, edges.data(), edges.size() / 2) != MINKQ_SUCCESS) report.fail("minkq_scene_edges");
+  std::vector<int32_t> edges(2 * minkq_scene_edge_count(scene.get()));
+  if (minkq_scene_edges(scene.get(), edges.data(), edges.size() / 2) != MINKQ_SUCCESS) report.fail("minkq_scene_edges");
   if (edges != (s.edges.empty() ? reference::derive_edges(s.tris) : s.edges))
     report.fail("minkq_scene_edges: not the documented edge list");
 
-  const MeshSets before = check_mesh_positions(scene, s, s.xyz, edges, independent, false, report, stats, "", result);
+  const MeshSets before =
+      check_mesh_positions(scene.get(), s, s.xyz, edges, independent, false, report, stats, "", result.get());
   MeshSets after;
   const bool refit = !s.moved.empty();
   if (refit) {
     const minkq_status status =
-        minkq_scene_refit(scene, {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
+        minkq_scene_refit(scene.get(), {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
     if (status != MINKQ_SUCCESS) {
       report.fail("minkq_scene_refit: " + status_text(status));
     } else {
-      after = check_mesh_positions(scene, s, s.moved, edges, independent, true, report, stats, "[refit]", result);
+      after = check_mesh_positions(scene.get(), s, s.moved, edges, independent, true, report, stats, "[refit]",
+                                   result.get());
       double growth = -1.0;
-      if (minkq_scene_tree_growth(scene, &growth) != MINKQ_SUCCESS || !(growth >= 0.0))
+      if (minkq_scene_tree_growth(scene.get(), &growth) != MINKQ_SUCCESS || !(growth >= 0.0))
         report.fail("minkq_scene_tree_growth after a refit: " + std::to_string(growth));
       // A refitted tree keeps its old topology but must give the sets of a fresh build, and so
       // must a scene built at the old positions and rebuilt at the new (all are compared with
       // the definition above, so this runs on one refit in four for each).
       const uint32_t twin = (s.variant >> 27) % 4;
-      minkq_scene* fresh = nullptr;
-      if (twin < 2 && create(devices[0], twin == 0 ? s.moved : s.xyz, &fresh)) {
+      const cxx::Scene fresh = twin < 2 ? create(devices[0], twin == 0 ? s.moved : s.xyz) : cxx::Scene();
+      if (fresh) {
         const char* label = twin == 0 ? "[refit] vs fresh build" : "[refit] vs rebuild";
         if (twin == 1) {
           const minkq_status rebuilt =
-              minkq_scene_rebuild(fresh, {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
+              minkq_scene_rebuild(fresh.get(), {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
           if (rebuilt != MINKQ_SUCCESS) report.fail("minkq_scene_rebuild: " + status_text(rebuilt));
-          if (minkq_scene_tree_growth(fresh, &growth) != MINKQ_SUCCESS || growth != 1.0)
+          if (minkq_scene_tree_growth(fresh.get(), &growth) != MINKQ_SUCCESS || growth != 1.0)
             report.fail("minkq_scene_tree_growth after a rebuild: " + std::to_string(growth) + ", not 1");
         }
         Stats scratch;
         const MeshGeometry g(s.moved, s.tris, edges);
-        compare_sets(report, after, minkq_mesh_sets(fresh, g, s.r, ~s.variant, report, scratch, label, nullptr), label,
-                     nullptr);
-        minkq_scene_release(fresh);
+        compare_sets(report, after, minkq_mesh_sets(fresh.get(), g, s.r, ~s.variant, report, scratch, label, nullptr),
+                     label, nullptr);
       }
       stats.refit_scenes++;
     }
   }
   // Every further device gives exactly the CPU's sets (the backends are bit-identical).
   for (size_t d = 1; d < devices.size(); ++d) {
-    minkq_scene* other = nullptr;
-    const std::string name = minkq_device_name(devices[d]);
-    if (!create(devices[d], s.xyz, &other)) continue;
+    const std::string name = minkq_device_name(devices[d].get());
+    const cxx::Scene other = create(devices[d], s.xyz);
+    if (!other) continue;
     Stats scratch;
-    compare_sets(report, minkq_mesh_sets(other, MeshGeometry(s.xyz, s.tris, edges), s.r, s.variant, report, scratch,
-                                         name, nullptr),
+    compare_sets(report, minkq_mesh_sets(other.get(), MeshGeometry(s.xyz, s.tris, edges), s.r, s.variant, report,
+                                         scratch, name, nullptr),
                  before, name + " vs cpu", nullptr);
-    if (refit && minkq_scene_refit(other, {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST}) == MINKQ_SUCCESS)
-      compare_sets(report, minkq_mesh_sets(other, MeshGeometry(s.moved, s.tris, edges), s.r, s.variant, report,
+    if (refit &&
+        minkq_scene_refit(other.get(), {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST}) == MINKQ_SUCCESS)
+      compare_sets(report, minkq_mesh_sets(other.get(), MeshGeometry(s.moved, s.tris, edges), s.r, s.variant, report,
                                            scratch, name + " [refit]", nullptr),
                    after, name + " [refit] vs cpu", nullptr);
-    minkq_scene_release(other);
   }
-  minkq_result_release(result);
-  minkq_scene_release(scene);
   stats.mesh_scenes++;
 }
 
@@ -783,67 +783,66 @@ inline void check_box_positions(minkq_bvh* bvh, const BoxScene& s, const std::ve
   if (out) *out = got;
 }
 
-inline void check_box_scene(const std::vector<minkq_device*>& devices, const BoxScene& s, IndependentSets* independent,
+inline void check_box_scene(const std::vector<cxx::Device>& devices, const BoxScene& s, IndependentSets* independent,
                             Report& report, Stats& stats) {
-  auto create = [&](minkq_device* device, minkq_bvh** out) {
-    const minkq_status status = minkq_bvh_create(device, {s.boxes.data(), 0, s.boxes.size() / 6, MINKQ_MEMORY_HOST}, out);
+  // A BVH of the scene's boxes on a device; empty (and reported) where creation fails.
+  auto create = [&](const cxx::Device& device) {
+    minkq_bvh* out = nullptr;
+    const minkq_status status =
+        minkq_bvh_create(device.get(), {s.boxes.data(), 0, s.boxes.size() / 6, MINKQ_MEMORY_HOST}, &out);
     if (status != MINKQ_SUCCESS) report.fail("minkq_bvh_create: " + status_text(status));
-    return status == MINKQ_SUCCESS;
+    return cxx::Bvh(out);
   };
-  minkq_bvh* bvh = nullptr;
-  if (!create(devices[0], &bvh)) return;
+  const cxx::Bvh bvh = create(devices[0]);
+  if (!bvh) return;
   BoxSets before, after;
-  check_box_positions(bvh, s, s.boxes, independent, false, report, stats, "", &before);
+  check_box_positions(bvh.get(), s, s.boxes, independent, false, report, stats, "", &before);
   const bool refit = !s.moved.empty();
   if (refit) {
     // Every check of the moved boxes, after a refit or (one scene in four) a rebuild.
     const bool rebuild = (s.variant >> 29) % 4 == 0;
     const minkq_buffer moved{s.moved.data(), 0, s.moved.size() / 6, MINKQ_MEMORY_HOST};
-    const minkq_status status = rebuild ? minkq_bvh_rebuild(bvh, moved) : minkq_bvh_refit(bvh, moved);
+    const minkq_status status = rebuild ? minkq_bvh_rebuild(bvh.get(), moved) : minkq_bvh_refit(bvh.get(), moved);
     double growth = -1.0;
     if (status != MINKQ_SUCCESS) {
       report.fail(std::string(rebuild ? "minkq_bvh_rebuild: " : "minkq_bvh_refit: ") + status_text(status));
     } else {
-      check_box_positions(bvh, s, s.moved, independent, true, report, stats, rebuild ? "[rebuild]" : "[refit]", &after);
-      if (minkq_bvh_tree_growth(bvh, &growth) != MINKQ_SUCCESS || !(rebuild ? growth == 1.0 : growth >= 0.0))
+      check_box_positions(bvh.get(), s, s.moved, independent, true, report, stats, rebuild ? "[rebuild]" : "[refit]",
+                          &after);
+      if (minkq_bvh_tree_growth(bvh.get(), &growth) != MINKQ_SUCCESS || !(rebuild ? growth == 1.0 : growth >= 0.0))
         report.fail("minkq_bvh_tree_growth: " + std::to_string(growth));
     }
   }
   for (size_t d = 1; d < devices.size(); ++d) {
-    minkq_bvh* other = nullptr;
-    const std::string name = minkq_device_name(devices[d]);
-    if (!create(devices[d], &other)) continue;
+    const std::string name = minkq_device_name(devices[d].get());
+    const cxx::Bvh other = create(devices[d]);
+    if (!other) continue;
     Stats scratch;
-    const BoxSets sets = minkq_box_sets(other, s, s.variant, report, scratch, name, int32_t(s.boxes.size() / 6));
+    const BoxSets sets = minkq_box_sets(other.get(), s, s.variant, report, scratch, name, int32_t(s.boxes.size() / 6));
     for (int mode = 0; mode < 4; ++mode)
       expect_equal(report, sets.by_mode[mode], before.by_mode[mode], name + " vs cpu " + mode_name(mode));
-    if (refit && minkq_bvh_refit(other, {s.moved.data(), 0, s.moved.size() / 6, MINKQ_MEMORY_HOST}) == MINKQ_SUCCESS) {
-      const BoxSets moved = minkq_box_sets(other, s, s.variant, report, scratch, name, int32_t(s.boxes.size() / 6));
+    if (refit &&
+        minkq_bvh_refit(other.get(), {s.moved.data(), 0, s.moved.size() / 6, MINKQ_MEMORY_HOST}) == MINKQ_SUCCESS) {
+      const BoxSets moved = minkq_box_sets(other.get(), s, s.variant, report, scratch, name, int32_t(s.boxes.size() / 6));
       for (int mode = 0; mode < 4; ++mode)
         expect_equal(report, moved.by_mode[mode], after.by_mode[mode], name + " [refit] vs cpu " + mode_name(mode));
     }
-    minkq_bvh_release(other);
   }
-  minkq_bvh_release(bvh);
   stats.box_scenes++;
 }
 
-// The CPU device plus, where CUDA devices exist, each of them. Release with release_devices.
-inline std::vector<minkq_device*> open_devices() {
-  std::vector<minkq_device*> devices;
+// The CPU device plus, where CUDA devices exist, each of them; empty if the CPU one fails.
+inline std::vector<cxx::Device> open_devices() {
+  std::vector<cxx::Device> devices;
   minkq_device* cpu = nullptr;
   if (minkq_device_create("cpu", &cpu) != MINKQ_SUCCESS) return devices;
-  devices.push_back(cpu);
+  devices.emplace_back(cpu);
   for (int i = 0; i < minkq_cuda_device_count(); ++i) {
     minkq_device* gpu = nullptr;
     const std::string spec = "cuda:" + std::to_string(i);
-    if (minkq_device_create(spec.c_str(), &gpu) == MINKQ_SUCCESS) devices.push_back(gpu);
+    if (minkq_device_create(spec.c_str(), &gpu) == MINKQ_SUCCESS) devices.emplace_back(gpu);
   }
   return devices;
-}
-inline void release_devices(std::vector<minkq_device*>& devices) {
-  for (minkq_device* d : devices) minkq_device_release(d);
-  devices.clear();
 }
 
 }  // namespace minkq::fuzz
