@@ -2,9 +2,10 @@
  * minkq: which pairs of mesh elements may lie within distance r of each other?
  *
  * A stable C99 ABI over the C++/CUDA core. Objects are opaque handles created and released by
- * the library; every object belongs to a device. Functions return a minkq_status; on failure
- * minkq_last_error_message() holds a message naming the offending element. Arrays are passed
- * as minkq_buffer: pointer, byte stride, element count and memory kind (host or device).
+ * the library; scenes and bvhs belong to a device. Functions that can fail return a
+ * minkq_status; on failure minkq_last_error_message() holds a message naming the offending
+ * argument or element. Arrays are passed as minkq_buffer: pointer, byte stride, element count
+ * and memory kind (host or device). A call that rejects its arguments changes nothing.
  *
  * Guarantee: every pair of elements within r is reported (zero false negatives), in every
  * mode, for every finite input; finer modes report subsets of coarser ones:
@@ -19,6 +20,13 @@
  * scenes and bvhs frees temporary device memory, which waits for all work on the GPU: such
  * calls are safe from several threads but do not overlap other threads' GPU work. Each call
  * selects its device for its duration and gives the calling thread's current device back.
+ *
+ * Memory: the library copies what it keeps (vertices, topology, boxes); a caller's arrays are
+ * read during the call only. On CUDA, device arrays are read and written in place on the
+ * calling thread's per-thread default stream, which each call synchronises before returning.
+ *
+ * No measured figures here: what the modes, flags and rebuild advice cost and save on the
+ * benchmark scenes is in bench/README.md.
  */
 #ifndef MINKQ_H
 #define MINKQ_H
@@ -37,9 +45,12 @@ extern "C" {
 /* Bumped whenever a struct layout, enum value or function signature changes. */
 #define MINKQ_ABI_VERSION 2
 
-/* The library's run-time version as MAJOR * 10000 + MINOR * 100 + PATCH. */
+/* Returns the version of the library loaded at run time, MAJOR * 10000 + MINOR * 100 + PATCH.
+ * Never fails; any thread. */
 uint32_t minkq_version(void);
-/* The run-time ABI version; compare with MINKQ_ABI_VERSION to detect a mismatched library. */
+/* Returns the ABI version of the library loaded at run time. A program compares it with
+ * MINKQ_ABI_VERSION, the version it was compiled against, to detect a mismatched library.
+ * Never fails; any thread. */
 uint32_t minkq_abi_version(void);
 
 /* ---- Errors -------------------------------------------------------------------------------- */
@@ -56,10 +67,13 @@ typedef enum minkq_status {
   MINKQ_ERROR_INTERNAL = 9
 } minkq_status;
 
-/* The message of the last failed call on this thread ("" if none). Valid until the next minkq
- * call on this thread. Thread safety: per-thread. */
+/* Returns the message of the last failed call on the calling thread, naming the argument or
+ * element at fault ("vertex 12 has a non-finite coordinate (nan, 0, 1)"); "" when that
+ * thread's last status-returning call succeeded. Owned by the library, valid until the next
+ * minkq call on this thread. Thread safety: each thread has its own message. */
 const char* minkq_last_error_message(void);
-/* A static name for a status ("MINKQ_ERROR_CAPACITY"). */
+/* Returns a static name for a status ("MINKQ_ERROR_CAPACITY"), or "unknown minkq_status" for a
+ * value outside the enum. Never fails; any thread. */
 const char* minkq_status_name(minkq_status status);
 
 /* ---- Buffers ------------------------------------------------------------------------------- */
@@ -85,16 +99,22 @@ typedef enum minkq_backend {
   MINKQ_BACKEND_CUDA = 1
 } minkq_backend;
 
-/* Creates a device from "cpu", "cuda" (device 0), "cuda:N" or "auto" (CUDA if a GPU is usable,
- * else CPU). Errors: INVALID_ARGUMENT for an unknown spec, UNSUPPORTED when CUDA is asked for
- * where minkq was built without it or no such GPU exists. Release with minkq_device_release. */
+/* Creates a device from a spec: "cpu" (all cores, through a thread pool), "cuda" (GPU 0),
+ * "cuda:N" or "auto" (GPU 0 when minkq_cuda_device_count() > 0, else the CPU), and stores it
+ * in *out_device (NULL on failure). Errors: INVALID_ARGUMENT (NULL argument, unknown or
+ * malformed spec), UNSUPPORTED (CUDA asked for where minkq was built without it, or no such
+ * GPU), DEVICE (a CUDA runtime call failed). Release with minkq_device_release. */
 minkq_status minkq_device_create(const char* spec, minkq_device** out_device);
-/* Releases a device; every scene, bvh and result made on it must be released first. NULL ok. */
+/* Releases a device. Every scene and bvh created on it must be released first. NULL is
+ * ignored. */
 void minkq_device_release(minkq_device* device);
+/* Returns the device's backend (MINKQ_BACKEND_CPU for NULL). */
 minkq_backend minkq_device_backend(const minkq_device* device);
-/* A static description, e.g. "cpu (8 threads)" or "cuda:0 (NVIDIA H100 80GB HBM3)". */
+/* Returns a description such as "cpu (8 threads)" or "cuda:0 (NVIDIA H100 80GB HBM3)", owned
+ * by the device and valid until it is released ("" for NULL). */
 const char* minkq_device_name(const minkq_device* device);
-/* Number of usable CUDA devices (0 where built without CUDA or no GPU is present). */
+/* Returns the number of usable CUDA devices: 0 where minkq was built without CUDA or no GPU is
+ * present. Never fails; any thread. */
 int minkq_cuda_device_count(void);
 
 /* ---- Mesh scenes: VT and EE queries ------------------------------------------------------- */
@@ -115,38 +135,49 @@ typedef struct minkq_scene_desc {
   minkq_buffer edges;
 } minkq_scene_desc;
 
-/* Copies the mesh to the device and builds the trees the flags ask for (a VT-only scene builds
- * no edge tree). Errors: NON_FINITE ("vertex 12 has a non-finite coordinate"),
- * INDEX_OUT_OF_RANGE, SIZE_OVERFLOW, INVALID_ARGUMENT (null pointer with non-zero count, stride
- * too small, no query kind, device memory on a CPU device). Release with minkq_scene_release. */
+/* Creates a scene on a device: copies the mesh (host or, on a CUDA device, device memory),
+ * derives the edges when desc->edges is empty and the flags ask for EE, builds the trees the
+ * flags ask for (a VT-only scene builds no edge tree) and stores the scene in *out_scene (NULL
+ * on failure). Errors: INVALID_ARGUMENT (NULL pointer, a NULL buffer with a non-zero count,
+ * unknown flag bits, neither VT nor EE, a stride under the element's size, device memory on a
+ * CPU device), NON_FINITE ("vertex 12 has a non-finite coordinate (...)"), INDEX_OUT_OF_RANGE
+ * ("triangle 3 references vertex 9 but the scene has 8 vertices"), SIZE_OVERFLOW (over
+ * 2^31 - 2 elements), OUT_OF_MEMORY, DEVICE. The scene holds its device, which must outlive
+ * it. Release with minkq_scene_release. */
 minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* desc, minkq_scene** out_scene);
+/* Releases a scene and its trees. NULL is ignored. */
 void minkq_scene_release(minkq_scene* scene);
-/* Moves the vertices (same count, any stride/memory) and refits the trees in place. On error
- * the scene keeps its previous positions. A refit keeps the grouping of the last build: after
- * large deformations its boxes overlap more and queries visit more nodes (see
- * minkq_scene_tree_growth); the pairs found never change. */
+/* Moves the vertices (the scene's vertex count, any stride, host or device memory) and refits
+ * the trees in place: cheaper than a rebuild, with the same pairs. A refit keeps the grouping of
+ * the last build, so after large deformations its boxes overlap more and queries visit more
+ * nodes (see minkq_scene_tree_growth). Errors: INVALID_ARGUMENT (NULL scene, another vertex
+ * count, a bad buffer as at creation), NON_FINITE; the scene then keeps its positions. */
 minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices);
-/* Moves the vertices like minkq_scene_refit and builds the trees afresh for the new positions
- * (the trees minkq_scene_create builds there; topology and edge numbering are kept). Same
- * errors as minkq_scene_refit; on error the scene keeps its positions and trees. */
+/* Moves the vertices like minkq_scene_refit and builds the trees afresh for the new positions:
+ * the trees minkq_scene_create would build there, at about its cost; topology and edge
+ * numbering are kept. Same errors as minkq_scene_refit; the scene then keeps its positions and
+ * trees. */
 minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
-/* How far the refits since the last build have stretched the trees: their area cost now over
- * its value right after that build, for the larger of the scene's trees; 1 after a build. The
- * area cost (the surface areas of every node's child boxes, summed, over the root box's) is
- * scale-free and grows with the nodes a query visits. It sees boxes that stretch, not a mesh
- * that folds or flattens into new neighbours: on the benchmark scenes a sheet wrung by three
- * turns after its build read 2.1, and a rebuild cut its nodes per VT query 1.6x, while a cloth
- * pressed flat read 0.72 and a rebuild still cut them 1.5x (bench/results/trees.md). Rebuild
- * when it passes about 1.5, and every so many steps when the mesh changes shape a lot; a
- * rebuild costs about what the build at creation did (several refits). A tree whose root box
- * has no area (every element on one axis-parallel line, or at one point) costs 0: growth 1
- * while it stays so, infinity once it gains area. */
+/* Writes to *out_growth how far the refits since the last build have stretched the trees: their
+ * area cost now over its value right after that build, for the larger of the scene's trees;
+ * 1 after a build. The area cost (the surface areas of every node's child boxes, summed, over
+ * the root box's) is scale-free and grows with the nodes a query visits. It sees boxes that
+ * stretch, not a mesh that folds or flattens into new neighbours (where a rebuild can still
+ * help). Rebuild when it passes about 1.5, and every so many steps when the mesh changes shape
+ * a lot: that advice, and what rebuilds bought on the benchmark scenes, are measured in
+ * bench/README.md (trees.md, policies.md). A tree whose root box has no area (every element on
+ * one axis-parallel line, or at one point) costs 0: growth 1 while it stays so, infinity once
+ * it gains area. Errors: INVALID_ARGUMENT (NULL scene or out_growth). */
 minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
+/* Return the scene's vertex, triangle and edge counts (edges: the derived ones when the scene
+ * derived them); 0 for NULL. */
 size_t minkq_scene_vertex_count(const minkq_scene* scene);
 size_t minkq_scene_triangle_count(const minkq_scene* scene);
 size_t minkq_scene_edge_count(const minkq_scene* scene);
-/* Copies the scene's edges (2 int32 each, host memory) into out_edges, which holds
- * 2 * capacity int32. CAPACITY if the scene has more edges than capacity. */
+/* Copies the scene's edges, in the numbering EE pairs use (2 int32 each, host memory), into
+ * out_edges, which holds 2 * capacity int32. Errors: INVALID_ARGUMENT (NULL scene, NULL
+ * out_edges with a non-zero capacity), CAPACITY when the scene has more edges than capacity
+ * (nothing is written; minkq_scene_edge_count gives the number). */
 minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, size_t capacity);
 
 /* ---- Queries ------------------------------------------------------------------------------- */
@@ -168,8 +199,9 @@ typedef enum minkq_mode {
 
 typedef enum minkq_query_flags {
   MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts.
-                                 Fastest with MINKQ_MODE_BOX: the finer node tests cost more
-                                 than they save once the leaves test distances */
+                                 Meant for MINKQ_MODE_BOX: once the leaves test distances, the
+                                 finer node tests cost more than they save (measured in
+                                 bench/README.md) */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
   MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
   MINKQ_QUERY_STATS = 8       /* count the traversal's work into info->stats (a separately compiled
@@ -198,21 +230,29 @@ typedef struct minkq_query_info {
   minkq_query_stats stats; /* with MINKQ_QUERY_STATS (also when the buffer was too small); else 0 */
 } minkq_query_info;
 
-/* Runs a query and writes pairs (2 int32 each) into out_pairs, which holds 2 * capacity int32
- * in out_memory (device memory on CUDA devices only). If more pairs exist than fit, returns
- * CAPACITY with info->count the exact number needed and writes nothing past the buffer.
- * Leaf-exact pairs lie within r + 2^-19 * S, S the size of the two elements and the distance
- * between them (see core/include/minkq/predicates.h). */
+/* Runs a VT or EE query on a scene and writes its pairs (2 int32 each: (vertex, triangle) for
+ * VT, (e, f) with e < f for EE) into out_pairs, which holds 2 * capacity int32 in out_memory
+ * (device memory on CUDA devices only); CANONICAL sorts them, else their order is unspecified.
+ * *info is zeroed, then gets the exact count, and the digest and stats its flags ask for. If
+ * more pairs exist than fit, returns CAPACITY with info->count the exact number needed and
+ * writes nothing past the buffer: grow it and call again. Leaf-exact pairs lie within
+ * r + 2^-19 * S, S the size of the two elements and the distance between them (see
+ * core/include/minkq/predicates.h). Errors: INVALID_ARGUMENT (NULL scene, query or info;
+ * unknown kind, mode or flag bits; a kind the scene was created without; sphere mode for EE;
+ * a negative radius; a NULL out_pairs with a non-zero capacity; device memory on a CPU
+ * device), NON_FINITE (radius), SIZE_OVERFLOW (capacity), CAPACITY, OUT_OF_MEMORY, DEVICE. */
 minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
                                size_t capacity, minkq_memory out_memory, minkq_query_info* info);
 
 /* A VT query and an EE query of one scene (created with both) in one pass: one parallel loop on
  * the CPU, one kernel launch and one count readback on CUDA, where two minkq_scene_query calls
- * take two of each. vt_query->kind must be MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE;
- * modes, flags and radii are each query's own. Each query's pairs, count, digest and stats are
- * exactly those minkq_scene_query gives it alone. Buffers as minkq_scene_query, both in
- * out_memory: a query whose pairs fit is written in full; if either does not fit, returns
- * CAPACITY (the message names VT or EE) with both infos' counts exact. */
+ * take two of each (what that saves is measured in bench/README.md). vt_query->kind must be
+ * MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE; modes, flags and radii are each query's
+ * own. Each query's pairs, count, digest and stats are exactly those minkq_scene_query gives
+ * it alone. Buffers as minkq_scene_query, both in out_memory: a query whose pairs fit is
+ * written in full; if either does not fit, returns CAPACITY (the message names VT or EE) with
+ * both infos' counts exact. Errors: those of minkq_scene_query for either query, and
+ * INVALID_ARGUMENT when a kind is the wrong one or vt_info and ee_info are the same struct. */
 minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
                                      const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
                                      int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
@@ -221,34 +261,53 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
 /* ---- Results: library-owned, growing pair buffers ------------------------------------------ */
 typedef struct minkq_result minkq_result;
 
+/* Creates an empty result: a host pair buffer that the library owns and grows as queries need,
+ * usable with any scene, and stores it in *out_result. Reusing one result every step keeps its
+ * memory. Errors: INVALID_ARGUMENT (NULL out_result), OUT_OF_MEMORY. Release with
+ * minkq_result_release. */
 minkq_status minkq_result_create(minkq_result** out_result);
+/* Releases a result and its pairs. NULL is ignored. */
 void minkq_result_release(minkq_result* result);
-/* Like minkq_scene_query, into a result that grows as needed (host memory). */
+/* Like minkq_scene_query, into a result (host memory): when its buffer is too small it grows to
+ * the exact count and the query runs again, so the call does not return CAPACITY. On failure
+ * the result holds no pairs. Errors: those of minkq_scene_query, INVALID_ARGUMENT for a NULL
+ * result, OUT_OF_MEMORY when it cannot grow. */
 minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query, minkq_result* result);
-/* Like minkq_scene_query_vt_ee, into two distinct results that grow as needed (host memory). */
+/* Like minkq_scene_query_vt_ee, into two distinct results that grow as needed (host memory), as
+ * minkq_scene_query_result does. INVALID_ARGUMENT for a NULL or shared result. */
 minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_query_desc* vt_query,
                                             const minkq_query_desc* ee_query, minkq_result* vt_result,
                                             minkq_result* ee_result);
+/* Returns the number of pairs of the result's last query (0 after a failed one, or for NULL). */
 uint64_t minkq_result_count(const minkq_result* result);
-/* 2 * count int32, valid until the result is reused or released. */
+/* Returns the result's pairs, 2 * count int32, valid until the result is reused or released
+ * (may be NULL when count is 0). */
 const int32_t* minkq_result_pairs(const minkq_result* result);
+/* Returns the last query's digest, with MINKQ_QUERY_DIGEST (else 0). */
 uint64_t minkq_result_digest(const minkq_result* result);
-/* The work counts of the last query, with MINKQ_QUERY_STATS (else all 0). */
+/* Returns the work counts of the last query, with MINKQ_QUERY_STATS (else all 0). */
 minkq_query_stats minkq_result_stats(const minkq_result* result);
 
 /* ---- BVH over user boxes ------------------------------------------------------------------- */
 typedef struct minkq_bvh minkq_bvh;
 
-/* Builds a BVH over boxes: 6 floats each (lo x, y, z, hi x, y, z), lo <= hi. Errors: NON_FINITE,
- * INVALID_ARGUMENT ("box 3 has lo > hi"), SIZE_OVERFLOW. Release with minkq_bvh_release. */
+/* Creates a BVH on a device over boxes, 6 floats each (lo x, y, z, hi x, y, z) with lo <= hi on
+ * every axis, in host or (on a CUDA device) device memory; copies them, builds the tree and
+ * stores the bvh in *out_bvh (NULL on failure). Errors: INVALID_ARGUMENT (NULL pointer, a bad
+ * buffer as for scenes, "box 3 has lo > hi"), NON_FINITE, SIZE_OVERFLOW, OUT_OF_MEMORY,
+ * DEVICE. The bvh holds its device, which must outlive it. Release with minkq_bvh_release. */
 minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh);
+/* Releases a bvh and its tree. NULL is ignored. */
 void minkq_bvh_release(minkq_bvh* bvh);
-/* New boxes (same count); refits in place (the tree keeps the grouping of its last build). */
+/* Moves the boxes (the bvh's count, checked as at creation) and refits the tree in place, keeping
+ * the grouping of its last build. Errors: those of minkq_bvh_create, INVALID_ARGUMENT for NULL
+ * or another box count; the bvh then keeps its boxes. */
 minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes);
-/* New boxes (same count); builds the tree afresh, as minkq_bvh_create would. On error the bvh
- * keeps its boxes and tree. */
+/* Moves the boxes like minkq_bvh_refit and builds the tree afresh, as minkq_bvh_create would.
+ * Same errors; the bvh then keeps its boxes and tree. */
 minkq_status minkq_bvh_rebuild(minkq_bvh* bvh, minkq_buffer boxes);
-/* minkq_scene_tree_growth for a bvh. */
+/* minkq_scene_tree_growth for a bvh: its tree's area cost over its value at the last build.
+ * Errors: INVALID_ARGUMENT (NULL bvh or out_growth). */
 minkq_status minkq_bvh_tree_growth(const minkq_bvh* bvh, double* out_growth);
 
 typedef enum minkq_shape {
@@ -266,7 +325,14 @@ typedef struct minkq_bvh_query_desc {
   minkq_buffer second; /* count 0 for spheres */
 } minkq_bvh_query_desc;
 
-/* Pairs (query, box) for every query shape overlapping a box; buffers as minkq_scene_query. */
+/* Runs one query per shape of query->first (and ->second) against a bvh and writes the pairs
+ * (query index, box index) of every query shape within radius of a box (box queries: every
+ * query box overlapping a box) into out_pairs; buffers, info and CAPACITY as
+ * minkq_scene_query. Errors: INVALID_ARGUMENT (NULL bvh, query or info; unknown shape, mode
+ * or flag bits; LEAF_EXACT; sphere mode for capsules; a mode other than box, or a radius
+ * other than 0, for boxes; second not empty for spheres, or not first's count otherwise;
+ * a bad buffer), NON_FINITE (radius, a query point), SIZE_OVERFLOW, CAPACITY, OUT_OF_MEMORY,
+ * DEVICE. */
 minkq_status minkq_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, int32_t* out_pairs,
                              size_t capacity, minkq_memory out_memory, minkq_query_info* info);
 

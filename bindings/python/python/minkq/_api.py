@@ -385,10 +385,11 @@ class Scene(_SizedQueries):
         stretched the trees: their area cost (scale-free; it grows with the nodes a query
         visits) now over its value right after that build, the larger of the scene's two trees.
         1.0 after a build. It sees boxes that stretch, not a mesh folding or flattening into new
-        neighbours: a sheet wrung three turns read 2.1 (a rebuild cut its nodes per VT query
-        1.6x), a cloth pressed flat 0.72 (a rebuild still cut them 1.5x; the C header and
-        ``bench/results/trees.md``). A tree whose elements all lie on one line parallel to an
-        axis (or at one point) has no area: 1.0 while it stays so, ``inf`` once it has any.
+        neighbours (where a rebuild can still help). Rebuild when it passes about 1.5, and every
+        so many steps when the mesh changes shape a lot (the C header; what rebuilds bought on
+        the benchmark scenes is in ``bench/README.md``). A tree whose elements all lie on one
+        line parallel to an axis (or at one point) has no area: 1.0 while it stays so, ``inf``
+        once it has any.
 
         >>> import numpy as np, minkq
         >>> u, v = np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9))
@@ -476,7 +477,7 @@ class Scene(_SizedQueries):
         """The VT and the EE pairs within ``radius`` from one pass (one parallel loop on the CPU,
         one kernel launch and one count readback on CUDA): exactly what ``query("vt", vt_mode,
         ...)`` and ``query("ee", ee_mode, ...)`` return. ``leaf_exact=True`` gives the contacts
-        (fastest with the default box modes). Results as :meth:`query`.
+        (meant for the default box modes: bench/README.md). Results as :meth:`query`.
 
         >>> import numpy as np, minkq
         >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]], np.float32)

@@ -355,8 +355,8 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     radius is reported, however short the edges.
 
     The VT pass runs minkq's ``vt_mode`` node test and the EE pass ``ee_mode``, both with
-    the leaf-exact primitive test; the node test changes the speed, not the pairs (the box
-    test is the fastest way to the contacts: bench/results/contacts.md).
+    the leaf-exact primitive test; the node test changes the speed, not the pairs (box, the
+    default, is the one meant for contacts: bench/README.md).
     """
 
     vt_mode = "box"

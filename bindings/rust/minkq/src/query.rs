@@ -24,7 +24,7 @@ pub enum QueryKind {
 /// The node test, from fast to tight. For every finite input the pairs nest:
 /// true contacts ⊆ `CapsuleExact` ⊆ `CapsuleRay` ⊆ `Box` (EE) and
 /// true contacts ⊆ `Sphere` ⊆ `Box` (VT); [`QueryFlags::LEAF_EXACT`] keeps, of any mode's
-/// pairs, the true contacts (fastest with `Box`). Points are zero-length capsules: for
+/// pairs, the true contacts (use it with `Box`). Points are zero-length capsules: for
 /// VT, `CapsuleRay` is the box test and `CapsuleExact` the sphere test.
 ///
 /// ```
@@ -223,8 +223,9 @@ flags! {
     /// ```
     QueryFlags {
         /// Primitive distance test at the leaves: candidates are the true contacts (plus, at
-        /// most, pairs within r + 2^-19 S). Mesh scenes only. Fastest with [`Mode::Box`]: the
-        /// finer node tests cost more than they save once the leaves test distances.
+        /// most, pairs within r + 2^-19 S). Mesh scenes only. Meant for [`Mode::Box`]: once the
+        /// leaves test distances, the finer node tests cost more than they save (measured in
+        /// `bench/README.md`).
         LEAF_EXACT = sys::MINKQ_QUERY_LEAF_EXACT;
         /// Pairs sorted lexicographically.
         CANONICAL = sys::MINKQ_QUERY_CANONICAL;

@@ -344,11 +344,12 @@ impl Scene {
     /// How far the refits since the last build (creation or [`Scene::rebuild`]) have stretched
     /// the trees: their area cost (scale-free; it grows with the nodes a query visits) now over
     /// its value right after that build, the larger of the scene's trees. 1 after a build. It
-    /// sees boxes that stretch, not a mesh folding or flattening into new neighbours: a sheet
-    /// wrung three turns read 2.1 (a rebuild cut its nodes per VT query 1.6x), a cloth pressed
-    /// flat 0.72 (a rebuild still cut them 1.5x; `minkq_scene_tree_growth` in `minkq.h`). A tree
-    /// whose elements all lie on one line parallel to an axis (or at one point) has no area: 1
-    /// while it stays so, infinity once it has any.
+    /// sees boxes that stretch, not a mesh folding or flattening into new neighbours (where a
+    /// rebuild can still help). Rebuild when it passes about 1.5, and every so many steps when
+    /// the mesh changes shape a lot (`minkq_scene_tree_growth` in `minkq.h`; what rebuilds
+    /// bought on the benchmark scenes is in `bench/README.md`). A tree whose elements all lie
+    /// on one line parallel to an axis (or at one point) has no area: 1 while it stays so,
+    /// infinity once it has any.
     ///
     /// ```
     /// # use minkq::*;
