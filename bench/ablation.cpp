@@ -355,8 +355,7 @@ std::string compare_tree_builds(const SceneFrames& sc, int repeats, bool& ok) {
     double build_ms;
     BvhView view(int kind) const { return build == kSah ? sah[kind].view() : trees[kind].view(); }
     double growth_of(int kind) const {
-      return build == kSah ? growth(sah[kind].area_cost(), sah[kind].cost_at_build())
-                           : growth(trees[kind].area_cost(), trees[kind].cost_at_build());
+      return build == kSah ? sah[kind].growth() : tree_growth_of(trees[kind]);
     }
   };
   std::vector<Variant> variants;

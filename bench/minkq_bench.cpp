@@ -393,7 +393,10 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
           !(c.mode->flags & MINKQ_QUERY_LEAF_EXACT)) {
         std::vector<int32_t>& dst = vt ? box_vt : box_ee;
         dst.clear();
-        for (uint64_t x : got) dst.insert(dst.end(), {int32_t(x >> 32), int32_t(x & 0xffffffffu)});
+        for (uint64_t x : got) {
+          const minkq::Pair pair = minkq::unpack_pair(x);
+          dst.insert(dst.end(), {pair.first, pair.second});
+        }
       }
       rep.false_negatives += row.fn;
       if (row.fn)

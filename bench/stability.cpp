@@ -270,14 +270,14 @@ NonFinite non_finite(const ref::Mesh& m, float r, const PairSet& vt_box, const P
     return finite_box({b.lo - hi, lo - b.hi});
   };
   for (uint64_t pr : vt_box) {
-    const int32_t v = int32_t(pr >> 32), t = int32_t(pr & 0xffffffffu);
+    const auto [v, t] = minkq::unpack_pair(pr);
     const minkq::Box b = minkq::box_expand(minkq::box_expand(minkq::Box::of_point(vf(m, m.tris[3 * size_t(t)])), vf(m, m.tris[3 * size_t(t) + 1])),
                                            vf(m, m.tris[3 * size_t(t) + 2]));
     if (!std::isfinite(minkq::point_box_distance2(vf(m, v), b))) ++nf.point_box;
     if (!gaps_finite(vf(m, v), vf(m, v), b)) ++nf.box_gap;
   }
   for (uint64_t pr : ee_box) {
-    const int32_t e = int32_t(pr >> 32), f = int32_t(pr & 0xffffffffu);
+    const auto [e, f] = minkq::unpack_pair(pr);
     const minkq::Vec3 p0 = vf(m, m.edges[2 * size_t(e)]), p1 = vf(m, m.edges[2 * size_t(e) + 1]);
     const minkq::Box b = minkq::box_expand(minkq::Box::of_point(vf(m, m.edges[2 * size_t(f)])), vf(m, m.edges[2 * size_t(f) + 1]));
     if (!gaps_finite(minkq::vmin(p0, p1), minkq::vmax(p0, p1), b)) ++nf.box_gap;
@@ -368,7 +368,10 @@ struct Runner {
         row.group = c.group, row.name = c.name, row.backend = backend, row.kind = vt ? "VT" : "EE", row.mode = m.name, row.r = c.r;
         const PairSet& truth = vt ? vt_truth : ee_truth;
         row.candidates = got.size(), row.truth = truth.size(), row.fn = missing(truth, got);
-        for (uint64_t pr : got) measure_excess(c.mesh, vt, int32_t(pr >> 32), int32_t(pr & 0xffffffffu), LD(c.r), m.metric, row.ex);
+        for (uint64_t pr : got) {
+          const minkq::Pair pair = minkq::unpack_pair(pr);
+          measure_excess(c.mesh, vt, pair.first, pair.second, LD(c.r), m.metric, row.ex);
+        }
         false_negatives += row.fn;
         over_bound += row.ex.over;
         const std::string key = backend + "/" + row.kind + "/" + m.name;
@@ -640,7 +643,7 @@ int run(int argc, char** argv) {
   o << "Machine: " << machine_line(device_names) << ". Load average (1 min) " << fmt(load_start, 3) << " -> " << fmt(load_average(), 3)
     << ". Written by `minkq_stability`" << (quick ? " --quick" : "") << ".\n\n";
   o << "Every case runs every mode on every backend and compares with the long-double oracle "
-       "(core/reference). **FN** = true contacts missing (must be 0). **worst excess / slack** = the largest "
+       "(testing/oracle). **FN** = true contacts missing (must be 0). **worst excess / slack** = the largest "
        "(distance - r) over the mode's candidates, in the mode's own metric, divided by the slack the bound stated in "
        "core/include/minkq/predicates.h allows for that candidate: box — Chebyshev box gap, half an ulp of r; sphere — "
        "point-box distance, r 2^-17; capsule_ray — Chebyshev segment-box distance, 2^-19 |d|_inf + 2 ulps; "

@@ -11,6 +11,7 @@
 
 #include "cpu/tree.h"
 #include "minkq/tree.h"
+#include "store.h"
 
 namespace minkq::bench {
 
@@ -32,32 +33,22 @@ void build_per_axis(CpuTree& tree, Boxes boxes, int32_t n) {
   tree.build_sorted(boxes, keys, std::move(order), n);
 }
 
-// A tree laid out by the SAH build below: node records with their links and splits, the
-// primitive at each leaf position, and the leaf boxes; refit with the library's per-slot step.
-class SahTree {
- public:
-  SahTree() = default;
-  template <class Boxes>
-  SahTree(std::vector<BvhNode> nodes, std::vector<int32_t> sorted_prims, Boxes boxes)
-      : nodes_(std::move(nodes)), sorted_prims_(std::move(sorted_prims)),
-        leaf_groups_(size_t(box_group_count(int64_t(sorted_prims_.size())))), arrivals_(nodes_.size()) {
-    refit(boxes);
-    cost_at_build_ = area_cost();
-  }
+// A tree laid out by the SAH build below, in the library's layout: node records with their
+// links and splits, the primitive at each leaf position, the leaf boxes in groups of four, and
+// the refit's arrival counters (refit with cpu/tree.h's refit_slots).
+struct SahTree {
+  std::vector<BvhNode> nodes;
+  std::vector<int32_t> sorted_prims;
+  std::vector<BoxGroup> leaf_groups;
+  std::vector<int32_t> arrivals;
+  double cost_at_build = 0.0;  // area_cost of the built tree (before any refit)
+
   template <class Boxes>
   void refit(Boxes boxes) {
-    refit_slots(boxes, nodes_, sorted_prims_.data(), leaf_groups_.data(), arrivals_);
+    refit_slots(boxes, nodes, sorted_prims.data(), leaf_groups.data(), arrivals);
   }
-  double area_cost() const { return minkq::area_cost(nodes_.data(), int64_t(nodes_.size())); }
-  double cost_at_build() const { return cost_at_build_; }
-  BvhView view() const { return {nodes_.data(), leaf_groups_.data(), sorted_prims_.data(), int32_t(sorted_prims_.size())}; }
-
- private:
-  std::vector<BvhNode> nodes_;
-  std::vector<int32_t> sorted_prims_;
-  std::vector<BoxGroup> leaf_groups_;
-  std::vector<int32_t> arrivals_;
-  double cost_at_build_ = 0.0;
+  double growth() const { return minkq::growth(area_cost(nodes.data(), int64_t(nodes.size())), cost_at_build); }
+  BvhView view() const { return {nodes.data(), leaf_groups.data(), sorted_prims.data(), int32_t(sorted_prims.size())}; }
 };
 
 // A top-down binned SAH build (the tree-quality alternative of issue 8; not the library's
@@ -146,7 +137,12 @@ SahTree build_sah(Boxes boxes, int32_t n) {
     if (range.last - s > kLeafSize) stack.push_back({s + 1, range.last, self << 1 | 1});
     if (s - range.first + 1 > kLeafSize) stack.push_back({range.first, s, self << 1});
   }
-  return SahTree(std::move(nodes), std::move(order), boxes);
+  SahTree tree{std::move(nodes), std::move(order), {}, {}, 0.0};
+  tree.leaf_groups.assign(size_t(box_group_count(n)), BoxGroup{});
+  tree.arrivals.assign(tree.nodes.size(), 0);
+  tree.refit(boxes);
+  tree.cost_at_build = area_cost(tree.nodes.data(), int64_t(tree.nodes.size()));
+  return tree;
 }
 
 }  // namespace minkq::bench
