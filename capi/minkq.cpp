@@ -145,6 +145,7 @@ minkq::Strided checked_buffer(const minkq_device* device, const minkq_buffer& bu
   require(stride >= element_size, Status::kInvalidArgument,
           name + ".byte_stride " + std::to_string(stride) + " is smaller than one element (" +
               std::to_string(element_size) + " bytes)");
+  if (buffer.memory == MINKQ_MEMORY_DEVICE && buffer.count > 0) device->backend->check_device_pointer(buffer.data, name + ".data");
   require(buffer.count <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
           name + ".count " + std::to_string(buffer.count) + " exceeds the limit of 2^31 - 2 elements");
   require(buffer.count == 0 || stride <= SIZE_MAX / buffer.count, Status::kSizeOverflow,
@@ -246,6 +247,7 @@ minkq::PairOutput checked_output(const minkq_device* device, int32_t* out_pairs,
           name.pairs + " is NULL but " + name.capacity + " is " + std::to_string(capacity));
   require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
           name.capacity + " " + std::to_string(capacity) + " pairs overflows the address space");
+  if (out_memory == MINKQ_MEMORY_DEVICE && capacity > 0) device->backend->check_device_pointer(out_pairs, name.pairs);
   return {out_pairs, capacity, static_cast<minkq::Memory>(out_memory),
           (flags & (MINKQ_QUERY_DIGEST | MINKQ_QUERY_CANONICAL)) != 0};
 }

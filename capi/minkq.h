@@ -24,6 +24,12 @@
  * Memory: the library copies what it keeps (vertices, topology, boxes); a caller's arrays are
  * read during the call only. On CUDA, device arrays are read and written in place on the
  * calling thread's per-thread default stream, which each call synchronises before returning.
+ * A buffer marked MINKQ_MEMORY_DEVICE is checked to be memory the device can use (its own
+ * device memory, managed memory, mapped pinned memory, or any host memory where the device
+ * reads pageable memory); anything else is MINKQ_ERROR_INVALID_ARGUMENT, naming the buffer,
+ * before a kernel could fault on it. Debugging: with the environment variable MINKQ_CUDA_SYNC
+ * set (not "0"), every kernel launch waits for its kernel, so a fault is reported, with the
+ * kernel's name, by the call that launched it.
  *
  * No measured figures here: what the modes, flags and rebuild advice cost and save on the
  * benchmark scenes is in bench/README.md.
@@ -79,7 +85,7 @@ const char* minkq_status_name(minkq_status status);
 /* ---- Buffers ------------------------------------------------------------------------------- */
 typedef enum minkq_memory {
   MINKQ_MEMORY_HOST = 0,  /* ordinary host memory */
-  MINKQ_MEMORY_DEVICE = 1 /* CUDA device memory of the object's device (CUDA devices only) */
+  MINKQ_MEMORY_DEVICE = 1 /* memory the object's CUDA device reads (CUDA devices only; checked) */
 } minkq_memory;
 
 /* `count` elements, element i at (const char*)data + i * byte_stride. byte_stride 0 means

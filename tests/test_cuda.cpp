@@ -178,7 +178,7 @@ TEST_F(Cuda, every_mode_matches_cpu_with_and_without_leaf_test) {
   test::Device cpu("cpu"), cuda("cuda");
   for (const auto& [name, mesh] : Scenes(seed).meshes)
     for (bool drop : {false, true}) {
-      const uint32_t flags = kBoth | (drop ? MINKQ_SCENE_DROP_INCIDENT : 0u);
+      const uint32_t flags = kBoth | (drop ? uint32_t(MINKQ_SCENE_DROP_INCIDENT) : 0u);
       cxx::Scene a = make_scene(cpu.get(), mesh, flags), b = make_scene(cuda.get(), mesh, flags);
       ASSERT_TRUE(a && b);
       const double edge = reference::mean_edge_length(mesh);
@@ -413,6 +413,46 @@ TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
     EXPECT_NE(message.find("vertex " + std::to_string(bad) + " "), std::string::npos) << message;
     minkq_scene_release(scene);
   }
+}
+
+// Host memory marked MINKQ_MEMORY_DEVICE is refused, named, before any kernel reads it (a
+// fault there would stick to the context and fail every later call); the device stays usable.
+TEST_F(Cuda, host_memory_marked_device_is_refused_and_named) {
+  test::Device cuda("cuda");
+  const Mesh mesh = reference::twisted_sheet(20, 1.0);
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  std::vector<float> pageable = mesh.xyz;  // ordinary host memory
+  minkq_scene_desc desc{};
+  desc.flags = kBoth;
+  desc.vertices = device_buffer(pageable.data(), mesh.vertex_count(), 12);
+  desc.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
+  int pageable_access = 0;
+  ASSERT_EQ(cudaDeviceGetAttribute(&pageable_access, cudaDevAttrPageableMemoryAccess, 0), cudaSuccess);
+  minkq_scene* scene = nullptr;
+  const minkq_status created = minkq_scene_create(cuda.get(), &desc, &scene);
+  if (pageable_access) {  // HMM / ATS: the device reads pageable memory, so it is accepted
+    EXPECT_EQ(created, MINKQ_SUCCESS) << minkq_last_error_message();
+  } else {
+    EXPECT_EQ(created, MINKQ_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(scene, nullptr);
+    const std::string message = minkq_last_error_message();
+    EXPECT_NE(message.find("vertices.data is host memory"), std::string::npos) << message;
+  }
+  minkq_scene_release(scene);
+  // Output pairs in host memory marked device: refused the same way, and the scene still works.
+  cxx::Scene good = make_scene(cuda.get(), mesh, kBoth);
+  ASSERT_TRUE(good);
+  std::vector<int32_t> host_pairs(2 * 1024);
+  const minkq_query_desc query{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, r};
+  minkq_query_info info{};
+  const minkq_status queried = minkq_scene_query(good.get(), &query, host_pairs.data(), 1024, MINKQ_MEMORY_DEVICE, &info);
+  if (!pageable_access) {
+    EXPECT_EQ(queried, MINKQ_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(minkq_last_error_message()).find("out_pairs is host memory"), std::string::npos)
+        << minkq_last_error_message();
+  }
+  const Outcome after = scene_query(good.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_CANONICAL);
+  EXPECT_GT(after.count, 0u);
 }
 
 TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {

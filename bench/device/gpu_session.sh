@@ -1,50 +1,70 @@
 #!/usr/bin/env bash
-# A GPU session on the device machine, in stages, each leaving its output in $OUT (the device
-# tool brings that folder back; at most 8 files). State between calls lives in /tmp and in
-# build-sm90, which a warm machine keeps (about 30 s idle): make the calls back to back.
+# A GPU session on the device machine, in stages. Every stage's detailed log goes to
+# /tmp/minkq-logs; after each stage $OUT receives the running session.log, stages.tsv (stage,
+# exit status, seconds) and logs.tar.gz (every log so far), so a call cut short still brings
+# back everything up to its last finished stage (the device tool returns at most 8 files).
+# State between calls lives in /tmp and build-sm90, which a warm machine keeps (about 30 s
+# idle): make the calls back to back.
 #
 #   here:    bash bench/device/pack.sh                   # .carry/kit: Debian packages, ../shared
-#   device:  run(carry=[".carry/kit"], timeout_s=600,
-#                command="bash bench/device/gpu_session.sh setup build test bench")
-#   (should that outrun a call's 10 minutes, split it: "setup build test", then "bench" at once)
-#   then Warp / Newton on the same GPU, per ../shared/tools/warp-for-device.sh (three calls; the
-#   third one ends with: bash bench/device/gpu_session.sh warp)
+#            bash bench/device/gpu_session.sh --smoke    # the same stages, CUDA parts skipped
+#   device, first call (about 5 min: the CUDA build is one long nvcc compile):
+#            run(carry=[".carry/kit"], timeout_s=540, command="bash bench/device/gpu_session.sh")
+#            = setup build memcheck gpu
+#   device, second call, at once:
+#            run(carry=[".carry/kit"], timeout_s=540,
+#                command="bash bench/device/gpu_session.sh racecheck test bench")
+#   then Warp / Newton on the same GPU, per ../shared/tools/warp-for-device.sh (its last call
+#   ends with: bash bench/device/gpu_session.sh warp)
 #
-# Stages:
-#   setup  unpack the packages into /tmp/minkq-deps, ../shared from the kit, report the machine
-#   build  cmake --preset sm90 with the benchmarks, build everything (build-sm90)
-#   test   the whole ctest suite, CUDA suites included (CPU == CUDA pair sets, digests, errors)
-#   bench  minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale), frames
-#          exported for Warp, and minkq_ablation --only fused --backend cuda (one VT + EE launch
-#          against two); $OUT/results.tar.gz holds bench/results-style tables
-#   warp   bench/warp_baseline.py --device cuda:0 on the exported frames beside minkq's cuda rows
-#   profile  Nsight Compute on the 1M-triangle twisted sheet's query and refit kernels ($OUT/ncu.txt)
-# --smoke (first argument): bench --quick, to try the script on a machine without a GPU.
+# Stages, in the order of their value:
+#   setup      unpack the packages into /tmp/minkq-deps, ../shared from the kit; the machine,
+#              the GPU and its compute mode
+#   build      configure from an empty build folder (sm_90 only, benchmarks on) against the
+#              kit's packages, build everything
+#   memcheck   compute-sanitizer memcheck on test_cuda, every launch synchronised
+#              (CUDA_LAUNCH_BLOCKING=1, MINKQ_CUDA_SYNC=1): a fault is blamed on its kernel
+#   gpu        the gpu-labelled tests (CPU == CUDA pairs, digests, work counts; device
+#              buffers; errors)
+#   racecheck  compute-sanitizer racecheck on test_cuda
+#   test       the whole ctest suite
+#   bench      minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale),
+#              frames exported for Warp, and minkq_ablation --only fused --backend cuda;
+#              $OUT/results.tar.gz holds bench/results-style tables
+#   warp       bench/warp_baseline.py --device cuda:0 on the exported frames ($OUT/warp_gpu.md)
+#   profile    Nsight Compute on the 1M-triangle twisted sheet's query and refit kernels
+#              ($OUT/ncu.txt)
+# --smoke (first argument): on a machine without a GPU, the same script from an empty build
+# folder with the CUDA backend off; the CUDA stages say they are skipped; bench runs --quick.
 # Exit status: the first failing stage's, after every stage asked for has run.
 set -uo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 kit=${MINKQ_KIT:-$root/.carry/kit}
 out=${OUT:-/tmp/minkq-out}
 deps=/tmp/minkq-deps
+logs=/tmp/minkq-logs
 results=/tmp/minkq-results
 export_dir=/tmp/minkq-export
 smoke=0
 if [ "${1:-}" = "--smoke" ]; then smoke=1; shift; fi
-[ $# -gt 0 ] || set -- setup build test bench
-mkdir -p "$out"
-log=$out/session.log
-exec > >(tee -a "$log") 2>&1
+[ $# -gt 0 ] || set -- setup build memcheck gpu
+build=$root/build-sm90
+[ $smoke = 1 ] && build=/tmp/minkq-smoke-build
+mkdir -p "$out" "$logs"
+exec > >(tee -a "$out/session.log") 2>&1
 cd "$root"
 
 # Packages unpacked into a prefix (not /): CMake finds them through CMAKE_PREFIX_PATH, the
-# programs through LD_LIBRARY_PATH; tbbbind (hwloc) is left out, TBB runs without it.
+# programs through LD_LIBRARY_PATH.
 export CMAKE_PREFIX_PATH="$deps/usr${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
 export LD_LIBRARY_PATH="$deps/usr/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 jobs=$(nproc)
 
+have_gpu() { [ $smoke = 0 ] && command -v nvidia-smi > /dev/null && nvidia-smi -L > /dev/null 2>&1; }
+
 stage_setup() {
   [ -d "$kit/debs" ] || { echo "no kit at $kit: run bench/device/pack.sh here and carry .carry/kit"; return 1; }
-  mkdir -p "$deps"
+  rm -rf "$deps" && mkdir -p "$deps"
   for deb in "$kit"/debs/*.deb; do
     if command -v dpkg-deb > /dev/null; then
       dpkg-deb -x "$deb" "$deps" || return 1
@@ -55,24 +75,65 @@ stage_setup() {
   if [ ! -d "$root/../shared/data" ]; then
     rm -rf /tmp/minkq-shared && cp -r "$kit/shared" /tmp/minkq-shared && ln -sfn /tmp/minkq-shared "$root/../shared"
   fi
-  nvidia-smi -L || echo "nvidia-smi: none"
-  nvcc --version | tail -2
+  if have_gpu; then
+    nvidia-smi -L
+    # Exclusive-process mode would fail a second CUDA process: the gpu tests hold a ctest
+    # RESOURCE_LOCK, so they run one at a time either way.
+    nvidia-smi --query-gpu=name,compute_mode,driver_version,memory.total,clocks.max.sm --format=csv
+  else
+    echo "no GPU here (smoke run or no driver)"
+  fi
+  command -v nvcc > /dev/null && nvcc --version | tail -2
+  command -v compute-sanitizer > /dev/null && compute-sanitizer --version | head -2
   g++ --version | head -1
   cmake --version | head -1
   echo "$(nproc) CPUs, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-)"
 }
 
 stage_build() {
-  cmake --preset sm90 -DMINKQ_BUILD_BENCH=ON > "$out/configure.log" 2>&1 || { tail -30 "$out/configure.log"; return 1; }
-  grep -E "^(TBB_DIR|embree_DIR|GTest_DIR|tinyobjloader_DIR|XXHASH_LIBRARY)" build-sm90/CMakeCache.txt
-  cmake --build build-sm90 -j "$jobs" > "$out/build.log" 2>&1 || { grep -E "error|Error" "$out/build.log" | head -40; return 1; }
-  echo "built: $(ls build-sm90/bin | tr '\n' ' ')"
+  rm -rf "$build"  # never a stale cache: configure finds the kit's packages or fails
+  if [ $smoke = 1 ]; then
+    cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA=OFF -DMINKQ_BUILD_BENCH=ON \
+      > "$logs/configure.log" 2>&1 || { tail -30 "$logs/configure.log"; return 1; }
+  else
+    cmake --preset sm90 -DMINKQ_BUILD_BENCH=ON > "$logs/configure.log" 2>&1 || { tail -30 "$logs/configure.log"; return 1; }
+  fi
+  grep -E "^(TBB_DIR|embree_DIR|GTest_DIR|tinyobjloader_DIR|XXHASH_LIBRARY)" "$build/CMakeCache.txt"
+  # The kit's packages, not the machine's: anything else means the kit is incomplete.
+  if grep -E "^(TBB_DIR|embree_DIR|GTest_DIR|tinyobjloader_DIR)" "$build/CMakeCache.txt" | grep -v "$deps" | grep -q .; then
+    echo "build: a dependency was found outside the kit ($deps)"
+    [ $smoke = 1 ] || return 1
+  fi
+  cmake --build "$build" -j "$jobs" > "$logs/build.log" 2>&1 || { grep -E "error|Error" "$logs/build.log" | head -40; return 1; }
+  grep -i "warning" "$logs/build.log" | head -20
+  echo "built: $(ls "$build/bin" | tr '\n' ' ')"
+}
+
+# compute-sanitizer --tool $1 on the CUDA test binary, every launch synchronised.
+sanitize() {
+  have_gpu || { echo "skipped: no GPU"; return 0; }
+  command -v compute-sanitizer > /dev/null || { echo "no compute-sanitizer on this machine"; return 1; }
+  CUDA_LAUNCH_BLOCKING=1 MINKQ_CUDA_SYNC=1 timeout "${MINKQ_SANITIZER_TIMEOUT:-240}" \
+    compute-sanitizer --tool "$1" --error-exitcode 99 \
+    "$build/tests/test_cuda" > "$logs/$1.log" 2>&1
+  local status=$?
+  grep -E "ERROR SUMMARY|RACECHECK SUMMARY|PASSED|FAILED|Skipped|^=========" "$logs/$1.log" | head -40
+  return $status
+}
+stage_memcheck() { sanitize memcheck; }
+stage_racecheck() { sanitize racecheck; }
+
+stage_gpu() {
+  ctest --test-dir "$build" -L gpu --output-on-failure --timeout 600 > "$logs/gpu.log" 2>&1
+  local status=$?
+  grep -E "tests passed|tests failed|\*\*\*|Failed|Skipped" "$logs/gpu.log" | tail -30
+  return $status
 }
 
 stage_test() {
-  ctest --test-dir build-sm90 -j "$jobs" --output-on-failure --timeout 1200 > "$out/ctest.log" 2>&1
+  ctest --test-dir "$build" -j "$jobs" --output-on-failure --timeout 1200 > "$logs/ctest.log" 2>&1
   local status=$?
-  grep -E "tests passed|tests failed|\*\*\*|Failed|Skipped" "$out/ctest.log" | tail -40
+  grep -E "tests passed|tests failed|\*\*\*|Failed" "$logs/ctest.log" | tail -40
   return $status
 }
 
@@ -81,14 +142,14 @@ stage_bench() {
   [ $smoke = 1 ] && args=(--quick --out "$results" --export "$export_dir")
   rm -rf "$results" "$export_dir"
   mkdir -p "$results"
-  build-sm90/bin/minkq_bench "${args[@]}" > "$out/bench.log" 2>&1
+  "$build/bin/minkq_bench" "${args[@]}" > "$logs/bench.log" 2>&1
   local status=$?
-  tail -20 "$out/bench.log"
+  tail -20 "$logs/bench.log"
   # One fused VT + EE launch against two (fused_cuda.md), beside the CPU's fused.md.
   local fused=(--only fused --backend cuda --out "$results")
   [ $smoke = 1 ] && fused=(--only fused --backend auto --quick --out "$results")  # no GPU there
-  build-sm90/bin/minkq_ablation "${fused[@]}" > "$out/fused.log" 2>&1 || status=1
-  tail -3 "$out/fused.log"
+  "$build/bin/minkq_ablation" "${fused[@]}" > "$logs/fused.log" 2>&1 || status=1
+  tail -3 "$logs/fused.log"
   nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv > "$results/device.txt" 2>&1 || true
   tar czf "$out/results.tar.gz" -C "$results" .
   return $status
@@ -105,10 +166,11 @@ stage_profile() {
   # Nsight Compute on the issue's target scene, the 1M-triangle twisted sheet at r = 0.25x mean
   # edge (minkq demo --size 708: every mode, checked against the oracle): the query and refit
   # kernels' throughput, memory, occupancy and warp stalls, to say what limits them.
+  have_gpu || { echo "skipped: no GPU"; return 0; }
   command -v ncu > /dev/null || { echo "no ncu on this machine"; return 1; }
   ncu --kernel-name regex:"query_kernel|refit_kernel" --launch-count 40 --section SpeedOfLight \
     --section MemoryWorkloadAnalysis --section Occupancy --section LaunchStats --section WarpStateStats \
-    build-sm90/bin/minkq demo --backend cuda --size 708 > "$out/ncu.txt" 2>&1
+    "$build/bin/minkq" demo --backend cuda --size 708 > "$out/ncu.txt" 2>&1
   local status=$?
   grep -E "query_kernel|refit_kernel|Duration|Memory Throughput|Compute \(SM\) Throughput|Achieved Occupancy" \
     "$out/ncu.txt" | head -80
@@ -118,13 +180,17 @@ stage_profile() {
 first_failure=0
 for stage in "$@"; do
   echo "== $stage ($(date -u +%H:%M:%S))"
+  started=$SECONDS
   case "$stage" in
-    setup) stage_setup ;; build) stage_build ;; test) stage_test ;; bench) stage_bench ;; warp) stage_warp ;;
+    setup) stage_setup ;; build) stage_build ;; memcheck) stage_memcheck ;; gpu) stage_gpu ;;
+    racecheck) stage_racecheck ;; test) stage_test ;; bench) stage_bench ;; warp) stage_warp ;;
     profile) stage_profile ;;
     *) echo "unknown stage $stage"; false ;;
   esac
   status=$?
-  echo "== $stage: exit $status"
+  echo "== $stage: exit $status, $((SECONDS - started)) s"
+  printf '%s\t%s\t%s\n' "$stage" "$status" "$((SECONDS - started))" >> "$out/stages.tsv"
+  tar czf "$out/logs.tar.gz" -C "$logs" . 2> /dev/null
   [ $status != 0 ] && [ $first_failure = 0 ] && first_failure=$status
 done
 exit $first_failure

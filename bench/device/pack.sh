@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
 # Packs what a GPU session needs on the device machine (no package registry there, and only the
-# repository travels): the Debian packages minkq builds against (TBB, xxHash, tinyobjloader,
-# GoogleTest, Embree; about 10 MB) and ../shared (meshes and scene data; about 14 MB), into
-# .carry/kit, which git ignores. Run here, once per session that has a GPU:
+# repository travels): the Debian packages minkq builds against (TBB with libtbbbind, whose
+# file Debian's TBB CMake config requires, xxHash, tinyobjloader, GoogleTest, Embree; about
+# 10 MB) and ../shared (meshes and scene data; about 14 MB), into .carry/kit, which git ignores. Run here, once per session that has a GPU:
 #
 #   bash bench/device/pack.sh            # then see bench/device/gpu_session.sh for the calls
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 kit=${1:-$root/.carry/kit}
-packages=(libtbb-dev libtbb12 libtbbmalloc2 libxxhash-dev libxxhash0 libtinyobjloader-dev libtinyobjloader2rc10
-          libgtest-dev libgmock-dev libembree-dev libembree3-3)
+packages=(libtbb-dev libtbb12 libtbbmalloc2 libtbbbind-2-5 libxxhash-dev libxxhash0 libtinyobjloader-dev
+          libtinyobjloader2rc10 libgtest-dev libgmock-dev libembree-dev libembree3-3)
 rm -rf "$kit"
 mkdir -p "$kit/debs"
 (cd "$kit/debs" && apt-get download "${packages[@]}" 2>&1 | grep -v "^Get:" || true)

@@ -107,6 +107,9 @@ class Backend {
   virtual int64_t first_non_finite(const Strided& values, int floats) = 0;
   // Copies `bytes` from host or device memory to the host.
   virtual void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) = 0;
+  // Throws Failure(kInvalidArgument), naming `what`, unless `data` (not null) is memory this
+  // backend's kernels may read and write as device memory (a buffer marked kDevice).
+  virtual void check_device_pointer(const void* data, const std::string& what) = 0;
   // Takes the topology over (host vectors, validated by the caller).
   virtual std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
                                                        std::vector<Edge> edges, bool triangle_tree,

@@ -73,6 +73,9 @@ class CpuBackend final : public Backend {
   void copy_to_host(void* dst, const void* src, size_t bytes, Memory) override {
     if (bytes) std::memcpy(dst, src, bytes);
   }
+  void check_device_pointer(const void*, const std::string& what) override {
+    fail(Status::kInvalidArgument, what + " is in device memory but the device is " + name());
+  }
   std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
                                                std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
     return std::make_unique<MeshStoreOn<CpuExecutor>>(CpuExecutor::Device{}, vertices, std::move(triangles),

@@ -69,9 +69,9 @@ class CudaExecutor {
 
 class CudaBackend final : public Backend {
  public:
-  CudaBackend(int ordinal, const std::string& device_name)
+  CudaBackend(int ordinal, const std::string& device_name, bool pageable_access)
       : ordinal_(ordinal), name_("cuda:" + std::to_string(ordinal) + " (" + device_name + ")"),
-        host_(make_cpu_backend()) {}
+        pageable_access_(pageable_access), host_(make_cpu_backend()) {}
 
   std::string name() const override { return name_; }
   bool is_cuda() const override { return true; }
@@ -97,6 +97,34 @@ class CudaBackend final : public Backend {
     copy(dst, src, bytes, cudaMemcpyDeviceToHost);
   }
 
+  // Device memory of this device, managed memory, mapped pinned host memory, or (where the
+  // device reads pageable memory: HMM / ATS systems) any host memory. Anything else would
+  // fault the first kernel that reads it, with an error that sticks to the context.
+  void check_device_pointer(const void* data, const std::string& what) override {
+    const DeviceScope device(ordinal_);
+    cudaPointerAttributes attributes{};
+    if (const cudaError_t error = cudaPointerGetAttributes(&attributes, data); error != cudaSuccess) {
+      cudaGetLastError();
+      fail(Status::kInvalidArgument, what + " is not memory the CUDA runtime knows (" +
+                                         cudaGetErrorString(error) + ") but its memory is MINKQ_MEMORY_DEVICE");
+    }
+    switch (attributes.type) {
+      case cudaMemoryTypeManaged: return;
+      case cudaMemoryTypeDevice:
+        if (attributes.device == ordinal_) return;
+        fail(Status::kInvalidArgument, what + " is memory of cuda:" + std::to_string(attributes.device) +
+                                           " but the device is " + name_);
+      case cudaMemoryTypeHost:
+        if (attributes.devicePointer == data) return;  // mapped pinned memory, same address
+        fail(Status::kInvalidArgument, what + " is pinned host memory not mapped at the same address on " +
+                                           name_ + ": pass MINKQ_MEMORY_HOST");
+      default:
+        if (pageable_access_) return;
+        fail(Status::kInvalidArgument, what + " is host memory but its memory is MINKQ_MEMORY_DEVICE (" + name_ +
+                                           " cannot read pageable host memory): pass MINKQ_MEMORY_HOST");
+    }
+  }
+
   std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
                                                std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
     return std::make_unique<MeshStoreOn<CudaExecutor>>(ordinal_, vertices, std::move(triangles), std::move(edges),
@@ -109,6 +137,7 @@ class CudaBackend final : public Backend {
  private:
   int ordinal_;
   std::string name_;
+  bool pageable_access_;  // the device reads pageable host memory (cudaDevAttrPageableMemoryAccess)
   std::unique_ptr<Backend> host_;  // host-memory inputs are checked and copied as on the CPU
 };
 
@@ -138,7 +167,9 @@ std::unique_ptr<Backend> make_cuda_backend(int ordinal) {
   const DeviceScope device(ordinal);  // creates the device's context now, not in the first call
   cudaDeviceProp properties;
   check(cudaGetDeviceProperties(&properties, ordinal), "cudaGetDeviceProperties");
-  return std::make_unique<CudaBackend>(ordinal, properties.name);
+  int pageable = 0;
+  check(cudaDeviceGetAttribute(&pageable, cudaDevAttrPageableMemoryAccess, ordinal), "cudaDeviceGetAttribute");
+  return std::make_unique<CudaBackend>(ordinal, properties.name, pageable != 0);
 }
 
 }  // namespace minkq

@@ -6,6 +6,8 @@
 
 #include <cuda_runtime.h>
 
+#include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -128,12 +130,24 @@ void upload(DeviceBuffer<T>& dst, const T* src, size_t count) {
   copy(dst.data(), src, count * sizeof(T), cudaMemcpyHostToDevice);
 }
 
+// Whether every launch waits for its kernel (environment MINKQ_CUDA_SYNC set and not "0"): a
+// debugging switch that reports a kernel's fault at its own launch, named, instead of at the
+// next copy or synchronisation, at the cost of a host wait per launch.
+inline bool sync_each_launch() {
+  static const bool on = [] {
+    const char* value = std::getenv("MINKQ_CUDA_SYNC");
+    return value != nullptr && *value != '\0' && std::strcmp(value, "0") != 0;
+  }();
+  return on;
+}
+
 // One thread per element i < n.
 template <class Kernel, class... Args>
 void launch(const char* name, Kernel kernel, int64_t n, int threads, Args... args) {
   if (n <= 0) return;
   kernel<<<unsigned((n + threads - 1) / threads), threads, 0, kStream>>>(args...);
   check(cudaGetLastError(), name);
+  if (sync_each_launch()) check(cudaStreamSynchronize(kStream), name);
 }
 
 __device__ inline int64_t global_index() { return int64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
