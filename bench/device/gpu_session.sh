@@ -13,21 +13,24 @@
 #            = setup build memcheck gpu
 #   device, second call, at once:
 #            run(carry=[".carry/kit"], timeout_s=540,
-#                command="bash bench/device/gpu_session.sh racecheck test bench")
+#                command="bash bench/device/gpu_session.sh racecheck test fuzz")
+#   third call, at once: command="bash bench/device/gpu_session.sh bench"
 #   then Warp / Newton on the same GPU, per ../shared/tools/warp-for-device.sh (its last call
 #   ends with: bash bench/device/gpu_session.sh warp)
 #
 # Stages, in the order of their value:
 #   setup      unpack the packages into /tmp/minkq-deps, ../shared from the kit; the machine,
 #              the GPU and its compute mode
-#   build      configure from an empty build folder (sm_90 only, benchmarks on) against the
-#              kit's packages, build everything
+#   build      configure from an empty build folder (sm_90 only, benchmarks and fuzz_campaign
+#              on) against the kit's packages, build everything
 #   memcheck   compute-sanitizer memcheck on test_cuda, every launch synchronised
 #              (CUDA_LAUNCH_BLOCKING=1, MINKQ_CUDA_SYNC=1): a fault is blamed on its kernel
 #   gpu        the gpu-labelled tests (CPU == CUDA pairs, digests, work counts; device
 #              buffers; errors)
 #   racecheck  compute-sanitizer racecheck on test_cuda
 #   test       the whole ctest suite
+#   fuzz       fuzz_campaign (fuzz/campaign): the differential checks on the corpus and
+#              $MINKQ_FUZZ_INPUTS (default 3000) random inputs, CPU == CUDA == Embree == oracle
 #   bench      minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale),
 #              frames exported for Warp, and minkq_ablation --only fused --backend cuda;
 #              $OUT/results.tar.gz holds bench/results-style tables
@@ -72,6 +75,7 @@ stage_setup() {
       (t=$(mktemp -d) && cd "$t" && ar x "$deb" && tar xf data.tar.* -C "$deps") || return 1
     fi
   done
+  cp -r "$kit/include" "$deps/usr/"  # FuzzedDataProvider.h for fuzz_campaign
   if [ ! -d "$root/../shared/data" ]; then
     rm -rf /tmp/minkq-shared && cp -r "$kit/shared" /tmp/minkq-shared && ln -sfn /tmp/minkq-shared "$root/../shared"
   fi
@@ -94,9 +98,10 @@ stage_build() {
   rm -rf "$build"  # never a stale cache: configure finds the kit's packages or fails
   if [ $smoke = 1 ]; then
     cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA=OFF -DMINKQ_BUILD_BENCH=ON \
-      > "$logs/configure.log" 2>&1 || { tail -30 "$logs/configure.log"; return 1; }
+      -DMINKQ_BUILD_FUZZ_CAMPAIGN=ON > "$logs/configure.log" 2>&1 || { tail -30 "$logs/configure.log"; return 1; }
   else
-    cmake --preset sm90 -DMINKQ_BUILD_BENCH=ON > "$logs/configure.log" 2>&1 || { tail -30 "$logs/configure.log"; return 1; }
+    cmake --preset sm90 -DMINKQ_BUILD_BENCH=ON -DMINKQ_BUILD_FUZZ_CAMPAIGN=ON > "$logs/configure.log" 2>&1 ||
+      { tail -30 "$logs/configure.log"; return 1; }
   fi
   grep -E "^(TBB_DIR|embree_DIR|GTest_DIR|tinyobjloader_DIR|XXHASH_LIBRARY)" "$build/CMakeCache.txt"
   # The kit's packages, not the machine's: anything else means the kit is incomplete.
@@ -134,6 +139,18 @@ stage_test() {
   ctest --test-dir "$build" -j "$jobs" --output-on-failure --timeout 1200 > "$logs/ctest.log" 2>&1
   local status=$?
   grep -E "tests passed|tests failed|\*\*\*|Failed" "$logs/ctest.log" | tail -40
+  return $status
+}
+
+stage_fuzz() {
+  # The differential checks on the corpus and on MINKQ_FUZZ_INPUTS random inputs, every scene
+  # on the CPU, each CUDA device, Embree and the oracle; the count goes to fuzz/RESULTS.md.
+  local seed=${MINKQ_FUZZ_SEED:-$(date +%s)}
+  MINKQ_FUZZ_THREADS=$jobs "$build/bin/fuzz_campaign" --inputs "${MINKQ_FUZZ_INPUTS:-3000}" --seed "$seed" \
+    fuzz/corpus/fuzz_differential > "$logs/fuzz.log" 2>&1
+  local status=$?
+  grep -E "devices:|fuzz_campaign:|at exit|MISMATCH" "$logs/fuzz.log" | head -10
+  [ $status = 0 ] || tail -60 "$logs/fuzz.log"
   return $status
 }
 
@@ -183,7 +200,7 @@ for stage in "$@"; do
   started=$SECONDS
   case "$stage" in
     setup) stage_setup ;; build) stage_build ;; memcheck) stage_memcheck ;; gpu) stage_gpu ;;
-    racecheck) stage_racecheck ;; test) stage_test ;; bench) stage_bench ;; warp) stage_warp ;;
+    racecheck) stage_racecheck ;; test) stage_test ;; fuzz) stage_fuzz ;; bench) stage_bench ;; warp) stage_warp ;;
     profile) stage_profile ;;
     *) echo "unknown stage $stage"; false ;;
   esac

@@ -14,6 +14,11 @@ rm -rf "$kit"
 mkdir -p "$kit/debs"
 (cd "$kit/debs" && apt-get download "${packages[@]}" 2>&1 | grep -v "^Get:" || true)
 [ "$(ls "$kit/debs" | wc -l)" = "${#packages[@]}" ] || { echo "pack.sh: apt-get download fetched $(ls "$kit/debs" | wc -l) of ${#packages[@]} packages" >&2; exit 1; }
+# libFuzzer's FuzzedDataProvider.h (one header, from clang here) for fuzz_campaign there.
+provider=$(ls /usr/lib/llvm-*/lib/clang/*/include/fuzzer/FuzzedDataProvider.h 2>/dev/null | head -1)
+[ -n "$provider" ] || { echo "pack.sh: FuzzedDataProvider.h not found (Debian: libclang-common-14-dev)" >&2; exit 1; }
+mkdir -p "$kit/include/fuzzer"
+cp "$provider" "$kit/include/fuzzer/"
 shared=$root/../shared
 [ -d "$shared/data" ] || { echo "pack.sh: $shared/data not found" >&2; exit 1; }
 mkdir -p "$kit/shared"
