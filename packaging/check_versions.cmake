@@ -1,7 +1,7 @@
 # cmake -DSOURCE_DIR=... -DPROJECT_VERSION=... -P check_versions.cmake
 # Fails unless every place that states minkq's release version says what VERSION says: CMake's
 # project() version, capi/minkq.h's MINKQ_VERSION_* macros, the Cargo manifests (the workspace
-# version, which the crates inherit and Cargo.lock) and bindings/python/pyproject.toml.
+# version, which the crates inherit, minkq's minkq-sys requirement and Cargo.lock) and bindings/python/pyproject.toml.
 # (The Rust example, minkq-demo, has a version of its own and is not published.)
 file(STRINGS ${SOURCE_DIR}/VERSION version LIMIT_COUNT 1)
 set(failures "")
@@ -35,6 +35,8 @@ foreach(manifest bindings/rust/minkq-sys/Cargo.toml bindings/rust/minkq/Cargo.to
   string(REGEX REPLACE "^ = \"(.*)\"$" "\\1" found "${found}")
   expect("${manifest} version" "${found}")
 endforeach()
+grab(found bindings/rust/minkq/Cargo.toml "\nminkq-sys = {[^}\n]*version = \"([^\"]*)\"")
+expect("bindings/rust/minkq/Cargo.toml minkq-sys dependency" "${found}")
 foreach(crate minkq minkq-sys minkq-python)
   grab(found bindings/Cargo.lock "name = \"${crate}\"\nversion = \"([^\"]*)\"")
   expect("bindings/Cargo.lock ${crate}" "${found}")
