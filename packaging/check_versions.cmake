@@ -1,7 +1,8 @@
 # cmake -DSOURCE_DIR=... -DPROJECT_VERSION=... -P check_versions.cmake
 # Fails unless every place that states minkq's release version says what VERSION says: CMake's
 # project() version, capi/minkq.h's MINKQ_VERSION_* macros, the Cargo manifests (the workspace
-# version, which the crates inherit, minkq's minkq-sys requirement and Cargo.lock) and bindings/python/pyproject.toml.
+# version, which the crates inherit, minkq's minkq-sys requirement and Cargo.lock) and
+# bindings/python/pyproject.toml.
 # (The Rust example, minkq-demo, has a version of its own and is not published.)
 file(STRINGS ${SOURCE_DIR}/VERSION version LIMIT_COUNT 1)
 set(failures "")
