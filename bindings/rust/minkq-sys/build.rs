@@ -2,7 +2,8 @@
 //! install's `lib/`), else built here with CMake from the repository this crate lives in (CPU
 //! backend unless `MINKQ_WITH_CUDA` says otherwise), else, outside the repository (a packaged
 //! crate), from an installed minkq that `pkg-config minkq` finds. Dependents get the folder as
-//! `DEP_MINKQ_LIB_DIR`.
+//! `DEP_MINKQ_LIB_DIR` and the library's SONAME, `libminkq.so.<MINKQ_ABI_VERSION>`, which the
+//! folder must hold, as `DEP_MINKQ_SONAME`.
 use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -24,11 +25,30 @@ fn main() {
             lib_dir.display()
         );
     }
+    let soname = format!("libminkq.so.{}", abi_version());
+    if !lib_dir.join(&soname).exists() {
+        panic!(
+            "{} holds no {soname}: its libminkq.so is of another ABI than these bindings \
+             (MINKQ_ABI_VERSION in src/bindings.rs); rebuild or reinstall it",
+            lib_dir.display()
+        );
+    }
     println!("cargo:rerun-if-changed={}", lib_dir.join("libminkq.so").display());
     println!("cargo:rustc-link-search=native={}", lib_dir.display());
     println!("cargo:rustc-link-lib=dylib=minkq");
     println!("cargo:lib_dir={}", lib_dir.display());
+    println!("cargo:soname={soname}");
     println!("cargo:rustc-link-arg=-Wl,-rpath,{}", lib_dir.display());
+}
+
+/// MINKQ_ABI_VERSION as bindgen wrote it into src/bindings.rs.
+fn abi_version() -> u32 {
+    let bindings = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").unwrap()).join("src/bindings.rs");
+    println!("cargo:rerun-if-changed={}", bindings.display());
+    let text = std::fs::read_to_string(&bindings).unwrap_or_else(|e| panic!("{}: {e}", bindings.display()));
+    text.lines()
+        .find_map(|line| line.strip_prefix("pub const MINKQ_ABI_VERSION: u32 = ")?.strip_suffix(';')?.parse().ok())
+        .unwrap_or_else(|| panic!("{} declares no MINKQ_ABI_VERSION", bindings.display()))
 }
 
 fn run(command: &mut Command) {
