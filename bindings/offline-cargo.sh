@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by the scripts that run cargo (bindings/test.sh, examples/consumers.sh) with a folder
 # as $1: points cargo, and maturin's cargo, at Debian's offline crates (the librust-*-dev
 # packages' directory registry, /usr/share/cargo/registry) through a cargo home of their own in

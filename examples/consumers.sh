@@ -38,7 +38,10 @@ step() { printf '\n== consumers: %s (%ds)\n' "$*" $((SECONDS - started)); }
 uses_lib_from() {
   local resolved
   resolved=$(ldd "$1" | awk '/libminkq\.so/ {print $3}')
-  [ -n "$resolved" ] && [ "$(realpath "$(dirname "$resolved")")" = "$(realpath "$2")" ] || { echo "$1 loads libminkq from '$resolved', not $2" >&2; exit 1; }
+  if [ -z "$resolved" ] || [ "$(realpath "$(dirname "$resolved")")" != "$(realpath "$2")" ]; then
+    echo "$1 loads libminkq from '$resolved', not $2" >&2
+    exit 1
+  fi
   echo "$(basename "$1") loads $resolved"
 }
 
