@@ -2,14 +2,15 @@
 # Set-up and entry points on a fresh Debian 12 machine:
 #   ./build.sh demo   installs what is missing, builds, runs `minkq demo` on the default scene
 #   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest, then
-#                     cargo test and pytest for the bindings, then both fuzzers for a minute)
+#                     cargo test and pytest for the bindings, programs built against the
+#                     installed library and the .deb, then both fuzzers for a minute)
 #   ./build.sh build  installs what is missing and builds only
 # PRESET=cpu|cuda|default (default: default = CUDA when nvcc is found).
 set -euo pipefail
 cd "$(dirname "$0")"
 preset=${PRESET:-default}
 binary_dir=build; [ "$preset" != default ] && binary_dir=build-$preset
-packages=(cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev libgtest-dev googletest)
+packages=(cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev libgtest-dev googletest dpkg-dev)
 
 install_packages() {
   local missing=()
@@ -33,6 +34,7 @@ case "${1:-}" in
     build
     ctest --preset "$preset" -j "$(nproc)"
     MINKQ_LIB_DIR="$PWD/$binary_dir/capi" bindings/test.sh  # cargo test (with doctests) and pytest
+    examples/consumers.sh "$binary_dir"  # cmake --install, find_package, pkg-config, Rust, .deb
     fuzz/run.sh 60  # differential (vs Embree and the oracle) and C API fuzzers, a minute each
     ;;
   build) build ;;

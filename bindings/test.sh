@@ -2,7 +2,8 @@
 # Builds and tests minkq's Rust and Python bindings on a fresh Debian 12 machine that has cargo
 # and python3 (build.sh's `test` command calls it after ctest):
 #   - installs what is missing: Debian's librust-*-dev crates (there is no crates.io here;
-#     .cargo/config.toml points cargo at /usr/share/cargo/registry), bindgen, cbindgen,
+#     offline-cargo.sh points this script's cargo and maturin runs at
+#     /usr/share/cargo/registry; MINKQ_CARGO_OFFLINE=0 keeps your own), bindgen, cbindgen,
 #     libclang, the C++ build dependencies, python3-venv; maturin, numpy and pytest from PyPI
 #     into a virtual environment under the build folder;
 #   - takes libminkq.so from MINKQ_LIB_DIR (the CMake build's capi/ folder) or builds a
@@ -63,6 +64,7 @@ fi
 
 # ---- Rust --------------------------------------------------------------------------------------
 cd "$root/bindings"
+. "$root/bindings/offline-cargo.sh" "$build/cargo-home"  # also for maturin below
 target=${CARGO_TARGET_DIR:-$root/bindings/target}
 step "cargo test --workspace (MINKQ_LIB_DIR=$MINKQ_LIB_DIR)"
 cargo test --workspace

@@ -1,6 +1,7 @@
-// C++ conveniences over the C API (minkq.h) for the project's own C++ programs (the CLI, the
-// tests, the fuzzers and the benchmarks): owning handles, a status check that throws with the
-// library's message, and small creation helpers. Header-only; nothing here is part of the ABI.
+// C++ conveniences over the C API (minkq.h), installed beside it and used by the project's own
+// C++ programs (the CLI, the tests, the fuzzers and the benchmarks): owning handles, a status
+// check that throws with the library's message, and small creation helpers. Header-only;
+// nothing here is part of the ABI.
 #pragma once
 
 #include <cstddef>
