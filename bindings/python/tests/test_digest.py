@@ -176,7 +176,7 @@ def test_pairs_and_digests_equal_the_c_api(device, make, r):
 def test_digest_of_the_default_demo_scene_equals_the_c_api(device):
     """The default `minkq demo` scene (twisted sheet 388 x 388): VT leaf_exact pairs and digest
     through the bindings equal the C API's."""
-    import demo
+    from minkq import demo
 
     xyz, tris = demo.twisted_sheet(demo.DEFAULT_SIZE, 3.0)
     r = float(np.float32(demo.DEFAULT_FACTOR * demo.mean_edge_length(xyz, demo.derive_edges(tris))))
