@@ -76,9 +76,11 @@ set -euo pipefail
 hidden=\${1:-}
 if [ -n "\$hidden" ]; then
   for f in /usr/lib/x86_64-linux-gnu/libtbb*.so* /usr/lib/x86_64-linux-gnu/libxxhash*.so* /lib/x86_64-linux-gnu/libtbb*.so* /lib/x86_64-linux-gnu/libxxhash*.so*; do
-    [ -f "\$f" ] && [ ! -L "\$f" ] && mount --bind /dev/null "\$f"
+    if [ -f "\$f" ] && [ ! -L "\$f" ]; then mount --bind /dev/null "\$f"; fi
   done
-  for d in ${hide[*]@Q}; do [ -d "\$d" ] && mount -t tmpfs none "\$d"; done
+  for d in ${hide[*]@Q}; do
+    if [ -d "\$d" ]; then mount -t tmpfs none "\$d"; fi  # one under an earlier one is gone already
+  done
   if "$py" -c 'import ctypes; ctypes.CDLL("libtbb.so.12")' 2>/dev/null; then
     echo "check-wheel: FAIL: the system's libtbb.so.12 still loads inside the namespace" >&2; exit 1
   fi
