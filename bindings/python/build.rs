@@ -1,22 +1,17 @@
-//! The extension finds libminkq.so.1 next to itself ($ORIGIN: the copy placed in the package
-//! below, which the wheel ships) or, in a build tree, in the folder minkq-sys linked.
+//! The extension links the libminkq.so.1 that minkq-sys found or built (MINKQ_LIB_DIR, else a
+//! CMake build of this repository in minkq-sys's OUT_DIR; CPU backend unless MINKQ_WITH_CUDA
+//! says otherwise) and gets no rpath of its own: a build-tree path must not end up in a wheel.
+//! maturin repairs the wheel (pyproject.toml: auditwheel = "repair"): it finds libminkq in the
+//! folder minkq-sys passed to the linker, copies it with TBB and xxHash into minkq.libs/ and
+//! sets the extension's rpath to $ORIGIN/../minkq.libs. The build tree's extension (pytest in
+//! bindings/test.sh) finds the library through LD_LIBRARY_PATH.
 use std::env;
 use std::fs;
 use std::path::PathBuf;
 
 fn main() {
-    let lib_dir = PathBuf::from(env::var_os("DEP_MINKQ_LIB_DIR").expect("minkq-sys sets DEP_MINKQ_LIB_DIR"));
-    println!("cargo:rustc-cdylib-link-arg=-Wl,-rpath,$ORIGIN:{}", lib_dir.display());
-    // Ship the library inside the Python package (python/minkq/libminkq.so.1, git-ignored):
-    // maturin puts everything under python/minkq into the wheel.
-    let soname = "libminkq.so.1";
-    let source = lib_dir.join(soname);
-    let package = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").unwrap()).join("python/minkq");
-    println!("cargo:rerun-if-changed={}", source.display());
-    if source.exists() {
-        let target = package.join(soname);
-        let _ = fs::remove_file(&target);
-        fs::copy(&source, &target)
-            .unwrap_or_else(|e| panic!("cannot copy {} into {}: {e}", source.display(), package.display()));
-    }
+    // Older builds copied the library into the package (python/minkq/libminkq.so.1): a copy
+    // left there would ship in a wheel beside the repaired one.
+    let stale = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").unwrap()).join("python/minkq/libminkq.so.1");
+    let _ = fs::remove_file(stale);
 }

@@ -3,10 +3,9 @@ import sys
 
 import pytest
 
-# The tests import their oracle (oracle.py) and the Python demo (examples/python/demo.py).
+# The tests import their oracle (oracle.py); the demo's scene comes from the package (minkq.demo).
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(HERE, "..", "..", "..", "examples", "python"))
 
 import minkq  # noqa: E402
 

@@ -216,7 +216,7 @@ def scenes() -> Dict[str, Callable[[], Scene]]:
 def fine_sheet(n: int = 500, turns: float = 3.0) -> Tuple[np.ndarray, np.ndarray]:
     """An n x n grid on the unit square twisted ``turns`` turns about the x axis (demo.py's
     twisted_sheet): edges across the sheet are 1 / (n - 1) long, far below 3.2e-3 for n = 500."""
-    from demo import twisted_sheet
+    from minkq.demo import twisted_sheet
 
     return twisted_sheet(n, turns)
 

@@ -14,10 +14,15 @@ from oracle import degenerate_soup, rolled_sheet
 
 
 def load_library() -> ctypes.CDLL:
-    """libminkq.so.1: beside the extension (wheel and build tree), or in MINKQ_LIB_DIR."""
-    candidates = [os.path.join(os.path.dirname(minkq.__file__), "libminkq.so.1")]
+    """The libminkq the extension loaded (a repaired wheel's minkq.libs/libminkq-<hash>.so.1,
+    or the build tree's libminkq.so.1), as /proc/self/maps names it; else MINKQ_LIB_DIR's."""
+    from minkq import _native  # noqa: F401  (loads the library)
+
+    with open("/proc/self/maps") as maps:
+        loaded = sorted({line.split()[-1] for line in maps if "/libminkq" in line})
+    candidates = loaded[:1]
     if os.environ.get("MINKQ_LIB_DIR"):
-        candidates.insert(0, os.path.join(os.environ["MINKQ_LIB_DIR"], "libminkq.so.1"))
+        candidates.append(os.path.join(os.environ["MINKQ_LIB_DIR"], "libminkq.so.1"))
     for path in candidates:
         if os.path.exists(path):
             return declare(ctypes.CDLL(path))
@@ -176,7 +181,7 @@ def test_pairs_and_digests_equal_the_c_api(device, make, r):
 def test_digest_of_the_default_demo_scene_equals_the_c_api(device):
     """The default `minkq demo` scene (twisted sheet 388 x 388): VT leaf_exact pairs and digest
     through the bindings equal the C API's."""
-    import demo
+    from minkq import demo
 
     xyz, tris = demo.twisted_sheet(demo.DEFAULT_SIZE, 3.0)
     r = float(np.float32(demo.DEFAULT_FACTOR * demo.mean_edge_length(xyz, demo.derive_edges(tris))))

@@ -23,10 +23,9 @@ def scene(device, mesh):
 @pytest.mark.parametrize(
     "change, error, match",
     [
-        (lambda v, t: (v.astype(np.float64), t), TypeError, r"vertices: expected a float32 array, got float64"),
-        (lambda v, t: (v, t.astype(np.int64)), TypeError, r"triangles: expected a int32 array, got int64"),
-        (lambda v, t: (v, t.astype(np.float32)), TypeError, r"triangles: expected a int32 array, got float32"),
-        (lambda v, t: (v.astype(">f4"), t), TypeError, r"vertices: expected a float32 array"),
+        (lambda v, t: (v, t.astype(np.float32)), TypeError, r"triangles: expected int32 values, got float32 \(floats are not rounded"),
+        (lambda v, t: (v.astype(np.complex64), t), TypeError, r"vertices: expected float32 values, got complex64"),
+        (lambda v, t: (v, t.astype(bool)), TypeError, r"triangles: expected int32 values, got bool"),
         (lambda v, t: (v[:, :2].copy(), t), ValueError, r"vertices: expected shape \(n, 3\), got \(25, 2\)"),
         (lambda v, t: (v.ravel(), t), ValueError, r"vertices: expected shape \(n, 3\), got \(75,\)"),
         (lambda v, t: (v, t[:, :2].copy()), ValueError, r"triangles: expected shape \(n, 3\), got \(32, 2\)"),
@@ -85,8 +84,9 @@ def test_byte_swapped_vertices_are_refused_by_the_native_layer(device, mesh):
     assert np.array_equal(swapped, xyz)  # the same values, the other byte order
     with pytest.raises(TypeError, match="vertices: expected native byte order"):
         _native.Scene(device._native, swapped, tris, None, True, True, True)
-    with pytest.raises(TypeError, match="vertices: expected a float32 array"):
-        minkq.Scene(device, swapped, tris)  # the package checks the exact dtype first
+    # The package converts it (one copy in native order) before the native layer sees it.
+    scene = minkq.Scene(device, swapped, tris)
+    assert np.array_equal(scene.query("vt", "box", 0.1, canonical=True), minkq.Scene(device, xyz, tris).query("vt", "box", 0.1, canonical=True))
 
 
 def test_non_finite_vertex(device, mesh):
@@ -110,7 +110,7 @@ def test_index_out_of_range(device, mesh):
         minkq.Scene(device, xyz, bad)
     with pytest.raises(minkq.IndexOutOfRangeError, match="edge 0 references vertex 99"):
         minkq.Scene(device, xyz, tris, edges=np.array([[0, 99]], np.int32))
-    with pytest.raises(ValueError, match="triangles: a value does not fit in int32"):
+    with pytest.raises(minkq.IndexOutOfRangeError, match=r"triangles\[0, 2\] = 1099511627776 does not fit in int32"):
         minkq.Scene(device, xyz, [[0, 1, 2**40]])
 
 
@@ -129,8 +129,8 @@ def test_invalid_arguments(device, mesh, scene):
         scene.rebuild(mesh[0][:-1])
     with pytest.raises(ValueError, match=r"vertices: expected shape \(n, 3\), got \(25, 2\)"):
         scene.rebuild(mesh[0][:, :2].copy())
-    with pytest.raises(TypeError, match="vertices: expected a float32 array, got float64"):
-        scene.rebuild(mesh[0].astype(np.float64))
+    with pytest.raises(TypeError, match="vertices: expected float32 values, got complex128"):
+        scene.rebuild(mesh[0].astype(np.complex128))
 
 
 def test_non_finite_radius(scene):

@@ -180,7 +180,7 @@ def test_fine_sheet_finds_every_contact_newtons_epsilon_loses(capsys):
     """A 500 x 500 grid on the unit square twisted three turns (edges across the sheet
     ~2e-3 long, under the 3.2e-3 that Newton's edge_edge_parallel_epsilon = 1e-5 turns into
     points), r = 0.25 x the mean edge: minkq's rows hold every contact of the oracle."""
-    from demo import derive_edges, mean_edge_length
+    from minkq.demo import derive_edges, mean_edge_length
 
     xyz, tris = ns.fine_sheet(500)
     r = float(np.float32(0.25 * mean_edge_length(xyz, derive_edges(tris))))

@@ -16,7 +16,7 @@ from oracle import rolled_sheet
 
 def test_package_ships_type_information():
     root = os.path.dirname(minkq.__file__)
-    for name in ("py.typed", "_native.pyi", "__init__.py", "_errors.py", "_api.py", "_interop.py", "newton.py"):
+    for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_interop.py", "newton.py", "demo.py"):
         assert os.path.exists(os.path.join(root, name)), name
     assert minkq.abi_version() == minkq.ABI_VERSION
     # The library the package loaded is the release the package says it is.
@@ -85,7 +85,7 @@ def _longest_pause_while(work) -> tuple:
 
 
 def test_gil_is_released_during_build_refit_rebuild_and_query(device):
-    import demo
+    from minkq import demo
 
     sheets = {}
 
@@ -149,7 +149,7 @@ def test_threads_share_a_scene_and_a_device(device):
 def test_default_demo_scene_true_contacts_equal_minkq_demo_reference(device):
     """examples/python/demo.py rebuilds `minkq demo`'s scene bit for bit: its leaf_exact counts
     are the reference oracle's 62694 VT and 192090 EE contacts."""
-    import demo
+    from minkq import demo
 
     xyz, tris = demo.twisted_sheet(demo.DEFAULT_SIZE, 3.0)
     edges = demo.derive_edges(tris)
@@ -165,7 +165,7 @@ def test_default_demo_scene_true_contacts_equal_minkq_demo_reference(device):
 
 
 def test_demo_prints_the_table(capsys):
-    import demo
+    from minkq import demo
 
     assert demo.main(["--backend", "cpu", "--size", "40", "--repeat", "1"]) == 0
     out = capsys.readouterr().out

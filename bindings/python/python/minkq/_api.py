@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple
 import numpy as np
 
 from . import _native
-from ._errors import CapacityError
+from ._errors import CapacityError, IndexOutOfRangeError
 from ._interop import Like, allocate_pairs, checked, has_protocol, head, like, view
 
 if TYPE_CHECKING:
@@ -55,17 +55,19 @@ class QueryInfo:
 def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.ndarray:
     """``value`` as a C-contiguous array of shape (n, *trailing) and dtype ``dtype``.
 
-    A numpy array must already have the dtype (no hidden conversion of a large array) and is
-    used without a copy when it is C-contiguous; a list or tuple is converted.
+    A C-contiguous numpy array of exactly ``dtype`` (float32 coordinates, int32 indices, native
+    byte order) is used in place, without a copy. Other host arrays are converted once, into a
+    copy that lives for the call:
+    float64 vertices and int64 / uint32 indices, as trimesh and most mesh loaders give, strided
+    or byte-swapped arrays, lists and tuples. Coordinates may come from any float or integer
+    dtype; indices from integer dtypes only (no rounding of floats), and an index that does not
+    fit in int32 raises :class:`~minkq.IndexOutOfRangeError` naming the element instead of
+    wrapping around. Arrays of other libraries (DLPack, the CUDA array interface) are never
+    converted: see :func:`minkq._interop.checked`.
     """
     dtype = np.dtype(dtype)
     if isinstance(value, np.ndarray):
         array = value
-        if array.dtype != dtype:
-            raise TypeError(
-                f"{name}: expected a {dtype.name} array, got {array.dtype} "
-                f"(convert with {name}.astype(np.{dtype.name}))"
-            )
     else:
         try:
             array = np.asarray(value)
@@ -73,23 +75,37 @@ def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.nd
             raise TypeError(f"{name}: expected an array of {dtype.name}, got {type(value).__name__}: {e}") from None
         if array.size == 0:
             array = array.astype(dtype)
-        elif dtype.kind == "f" and array.dtype.kind in "fiu":
-            array = array.astype(dtype)
-        elif dtype.kind == "i" and array.dtype.kind in "iu":
-            info = np.iinfo(dtype)
-            if array.min() < info.min or array.max() > info.max:
-                raise ValueError(f"{name}: a value does not fit in {dtype.name}")
-            array = array.astype(dtype)
-        else:
-            raise TypeError(f"{name}: expected {dtype.name} values, got {array.dtype}")
         if array.size == 0 and array.ndim == 1:
             array = array.reshape((0,) + trailing)
+    if array.dtype != dtype:
+        array = _converted(array, name, dtype)
     if array.ndim != 1 + len(trailing) or array.shape[1:] != trailing:
         wanted = ", ".join(["n"] + [str(d) for d in trailing])
         raise ValueError(f"{name}: expected shape ({wanted}), got {array.shape}")
     if not (array.flags.c_contiguous and array.flags.aligned):
-        array = np.require(array, requirements=("C", "A"))  # the only copy: strided input
+        array = np.require(array, requirements=("C", "A"))  # strided input: a contiguous copy
     return array
+
+
+def _converted(array: np.ndarray, name: str, dtype: np.dtype) -> np.ndarray:
+    """A copy of ``array`` in ``dtype`` (float32 from any real dtype, int32 from integers whose
+    values fit), or TypeError / IndexOutOfRangeError naming the argument."""
+    kind = array.dtype.kind
+    if dtype.kind == "f" and kind in "fiu":
+        return array.astype(dtype)
+    if dtype.kind == "i" and kind in "iu":
+        info = np.iinfo(dtype)
+        if array.size:
+            for bad in (array < info.min, array > info.max):
+                if bad.any():
+                    at = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), array.shape))
+                    raise IndexOutOfRangeError(
+                        f"{name}[{', '.join(map(str, at))}] = {array[at]} does not fit in int32: minkq indices "
+                        f"are int32 (0 to {info.max})"
+                    )
+        return array.astype(dtype)
+    hint = " (floats are not rounded to indices)" if kind == "f" else ""
+    raise TypeError(f"{name}: expected {dtype.name} values, got {array.dtype}{hint}")
 
 
 def _boxes(value: Any, name: str) -> np.ndarray:
@@ -272,7 +288,10 @@ class Scene(_SizedQueries):
     ``vertices``: (n, 3) float32; ``triangles``: (m, 3) int32; ``edges``: (e, 2) int32, or None
     (or an empty array) to derive them from the triangles (every distinct undirected edge as
     (min, max), sorted).
-    numpy arrays must have exactly these dtypes and are used without a copy when C-contiguous.
+    C-contiguous numpy arrays of exactly these dtypes are used without a copy; other host
+    arrays (float64 vertices, int64 indices, ...) are converted once: a copy is made (an index
+    that does not fit in int32 raises IndexOutOfRangeError naming it). Arrays of other
+    libraries must have exactly these dtypes.
     ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
     a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
 
