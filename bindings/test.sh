@@ -80,7 +80,7 @@ cargo build -p minkq-python -p minkq-demo
 # ---- Python ------------------------------------------------------------------------------------
 step "pytest on the build tree"
 # The debug extension (Rust glue; the library itself is the Release libminkq.so). [python wheel]
-# It has no rpath (none may reach a wheel): it finds libminkq.so.1 through LD_LIBRARY_PATH.
+# It has no rpath (none may reach a wheel): it finds libminkq.so.<ABI> through LD_LIBRARY_PATH.
 cp "$target/debug/lib_native.so" python/python/minkq/_native.so
 tree_env=(env PYTHONPATH="$root/bindings/python/python" LD_LIBRARY_PATH="$MINKQ_LIB_DIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}")
 "${tree_env[@]}" "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests

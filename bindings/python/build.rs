@@ -1,4 +1,4 @@
-//! The extension links the libminkq.so.1 that minkq-sys found or built (MINKQ_LIB_DIR, else a
+//! The extension links the libminkq.so.<ABI> that minkq-sys found or built (MINKQ_LIB_DIR, else a
 //! CMake build of this repository in minkq-sys's OUT_DIR; CPU backend unless MINKQ_WITH_CUDA
 //! says otherwise) and gets no rpath of its own: a build-tree path must not end up in a wheel.
 //! maturin repairs the wheel (pyproject.toml: auditwheel = "repair"): it finds libminkq in the

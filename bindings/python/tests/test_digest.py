@@ -14,19 +14,20 @@ from oracle import degenerate_soup, rolled_sheet
 
 
 def load_library() -> ctypes.CDLL:
-    """The libminkq the extension loaded (a repaired wheel's minkq.libs/libminkq-<hash>.so.1,
-    or the build tree's libminkq.so.1), as /proc/self/maps names it; else MINKQ_LIB_DIR's."""
+    """The libminkq the extension loaded (a repaired wheel's minkq.libs/libminkq-<hash>.so.N,
+    or the build tree's libminkq.so.N, N the ABI version), as /proc/self/maps names it; else
+    MINKQ_LIB_DIR's."""
     from minkq import _native  # noqa: F401  (loads the library)
 
     with open("/proc/self/maps") as maps:
         loaded = sorted({line.split()[-1] for line in maps if "/libminkq" in line})
     candidates = loaded[:1]
     if os.environ.get("MINKQ_LIB_DIR"):
-        candidates.append(os.path.join(os.environ["MINKQ_LIB_DIR"], "libminkq.so.1"))
+        candidates.append(os.path.join(os.environ["MINKQ_LIB_DIR"], "libminkq.so"))
     for path in candidates:
         if os.path.exists(path):
             return declare(ctypes.CDLL(path))
-    pytest.skip(f"no libminkq.so.1 in {candidates}")
+    pytest.skip(f"no libminkq in {candidates}")
 
 
 class Buffer(ctypes.Structure):
