@@ -334,8 +334,9 @@ def test_result_struct_and_attributes_are_newtons(built):
     assert detector.collision_info._cls is _newton_tmc.TriMeshCollisionInfo  # Newton's wp.struct
     assert detector.get_collision_data() is detector.collision_info
     assert detector.edge_edge_parallel_epsilon == 1e-5 and detector.minkq_device.backend == "cpu"
-    with pytest.raises(AttributeError, match="builds no Warp BVH"):
-        detector.bvh_edges
+    assert "bvh_tris" not in detector.__dict__  # Newton's Warp BVHs: not built until read
+    with pytest.raises(AttributeError, match="has no attribute 'bvh_nothing'"):
+        detector.bvh_nothing
     with pytest.raises(ValueError, match="no result buffers"):
         mn.TriMeshCollisionDetector(model).vertex_triangle_collision_detection(0.1)
     with pytest.raises(ValueError, match="either collision_info or init_collision_info"):
@@ -352,6 +353,47 @@ def test_result_struct_and_attributes_are_newtons(built):
     # Triangle-triangle intersections: Newton's kernel over a Warp BVH built for the call.
     detector.triangle_triangle_intersection_detection()
     assert not detector.triangle_intersecting_triangles_count.numpy().any()
+
+
+def test_warp_bvhs_are_built_when_read_and_follow_refit_and_rebuild(built):
+    """bvh_tris / bvh_edges, their bounds, groups and group roots equal Newton's detector's at
+    first access, after a refit to moved vertices and after a rebuild; queried with Warp they
+    find the same triangles."""
+    scene, model, _, _ = built("cloth_bending")
+    ours = mn.TriMeshCollisionDetector(model, init_collision_info=True)
+    theirs = NewtonDetector(model, init_collision_info=True)
+    names = ("lower_bounds_tris", "upper_bounds_tris", "tri_groups", "bvh_tris_group_roots",
+             "lower_bounds_edges", "upper_bounds_edges", "edge_groups", "bvh_edges_group_roots")
+
+    def same():
+        for name in names:
+            assert np.array_equal(getattr(ours, name).numpy(), getattr(theirs, name).numpy()), name
+        assert isinstance(ours.bvh_tris, wp.Bvh) and isinstance(ours.bvh_edges, wp.Bvh)
+
+    same()
+    moved = wp.array(model.particle_q.numpy() * np.float32(1.25) + np.float32(0.1), dtype=wp.vec3, device=model.device)
+    ours.refit(moved)
+    theirs.refit(moved)
+    same()
+    ours.rebuild(model.particle_q)
+    theirs.rebuild(model.particle_q)
+    same()
+
+    @wp.kernel
+    def count_hits(bvh: wp.uint64, lower: wp.vec3, upper: wp.vec3, hits: wp.array(dtype=wp.int32)):
+        query = wp.bvh_query_aabb(bvh, lower, upper)
+        index = int(0)
+        while wp.bvh_query_next(query, index):
+            wp.atomic_add(hits, 0, 1)
+
+    lo, hi = model.particle_q.numpy().min(axis=0), model.particle_q.numpy().max(axis=0)
+    box = (wp.vec3(*lo), wp.vec3(*(lo + 0.5 * (hi - lo))))
+    counts = []
+    for detector in (ours, theirs):
+        hits = wp.zeros(1, dtype=wp.int32, device=model.device)
+        wp.launch(count_hits, dim=1, inputs=[detector.bvh_tris.id, box[0], box[1], hits], device=model.device)
+        counts.append(int(hits.numpy()[0]))
+    assert counts[0] == counts[1] > 0
 
 
 def test_install_swaps_the_detector_into_newton():

@@ -61,10 +61,11 @@ Deliberate differences (documented choices):
 - Positions. Pairs come from the positions of the last ``refit`` / ``rebuild`` (as Newton's
   BVHs do); distances and min distances from ``vertex_positions`` at detection time (as
   Newton's kernels do).
-- Not built: Newton's Warp BVHs (``bvh_tris``, ``bvh_edges`` and their group roots), which
-  some other Newton code (``soft_contacts_mesh``) queries directly; reading them raises an
-  AttributeError saying so. ``triangle_triangle_intersection_detection`` works (it builds a
-  Warp BVH of the triangles for the call). ``collision_detection_block_size`` is unused.
+- Newton's Warp BVHs (``bvh_tris``, ``bvh_edges``, their group roots and bounds), which other
+  Newton code (its collision tests, ``soft_contacts_mesh``) queries directly, are built as
+  Newton builds them the first time one is read, and from then on refit and rebuilt with the
+  detector; a detector whose BVHs nobody reads never builds them. minkq's pairs never come
+  from them. ``collision_detection_block_size`` is unused.
 - Graph capture. Detection reads the pair count on the host and calls minkq (which
   synchronises its stream), so it cannot be recorded into a Warp graph (``wp.ScopedCapture``,
   on CUDA or, with Warp's APIC, on the CPU); Newton's detection launches only kernels. Inside a
@@ -82,7 +83,14 @@ from typing import Any, Optional
 import numpy as np
 import warp as wp
 from newton._src.geometry import tri_mesh_collision as _newton_tmc
-from newton._src.geometry.kernels import compute_tri_aabbs, init_triangle_collision_data_kernel
+from newton._src.geometry.bvh import compute_bvh_group_roots
+from newton._src.geometry.kernels import (
+    compute_edge_aabbs,
+    compute_edge_groups,
+    compute_tri_aabbs,
+    compute_tri_groups,
+    init_triangle_collision_data_kernel,
+)
 
 from . import _api
 from ._errors import CapacityError, UnsupportedError
@@ -498,6 +506,8 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
             self._scene.rebuild(self.vertex_positions)
         else:
             self._build_scene()
+        if self._warp_bvhs_built():
+            _newton_tmc.TriMeshCollisionDetector.rebuild(self)
 
     def refit(self, new_pos=None):
         """Refits both trees to ``new_pos`` (or the current ``vertex_positions``), read in place
@@ -507,6 +517,9 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
             self.vertex_positions = new_pos
         if self._scene is not None:
             self._scene.refit(self.vertex_positions)
+        if self._warp_bvhs_built():  # Newton's own per-tree refits (its refit() calls the overrides below)
+            _newton_tmc.TriMeshCollisionDetector.refit_triangles(self)
+            _newton_tmc.TriMeshCollisionDetector.refit_edges(self)
 
     def refit_triangles(self):
         """Refits the trees to ``vertex_positions`` (minkq refits both trees together)."""
@@ -654,8 +667,11 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         )
 
     def triangle_triangle_intersection_detection(self):
-        """Newton's triangle-triangle intersection test, over a Warp BVH of the triangles built
-        for the call (minkq has no triangle-triangle query)."""
+        """Newton's triangle-triangle intersection test, over Newton's Warp BVH of the triangles
+        when it has been built (see the module's documentation), else over one built for the
+        call from ``vertex_positions`` (minkq has no triangle-triangle query)."""
+        if self._warp_bvhs_built():  # Newton's BVH, as of the last refit or rebuild
+            return super().triangle_triangle_intersection_detection()
         model = self.model
         lower = wp.empty(model.tri_count, dtype=wp.vec3, device=self.device)
         upper = wp.empty(model.tri_count, dtype=wp.vec3, device=self.device)
@@ -666,14 +682,46 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         finally:
             del self.__dict__["bvh_tris"]
 
+    # Newton's Warp BVHs and what it keeps for them, built on first access.
+    _WARP_BVH_ATTRIBUTES = frozenset(
+        ("bvh_tris", "bvh_edges", "bvh_tris_group_roots", "bvh_edges_group_roots", "lower_bounds_tris",
+         "upper_bounds_tris", "lower_bounds_edges", "upper_bounds_edges", "tri_groups", "edge_groups")
+    )
+
+    def _warp_bvhs_built(self) -> bool:
+        return "bvh_tris" in self.__dict__ and "bvh_edges" in self.__dict__
+
+    def _build_warp_bvhs(self) -> None:
+        """Newton's BVHs of the triangles and edges, grouped by world, over ``vertex_positions``
+        (those of the last refit or rebuild), with Newton's kernels: the attributes its
+        constructor makes."""
+        self._not_capturing("bvh_tris / bvh_edges (first access)")
+        model, device = self.model, self.device
+        built = {}
+        for kind, count, indices, aabbs, groups in (
+            ("tris", model.tri_count, model.tri_indices, compute_tri_aabbs, compute_tri_groups),
+            ("edges", model.edge_count, model.edge_indices, compute_edge_aabbs, compute_edge_groups),
+        ):
+            lower = wp.empty(count, dtype=wp.vec3, device=device)
+            upper = wp.empty(count, dtype=wp.vec3, device=device)
+            group = wp.empty(count, dtype=wp.int32, device=device)
+            wp.launch(aabbs, dim=count, inputs=[self.vertex_positions, indices, lower, upper], device=device)
+            wp.launch(groups, dim=count, inputs=[indices, model.particle_world, model.world_count, group], device=device)
+            # Warp cannot build an empty grouped BVH on every device: Newton keeps None for no edges.
+            bvh = wp.Bvh(lower, upper, groups=group) if count or kind == "tris" else None
+            roots = wp.full(model.world_count + 1, -1 if kind == "edges" else 0, dtype=wp.int32, device=device)
+            if bvh is not None:
+                wp.launch(compute_bvh_group_roots, dim=model.world_count + 1, inputs=[bvh.id, roots], device=device)
+            singular = kind[:-1] if kind == "tris" else "edge"
+            built.update({f"lower_bounds_{kind}": lower, f"upper_bounds_{kind}": upper, f"{singular}_groups": group,
+                          f"bvh_{kind}": bvh, f"bvh_{kind}_group_roots": roots})
+        self.__dict__.update(built)
+
     def __getattr__(self, name: str) -> Any:
-        # Only reached for attributes that do not exist.
-        if name in ("bvh_tris", "bvh_edges", "bvh_tris_group_roots", "bvh_edges_group_roots",
-                    "lower_bounds_tris", "upper_bounds_tris", "lower_bounds_edges", "upper_bounds_edges"):
-            raise AttributeError(
-                f"minkq.newton.TriMeshCollisionDetector builds no Warp BVH ({name}): its pairs come from minkq. "
-                "Use Newton's own detector for code that queries the Warp BVHs directly."
-            )
+        # Only reached for attributes that do not exist (yet).
+        if name in TriMeshCollisionDetector._WARP_BVH_ATTRIBUTES and not self._warp_bvhs_built():
+            self._build_warp_bvhs()
+            return self.__dict__[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
