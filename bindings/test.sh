@@ -100,7 +100,7 @@ AUDITWHEEL="$venv/bin/auditwheel" \
 if [ "${MINKQ_CHECK_SDIST:-0}" = 1 ]; then
   step "sdist (python -m build --sdist), a wheel from it in a fresh folder, check-wheel.sh"
   "$venv/bin/python" -c 'import build' 2>/dev/null || "$venv/bin/pip" install -q --disable-pip-version-check build
-  # Inside the repository, so that cargo still finds the repository's registry configuration.
+  # Under the build folder; cargo there runs with offline-cargo.sh's CARGO_HOME, as above.
   sdist=$build/sdist-check
   rm -rf "$sdist" && mkdir -p "$sdist"
   PATH="$venv/bin:$PATH" "$venv/bin/python" -m build -q --sdist --no-isolation -o "$sdist" python

@@ -12,8 +12,8 @@ left as it is.
 
 Sdists. maturin's sdist holds the Rust workspace (bindings/) but not the C++ library, which
 lives above it; minkq-sys finds that only in a checkout. :func:`build_sdist` adds the sources
-CMake needs (``CMakeLists.txt``, ``capi/``, ``core/``, ``testing/`` and, where present,
-``VERSION``, ``LICENSE``, ``cmake/``) under ``minkq-src/`` in the sdist, and :func:`build_wheel`,
+CMake needs (``_CPP_SOURCES``: the top-level ``CMakeLists.txt`` and the folders and files it
+reads) under ``minkq-src/`` in the sdist, and :func:`build_wheel`,
 building from such an sdist without MINKQ_LIB_DIR, builds libminkq there with CMake first (CPU
 backend unless MINKQ_WITH_CUDA; tests and examples off) and hands the build to minkq-sys
 through MINKQ_LIB_DIR. Everything else is maturin's own backend.
@@ -32,8 +32,11 @@ from typing import Any, Dict, List, Mapping, Optional
 import maturin
 from maturin import *  # noqa: F401,F403  (the other PEP 517 hooks, unchanged)
 
-# What CMake needs of the repository for the library alone (MINKQ_BUILD_TESTS/EXAMPLES=OFF).
-_CPP_SOURCES = ("CMakeLists.txt", "capi", "core", "testing", "VERSION", "LICENSE", "cmake")
+# What CMake needs of the repository for the library alone (MINKQ_BUILD_TESTS/EXAMPLES=OFF):
+# the top-level CMakeLists.txt adds capi/, core/, testing/ and packaging/ (whose install rules
+# name LICENSE, CHANGELOG.md and README.md), and reads VERSION.
+_CPP_SOURCES = ("CMakeLists.txt", "capi", "core", "testing", "packaging", "VERSION", "LICENSE", "CHANGELOG.md",
+                "README.md")
 _CPP_DIR = "minkq-src"
 
 
