@@ -698,22 +698,24 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         self._not_capturing("bvh_tris / bvh_edges (first access)")
         model, device = self.model, self.device
         built = {}
-        for kind, count, indices, aabbs, groups in (
-            ("tris", model.tri_count, model.tri_indices, compute_tri_aabbs, compute_tri_groups),
-            ("edges", model.edge_count, model.edge_indices, compute_edge_aabbs, compute_edge_groups),
+        # Per kind, as Newton keeps them: the groups' attribute name, whether an empty set still
+        # gets a BVH (Warp cannot build an empty grouped BVH on every device: Newton keeps None
+        # for no edges) and the group roots' fill value.
+        for kind, groups_name, count, indices, aabbs, groups, empty_bvh, root_fill in (
+            ("tris", "tri_groups", model.tri_count, model.tri_indices, compute_tri_aabbs, compute_tri_groups, True, 0),
+            ("edges", "edge_groups", model.edge_count, model.edge_indices, compute_edge_aabbs, compute_edge_groups,
+             False, -1),
         ):
             lower = wp.empty(count, dtype=wp.vec3, device=device)
             upper = wp.empty(count, dtype=wp.vec3, device=device)
             group = wp.empty(count, dtype=wp.int32, device=device)
             wp.launch(aabbs, dim=count, inputs=[self.vertex_positions, indices, lower, upper], device=device)
             wp.launch(groups, dim=count, inputs=[indices, model.particle_world, model.world_count, group], device=device)
-            # Warp cannot build an empty grouped BVH on every device: Newton keeps None for no edges.
-            bvh = wp.Bvh(lower, upper, groups=group) if count or kind == "tris" else None
-            roots = wp.full(model.world_count + 1, -1 if kind == "edges" else 0, dtype=wp.int32, device=device)
+            bvh = wp.Bvh(lower, upper, groups=group) if count or empty_bvh else None
+            roots = wp.full(model.world_count + 1, root_fill, dtype=wp.int32, device=device)
             if bvh is not None:
                 wp.launch(compute_bvh_group_roots, dim=model.world_count + 1, inputs=[bvh.id, roots], device=device)
-            singular = kind[:-1] if kind == "tris" else "edge"
-            built.update({f"lower_bounds_{kind}": lower, f"upper_bounds_{kind}": upper, f"{singular}_groups": group,
+            built.update({f"lower_bounds_{kind}": lower, f"upper_bounds_{kind}": upper, groups_name: group,
                           f"bvh_{kind}": bvh, f"bvh_{kind}_group_roots": roots})
         self.__dict__.update(built)
 
