@@ -170,7 +170,7 @@ inline bool is_aligned4(const Strided& values) {
 }
 
 static __global__ void gather_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
-                              float* out) {
+                                     float* out) {
   const int64_t i = global_index();
   if (i >= n) return;
   const char* record = base + size_t(i) * stride;
@@ -178,7 +178,7 @@ static __global__ void gather_kernel(const char* base, size_t stride, int64_t n,
 }
 
 static __global__ void first_non_finite_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
-                                        unsigned long long* first) {
+                                               unsigned long long* first) {
   const int64_t i = global_index();
   if (i >= n) return;
   const char* record = base + size_t(i) * stride;

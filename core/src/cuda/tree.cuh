@@ -49,7 +49,7 @@ static __global__ void collapse_kernel(const KarrasNode* karras, const int32_t* 
 
 template <class Boxes>
 static __global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
-                             BvhNode* nodes, int32_t* arrivals) {
+                                    BvhNode* nodes, int32_t* arrivals) {
   const int64_t slot = global_index();
   if (slot < 2 * int64_t(num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes, arrivals);
 }
