@@ -33,7 +33,8 @@ case "${1:-}" in
   test)
     build
     ctest --preset "$preset" -j "$(nproc)"
-    MINKQ_LIB_DIR="$PWD/$binary_dir/capi" bindings/test.sh  # cargo test (with doctests) and pytest
+    # cargo test (with doctests), pytest, the wheel alone, and a wheel built from the sdist
+    MINKQ_CHECK_SDIST=1 MINKQ_LIB_DIR="$PWD/$binary_dir/capi" bindings/test.sh
     examples/consumers.sh "$binary_dir"  # cmake --install, find_package, pkg-config, Rust, .deb
     fuzz/run.sh 60  # differential (vs Embree and the oracle) and C API fuzzers, a minute each
     ;;
