@@ -428,10 +428,12 @@ class _Driver:
         """Orders ``consumer`` after the work enqueued on ``producer`` so far, on the device (an
         event recorded on one and waited for by the other), without blocking the host."""
         event = ctypes.c_void_p()
-        self._check(self._lib.cuEventCreate(ctypes.byref(event), ctypes.c_uint(self.CU_EVENT_DISABLE_TIMING)), "cuEventCreate")
+        flags = ctypes.c_uint(self.CU_EVENT_DISABLE_TIMING)
+        self._check(self._lib.cuEventCreate(ctypes.byref(event), flags), "cuEventCreate")
         try:
             self._check(self._lib.cuEventRecord(event, ctypes.c_void_p(producer)), "cuEventRecord")
-            self._check(self._lib.cuStreamWaitEvent(ctypes.c_void_p(consumer), event, ctypes.c_uint(0)), "cuStreamWaitEvent")
+            wait = self._lib.cuStreamWaitEvent(ctypes.c_void_p(consumer), event, ctypes.c_uint(0))
+            self._check(wait, "cuStreamWaitEvent")
         finally:
             self._lib.cuEventDestroy_v2(event)
 
