@@ -264,6 +264,89 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
                                      int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
                                      minkq_query_info* vt_info, minkq_query_info* ee_info);
 
+/* ---- Stream-ordered calls: a scene inside a simulator's captured step -------------------
+ *
+ * The *_async calls enqueue their work on a stream and return without waiting for it: they do
+ * not synchronise, allocate or read device results on the host, so a sequence of them (refit,
+ * VT and EE queries) can be recorded into a CUDA graph by stream capture and replayed over new
+ * data. On a CUDA device:
+ *   - the stream is a cudaStream_t passed as a pointer (NULL: CUDA's default stream), and the
+ *     scene's asynchronous work is ordered on it only: the caller orders its own work (and
+ *     other streams) around it, and keeps the buffers alive until the work has run;
+ *   - every buffer is device memory: vertices.memory must be MINKQ_MEMORY_DEVICE, and all
+ *     buffers are checked as device buffers of blocking calls are;
+ *   - the scene's scratch (see minkq_scene_reserve) is shared by its asynchronous calls:
+ *     enqueue them on one stream, or order their streams; a blocking call runs on the calling
+ *     thread's per-thread default stream and does not wait for work enqueued elsewhere.
+ * On the CPU the same calls run to completion before returning, on host memory
+ * (vertices.memory MINKQ_MEMORY_HOST), and the stream is ignored. Both backends apply the same
+ * rules, so a program tested on the CPU keeps them on CUDA.
+ *
+ * Checked at once, as by the blocking calls and with their errors, before anything is
+ * enqueued: handles, descriptions, counts, strides, memory kinds, capacities, the radius and
+ * reservations. The data read on the device (vertex coordinates) is checked by the device: a
+ * refit or rebuild whose vertices hold a NaN or infinity leaves the scene's positions as they
+ * were (a rebuild then builds the trees for those positions), and records the scene's pending
+ * error, which minkq_scene_async_status returns and clears. Queries run on the positions the
+ * scene holds.
+ *
+ * Flags: MINKQ_QUERY_LEAF_EXACT and MINKQ_QUERY_CANONICAL (pairs sorted when they all fit,
+ * with scratch reserved for the capacity); MINKQ_QUERY_DIGEST and MINKQ_QUERY_STATS need a
+ * host read and return MINKQ_ERROR_UNSUPPORTED here. */
+typedef void* minkq_stream;
+
+typedef enum minkq_reserve_flags {
+  MINKQ_RESERVE_REFIT = 1,  /* scratch for minkq_scene_refit_async and the pending error */
+  MINKQ_RESERVE_REBUILD = 2 /* also the tree builds' scratch, for minkq_scene_rebuild_async */
+} minkq_reserve_flags;
+
+/* Reserves, on the scene's device, the scratch its asynchronous calls use, so that they never
+ * allocate: MINKQ_RESERVE_REFIT for refits (a copy of the vertices), MINKQ_RESERVE_REBUILD for
+ * refits and rebuilds (about the trees' size again), and canonical_capacity pairs for the sort
+ * of canonical asynchronous queries (queries with a larger capacity return INVALID_ARGUMENT).
+ * Queries without MINKQ_QUERY_CANONICAL need no reservation. Reservations only grow and last
+ * as long as the scene; call this before capturing. A blocking call (it may allocate and
+ * synchronise). Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
+ * (canonical_capacity), OUT_OF_MEMORY, DEVICE. */
+minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity);
+
+/* minkq_scene_refit, enqueued on `stream` (see above: the vertices in device memory on CUDA;
+ * non-finite coordinates reported by minkq_scene_async_status). Needs MINKQ_RESERVE_REFIT.
+ * Errors (at once): those of minkq_scene_refit except NON_FINITE; INVALID_ARGUMENT without the
+ * reservation or for host vertices on a CUDA device (device ones on the CPU); DEVICE. */
+minkq_status minkq_scene_refit_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
+/* minkq_scene_rebuild, enqueued on `stream`, as minkq_scene_refit_async; its trees are those
+ * minkq_scene_rebuild builds. Needs MINKQ_RESERVE_REBUILD. */
+minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
+
+/* minkq_scene_query, enqueued on `stream`: writes the exact number of pairs to *out_count (a
+ * uint64_t in device memory on CUDA, host memory on the CPU), also when it exceeds capacity,
+ * and at most `capacity` pairs to out_pairs (device memory on CUDA, host on the CPU), never
+ * past it: which pairs, when they do not all fit, is unspecified (the CPU writes none). A
+ * simulator grows its buffer between steps when the count says so. CANONICAL sorts the pairs
+ * when they fit and needs capacity <= the reserved canonical capacity. Errors (at once): those
+ * of minkq_scene_query for the description and buffers; INVALID_ARGUMENT for a NULL out_count,
+ * or a canonical capacity over the reservation; UNSUPPORTED for DIGEST or STATS; never
+ * CAPACITY. */
+minkq_status minkq_scene_query_async(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
+                                     size_t capacity, uint64_t* out_count, minkq_stream stream);
+/* minkq_scene_query_vt_ee, enqueued on `stream`: one kernel launch for both queries, each
+ * query's pairs and count as minkq_scene_query_async gives it alone. Errors: those of
+ * minkq_scene_query_async for either query; INVALID_ARGUMENT when a kind is the wrong one or
+ * vt_count and ee_count are the same pointer. */
+minkq_status minkq_scene_query_vt_ee_async(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                           const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                           uint64_t* vt_count, int32_t* ee_pairs, size_t ee_capacity,
+                                           uint64_t* ee_count, minkq_stream stream);
+
+/* Waits for the work enqueued on `stream` (CUDA), then returns the scene's pending error and
+ * clears it: MINKQ_SUCCESS when every asynchronous refit and rebuild since the last call (or
+ * the reservation) accepted its vertices, else the status of the first one that did not, with
+ * a message naming the call and the vertex ("minkq_scene_refit_async: vertex 12 has a
+ * non-finite coordinate; the scene kept its positions"). A blocking call. Errors:
+ * INVALID_ARGUMENT (NULL scene), NON_FINITE (the pending error), DEVICE. */
+minkq_status minkq_scene_async_status(minkq_scene* scene, minkq_stream stream);
+
 /* ---- Results: library-owned, growing pair buffers ------------------------------------------ */
 typedef struct minkq_result minkq_result;
 
