@@ -310,6 +310,17 @@ minkq::QueryRequest checked_scene_request(const minkq_scene* scene, const minkq_
           filters, query->radius, {}, {}};
 }
 
+// The two descriptions of a fused VT + EE call, checked (the scene too).
+std::array<minkq::QueryRequest, 2> checked_vt_ee_requests(const minkq_scene* scene, const minkq_query_desc* vt_query,
+                                                          const minkq_query_desc* ee_query) {
+  require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+  const minkq::QueryRequest vt = checked_scene_request(scene, vt_query, "vt_query");
+  const minkq::QueryRequest ee = checked_scene_request(scene, ee_query, "ee_query");
+  require(vt_query->kind == MINKQ_QUERY_VT, Status::kInvalidArgument, "vt_query->kind is not MINKQ_QUERY_VT");
+  require(ee_query->kind == MINKQ_QUERY_EE, Status::kInvalidArgument, "ee_query->kind is not MINKQ_QUERY_EE");
+  return {vt, ee};
+}
+
 // New vertex positions for a scene, validated: `verb` names the call in messages.
 minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* verb) {
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
@@ -353,6 +364,63 @@ minkq_status query_into_results(const std::array<minkq_result*, N>& results, Que
     results[k]->stats = status == MINKQ_SUCCESS ? info[k].stats : minkq_query_stats{};
   }
   return status;
+}
+
+// ---- Asynchronous calls ---------------------------------------------------------------------
+
+// The memory asynchronous calls read and write: device memory on a CUDA device, host memory on
+// the CPU.
+minkq_memory async_memory(const minkq_device* device) {
+  return device->kind == MINKQ_BACKEND_CUDA ? MINKQ_MEMORY_DEVICE : MINKQ_MEMORY_HOST;
+}
+
+// New vertex positions for an asynchronous refit or rebuild, validated as far as the host can
+// (their coordinates are checked on the device), with the reservation the call needs.
+minkq::Strided checked_async_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* call,
+                                      bool rebuild) {
+  require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+  const minkq::Reservation& reserved = scene->store->reservation();
+  require(rebuild ? reserved.rebuild : reserved.refit, Status::kInvalidArgument,
+          std::string(call) + " needs scratch reserved first: minkq_scene_reserve(scene, " +
+              (rebuild ? "MINKQ_RESERVE_REBUILD" : "MINKQ_RESERVE_REFIT") + ", ...)");
+  const minkq::Strided values = checked_buffer(scene->device, vertices, 12, "vertices");
+  require(enum_value(vertices.memory) == async_memory(scene->device), Status::kInvalidArgument,
+          "vertices are host memory but " + std::string(call) + " on " + scene->device->name +
+              " reads device memory (MINKQ_MEMORY_DEVICE)");
+  require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
+          std::string(call) + " with " + std::to_string(values.count) + " vertices but the scene has " +
+              std::to_string(scene->vertex_count));
+  return values;
+}
+
+// An asynchronous query's outputs, checked: pairs and count in the call's memory, flags the
+// path supports, canonical order within the reservation. `prefix` names the query ("", "vt_").
+minkq::PairOutput checked_async_output(const minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
+                                       size_t capacity, uint64_t* out_count, const std::string& prefix) {
+  const minkq_device* device = scene->device;
+  const std::string pairs = prefix.empty() ? "out_pairs" : prefix + "pairs";
+  const std::string count = prefix.empty() ? "out_count" : prefix + "count";
+  const std::string cap = prefix + "capacity";
+  const std::string name = prefix.empty() ? "query" : prefix + "query";
+  require((query->flags & (MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS)) == 0, Status::kUnsupported,
+          name + "->flags asks for a digest or stats, which need a host read: asynchronous queries support "
+                 "MINKQ_QUERY_LEAF_EXACT and MINKQ_QUERY_CANONICAL");
+  require(out_count != nullptr, Status::kInvalidArgument, count + " is NULL");
+  require(capacity == 0 || out_pairs != nullptr, Status::kInvalidArgument,
+          pairs + " is NULL but " + cap + " is " + std::to_string(capacity));
+  require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
+          cap + " " + std::to_string(capacity) + " pairs overflows the address space");
+  const bool canonical = (query->flags & MINKQ_QUERY_CANONICAL) != 0;
+  const size_t reserved = scene->store->reservation().canonical_capacity;
+  require(!canonical || capacity <= reserved, Status::kInvalidArgument,
+          "canonical order for " + cap + " " + std::to_string(capacity) + " needs that many pairs reserved: " +
+              "minkq_scene_reserve(scene, flags, " + std::to_string(capacity) + ") (reserved: " +
+              std::to_string(reserved) + ")");
+  if (device->kind == MINKQ_BACKEND_CUDA) {
+    if (capacity > 0) device->backend->check_device_pointer(out_pairs, pairs);
+    device->backend->check_device_pointer(out_count, count);
+  }
+  return {out_pairs, capacity, static_cast<minkq::Memory>(async_memory(device)), canonical, out_count};
 }
 
 }  // namespace
@@ -508,11 +576,7 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
                                      int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
                                      minkq_query_info* vt_info, minkq_query_info* ee_info) {
   return guarded([&] {
-    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-    const minkq::QueryRequest vt = checked_scene_request(scene, vt_query, "vt_query");
-    const minkq::QueryRequest ee = checked_scene_request(scene, ee_query, "ee_query");
-    require(vt_query->kind == MINKQ_QUERY_VT, Status::kInvalidArgument, "vt_query->kind is not MINKQ_QUERY_VT");
-    require(ee_query->kind == MINKQ_QUERY_EE, Status::kInvalidArgument, "ee_query->kind is not MINKQ_QUERY_EE");
+    const auto [vt, ee] = checked_vt_ee_requests(scene, vt_query, ee_query);
     const minkq::PairOutput vt_out =
         checked_output(scene->device, vt_pairs, vt_capacity, out_memory, vt_query->flags, vt_info,
                        {"vt_pairs", "vt_capacity", "vt_info"});
@@ -530,6 +594,72 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
     const bool ee_fits = report(scene->device, ee_out, ee_query->flags, counts[1], ee_work, ee_info);
     if (!vt_fits) fail(Status::kCapacity, "VT: " + capacity_message(counts[0], vt_capacity));
     if (!ee_fits) fail(Status::kCapacity, "EE: " + capacity_message(counts[1], ee_capacity));
+  });
+}
+
+constexpr uint32_t kKnownReserveFlags = MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD;
+
+minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    require((flags & ~kKnownReserveFlags) == 0, Status::kInvalidArgument, "flags has unknown bits");
+    require(canonical_capacity <= SIZE_MAX / (2 * sizeof(uint64_t)), Status::kSizeOverflow,
+            "canonical_capacity " + std::to_string(canonical_capacity) + " pairs overflows the address space");
+    minkq::Reservation wanted;
+    wanted.refit = (flags & (MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD)) != 0;
+    wanted.rebuild = (flags & MINKQ_RESERVE_REBUILD) != 0;
+    wanted.canonical_capacity = canonical_capacity;
+    scene->store->reserve(wanted);
+  });
+}
+
+minkq_status minkq_scene_refit_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream) {
+  return guarded([&] {
+    const minkq::Strided values = checked_async_vertices(scene, vertices, "minkq_scene_refit_async", false);
+    scene->store->refit_async(values, stream);
+  });
+}
+
+minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream) {
+  return guarded([&] {
+    const minkq::Strided values = checked_async_vertices(scene, vertices, "minkq_scene_rebuild_async", true);
+    scene->store->rebuild_async(values, stream);
+  });
+}
+
+minkq_status minkq_scene_query_async(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
+                                     size_t capacity, uint64_t* out_count, minkq_stream stream) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    const minkq::QueryRequest request = checked_scene_request(scene, query, "query");
+    const minkq::PairOutput out = checked_async_output(scene, query, out_pairs, capacity, out_count, "");
+    scene->store->query_async(request, out, stream);
+  });
+}
+
+minkq_status minkq_scene_query_vt_ee_async(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                           const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                           uint64_t* vt_count, int32_t* ee_pairs, size_t ee_capacity,
+                                           uint64_t* ee_count, minkq_stream stream) {
+  return guarded([&] {
+    const auto [vt, ee] = checked_vt_ee_requests(scene, vt_query, ee_query);
+    const minkq::PairOutput vt_out = checked_async_output(scene, vt_query, vt_pairs, vt_capacity, vt_count, "vt_");
+    const minkq::PairOutput ee_out = checked_async_output(scene, ee_query, ee_pairs, ee_capacity, ee_count, "ee_");
+    require(vt_count != ee_count, Status::kInvalidArgument, "vt_count and ee_count are the same pointer");
+    scene->store->query_vt_ee_async(vt, vt_out, ee, ee_out, stream);
+  });
+}
+
+minkq_status minkq_scene_async_status(minkq_scene* scene, minkq_stream stream) {
+  return guarded([&] {
+    require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
+    const minkq::PendingError pending = scene->store->take_pending_error(stream);
+    if (pending.call == minkq::PendingError::kNone) return;
+    const bool rebuild = pending.call == minkq::PendingError::kRebuild;
+    fail(Status::kNonFinite, std::string(rebuild ? "minkq_scene_rebuild_async" : "minkq_scene_refit_async") +
+                                 ": vertex " + std::to_string(pending.vertex) +
+                                 " has a non-finite coordinate; the scene kept its positions" +
+                                 (rebuild ? " and built its trees for them" : ""));
   });
 }
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "async_checks.h"
 #include "capi_util.h"
 #include "minkq/queries.h"
 #include "test_util.h"
@@ -585,6 +586,122 @@ TEST_F(Cuda, user_queries_from_device_memory_match_host_queries) {
   });
   expect_same(bvh_query(a.get(), MINKQ_SHAPE_CAPSULE, MINKQ_MODE_CAPSULE_EXACT, 0.01f, p0, p1), got,
               "device capsule queries");
+}
+
+// ---- Stream-ordered calls -------------------------------------------------------------------
+
+// Device memory and a stream of the test's own (not the per-thread default stream the
+// blocking calls use), for async_checks.h.
+class DeviceAsyncMemory final : public test::AsyncMemory {
+ public:
+  DeviceAsyncMemory() { EXPECT_EQ(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), cudaSuccess); }
+  ~DeviceAsyncMemory() override {
+    cudaStreamSynchronize(stream_);
+    for (void* p : blocks_) cudaFree(p);
+    cudaStreamDestroy(stream_);
+  }
+  void* allocate(size_t bytes) override {
+    void* p = nullptr;
+    EXPECT_EQ(cudaMalloc(&p, bytes ? bytes : 1), cudaSuccess);
+    blocks_.push_back(p);
+    return p;
+  }
+  void write(void* dst, const void* host, size_t bytes) override {
+    EXPECT_EQ(cudaMemcpyAsync(dst, host, bytes, cudaMemcpyHostToDevice, stream_), cudaSuccess);
+    EXPECT_EQ(cudaStreamSynchronize(stream_), cudaSuccess);
+  }
+  void read(void* host, const void* src, size_t bytes) override {
+    EXPECT_EQ(cudaMemcpyAsync(host, src, bytes, cudaMemcpyDeviceToHost, stream_), cudaSuccess);
+    EXPECT_EQ(cudaStreamSynchronize(stream_), cudaSuccess);
+  }
+  minkq_stream stream() override { return stream_; }
+  void wait() override { EXPECT_EQ(cudaStreamSynchronize(stream_), cudaSuccess); }
+  minkq_memory kind() override { return MINKQ_MEMORY_DEVICE; }
+
+ private:
+  cudaStream_t stream_ = nullptr;
+  std::vector<void*> blocks_;
+};
+
+class CudaAsync : public Cuda {
+ protected:
+  void SetUp() override {
+    Cuda::SetUp();
+    if (IsSkipped()) return;
+    cpu = std::make_unique<test::Device>("cpu");
+    cuda = std::make_unique<test::Device>("cuda");
+    device_memory = std::make_unique<DeviceAsyncMemory>();
+  }
+  std::unique_ptr<test::Device> cpu, cuda;
+  std::unique_ptr<DeviceAsyncMemory> device_memory;  // made only where a GPU is present
+  DeviceAsyncMemory& memory() { return *device_memory; }
+};
+
+TEST_F(CudaAsync, queries_match_the_blocking_calls_over_refits_and_rebuilds) {
+  test::check_async_matches_blocking(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaAsync, non_finite_vertices_keep_the_positions_and_are_reported_once) {
+  test::check_async_non_finite_is_pending(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaAsync, bad_arguments_and_missing_reservations_are_refused_at_once) {
+  test::check_async_argument_errors(memory(), cuda->get(), cpu->get());
+}
+
+// A simulator's captured step: refit (or rebuild) + VT + EE recorded once into a CUDA graph by
+// stream capture, then replayed over new positions written into the same device buffer; every
+// replay gives the pairs of the blocking calls on the CPU at those positions.
+TEST_F(CudaAsync, captured_refit_and_queries_replay_over_moving_vertices) {
+  const Mesh mesh = reference::twisted_sheet(40, 3.0);
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  DeviceAsyncMemory& memory = this->memory();
+  test::AsyncScene s(memory, cuda->get(), cpu->get(), mesh);
+  for (bool rebuild : {false, true}) {
+    SCOPED_TRACE(rebuild ? "rebuild" : "refit");
+    const size_t capacity = 1 << 15;
+    ASSERT_EQ(minkq_scene_reserve(s.scene.get(), MINKQ_RESERVE_REBUILD, capacity), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    float* positions = memory.copy_of(mesh.xyz);
+    int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    int32_t* ee_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    uint64_t* counts = static_cast<uint64_t*>(memory.allocate(2 * sizeof(uint64_t)));
+    const minkq_buffer vertices{positions, 0, mesh.vertex_count(), MINKQ_MEMORY_DEVICE};
+    const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL, r};
+    const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL, r};
+    cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
+    ASSERT_EQ(cudaStreamBeginCapture(stream, cudaStreamCaptureModeGlobal), cudaSuccess);
+    const minkq_status moved = rebuild ? minkq_scene_rebuild_async(s.scene.get(), vertices, stream)
+                                       : minkq_scene_refit_async(s.scene.get(), vertices, stream);
+    const minkq_status queried = minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts,
+                                                               ee_pairs, capacity, counts + 1, stream);
+    cudaGraph_t graph = nullptr;
+    ASSERT_EQ(cudaStreamEndCapture(stream, &graph), cudaSuccess);
+    ASSERT_EQ(moved, MINKQ_SUCCESS) << minkq_last_error_message();
+    ASSERT_EQ(queried, MINKQ_SUCCESS) << minkq_last_error_message();
+    cudaGraphExec_t exec = nullptr;
+    ASSERT_EQ(cudaGraphInstantiate(&exec, graph, 0), cudaSuccess);
+    for (int step = 1; step <= 4; ++step) {
+      Mesh next = mesh;
+      reference::transform(next, 1.0 + 0.05 * step, 0.002 * step);
+      for (size_t v = 0; v < next.vertex_count(); ++v) next.xyz[3 * v + 1] += 0.01f * float(std::cos(0.05 * double(v) * step));
+      memory.write(positions, next.xyz.data(), next.xyz.size() * sizeof(float));
+      ASSERT_EQ(cudaGraphLaunch(exec, stream), cudaSuccess);
+      const std::vector<uint64_t> count = memory.read_back(counts, 2);
+      const minkq_buffer host = host_buffer(next.xyz.data(), next.vertex_count());
+      ASSERT_EQ(rebuild ? minkq_scene_rebuild(s.blocking.get(), host) : minkq_scene_refit(s.blocking.get(), host),
+                MINKQ_SUCCESS);
+      const test::Pairs vt_expected = s.blocking.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      const test::Pairs ee_expected = s.blocking.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_EQ(count[0], vt_expected.size()) << "replay " << step;
+      ASSERT_EQ(count[1], ee_expected.size()) << "replay " << step;
+      EXPECT_EQ(test::pairs_of(memory.read_back(vt_pairs, 2 * count[0]), count[0]), vt_expected) << "replay " << step;
+      EXPECT_EQ(test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1]), ee_expected) << "replay " << step;
+    }
+    EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
+    cudaGraphExecDestroy(exec);
+    cudaGraphDestroy(graph);
+  }
 }
 
 #endif  // MINKQ_TEST_HAVE_CUDART

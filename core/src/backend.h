@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -57,11 +58,31 @@ struct QueryRequest {
   Strided second;  // user queries: capsule ends or box highs (float3)
 };
 
+// The stream of an asynchronous call (a cudaStream_t on CUDA; unused on the CPU).
+using Stream = void*;
+
 struct PairOutput {
   int32_t* pairs;  // 2 * capacity int32
   size_t capacity;
   Memory memory;
   bool canonical;  // lexicographic order
+  // Asynchronous queries: the exact count goes here (executor memory), pairs are written up to
+  // the capacity, and nothing is read back. Null for blocking queries.
+  uint64_t* count = nullptr;
+};
+
+// What a scene has reserved for its asynchronous calls (minkq_scene_reserve).
+struct Reservation {
+  bool refit = false;    // a staging copy of the vertices and the pending error
+  bool rebuild = false;  // the tree builds' scratch, kept
+  size_t canonical_capacity = 0;  // pairs the canonical sort's scratch holds
+};
+
+// The first data error of the asynchronous refits and rebuilds since it was last taken.
+struct PendingError {
+  enum Call : int { kNone = 0, kRefit = 1, kRebuild = 2 };
+  Call call = kNone;
+  int64_t vertex = -1;  // the first vertex with a non-finite coordinate in that call
 };
 
 // One query of a call: what to run, where its pairs go, and where its work is counted (or null).
@@ -96,6 +117,24 @@ class MeshStore : public Store {
   // A VT and an EE query in one pass (one parallel loop; on CUDA one kernel launch and one
   // count readback): each query's total, pairs and work as query() gives them alone.
   virtual std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) = 0;
+
+  // ---- Asynchronous calls (minkq.h's stream-ordered section): enqueued on `stream`, with no
+  // synchronisation, allocation or host read on CUDA; run to completion on the CPU.
+  // Grows the reservation to cover `wanted` (a blocking call).
+  virtual void reserve(const Reservation& wanted) = 0;
+  virtual const Reservation& reservation() const = 0;
+  // New positions in executor memory, checked on the device: with a non-finite coordinate the
+  // scene keeps its positions (rebuild_async then builds for them) and the pending error is
+  // recorded. Need reservation().refit (rebuild_async: .rebuild); the caller checks that.
+  virtual void refit_async(const Strided& vertices, Stream stream) = 0;
+  virtual void rebuild_async(const Strided& vertices, Stream stream) = 0;
+  // Queries whose outputs have `count` set (executor memory); canonical ones within the
+  // reserved canonical capacity (the caller checks). No work counts.
+  virtual void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) = 0;
+  virtual void query_vt_ee_async(const QueryRequest& vt, const PairOutput& vt_out, const QueryRequest& ee,
+                                 const PairOutput& ee_out, Stream stream) = 0;
+  // Waits for `stream`, then returns the pending error and clears it (a blocking call).
+  virtual PendingError take_pending_error(Stream stream) = 0;
 };
 
 class Backend {
@@ -130,6 +169,18 @@ std::vector<T> gather_host(const Strided& values) {
   const char* base = static_cast<const char*>(values.data);
   for (int64_t i = 0; i < values.count; ++i) std::memcpy(&out[size_t(i)], base + size_t(i) * values.stride, sizeof(T));
   return out;
+}
+
+// The first record of host `values` (of `floats` floats each) holding a NaN or infinity, or -1.
+inline int64_t first_non_finite_host(const Strided& values, int floats) {
+  const char* base = static_cast<const char*>(values.data);
+  for (int64_t i = 0; i < values.count; ++i) {
+    float f[6];
+    std::memcpy(f, base + size_t(i) * values.stride, sizeof(float) * size_t(floats));
+    for (int k = 0; k < floats; ++k)
+      if (!std::isfinite(f[k])) return i;
+  }
+  return -1;
 }
 
 }  // namespace minkq

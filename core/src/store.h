@@ -20,7 +20,22 @@
 //   run_passes<Work>(works, passes...)
 //                                  runs the QueryPasses of one call (one parallel loop, or one
 //                                  kernel launch) and returns each pass's exact pair count,
-//                                  its pairs written, and sorted when asked, where they fit.
+//                                  its pairs written, and sorted when asked, where they fit;
+//                                  for outputs with a count pointer (asynchronous queries) the
+//                                  count goes there, pairs up to the capacity, nothing is read
+//                                  back and the returned counts are not used.
+//
+// and for the asynchronous calls (backend.h's MeshStore section):
+//   scope_on(stream)               the scope of an asynchronous call: on CUDA the caller's
+//                                  stream, with allocation and host copies refused.
+//   wait(stream)                   waits for the stream's work (CUDA).
+//   reserve_staging(Array<Vec3>&, n), reserve_pending(), reserve_canonical(pairs),
+//   reserve_build(Tree&, boxes, n), reserve_sort(boxes, n)
+//                                  the scratch the asynchronous calls use, kept from then on.
+//   commit_finite(values, staging, dst, call)
+//                                  dst = values (executor memory) unless a coordinate is not
+//                                  finite; then dst is kept and the pending error recorded.
+//   take_pending()                 the pending error (after wait()), cleared.
 //
 // cpu/backend.cpp and cuda/backend.cu define the two executors; a query's pairs, counts and
 // work counters are the same on both.
@@ -164,6 +179,64 @@ class MeshStoreOn final : public MeshStore {
     return totals;
   }
 
+  // ---- Asynchronous calls ------------------------------------------------------------------
+
+  void reserve(const Reservation& wanted) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    if ((wanted.refit || wanted.rebuild) && !reserved_.refit) {
+      x_.reserve_staging(staging_, num_vertices_);
+      x_.reserve_pending();
+      reserved_.refit = true;
+    }
+    if (wanted.rebuild && !reserved_.rebuild) {
+      if (has_triangle_tree_) {
+        x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
+        x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
+      }
+      if (has_edge_tree_) x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
+      reserved_.rebuild = true;
+    }
+    if (wanted.canonical_capacity > reserved_.canonical_capacity) {
+      x_.reserve_canonical(wanted.canonical_capacity);
+      reserved_.canonical_capacity = wanted.canonical_capacity;
+    }
+    x_.finish();
+  }
+  const Reservation& reservation() const override { return reserved_; }
+
+  void refit_async(const Strided& vertices, Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    x_.commit_finite(vertices, staging_, vertices_, PendingError::kRefit);
+    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
+    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
+  }
+
+  void rebuild_async(const Strided& vertices, Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    x_.commit_finite(vertices, staging_, vertices_, PendingError::kRebuild);
+    build_trees();
+  }
+
+  void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    auto run = [&](const auto& pass) { run_counted(x_, {nullptr}, pass); };
+    if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
+  }
+
+  void query_vt_ee_async(const QueryRequest& vt, const PairOutput& vt_out, const QueryRequest& ee,
+                         const PairOutput& ee_out, Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    with_vt_pass(vt, vt_out, [&](const auto& vt_pass) {
+      with_ee_pass(ee, ee_out, [&](const auto& ee_pass) { run_counted(x_, {nullptr, nullptr}, vt_pass, ee_pass); });
+    });
+  }
+
+  PendingError take_pending_error(Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    x_.wait(stream);
+    return reserved_.refit ? x_.take_pending() : PendingError{};
+  }
+
  private:
   // Calls fn with the QueryPass of a VT request, or of an EE request.
   template <class Fn>
@@ -195,8 +268,10 @@ class MeshStoreOn final : public MeshStore {
   Array<Triangle> triangles_;  // only with a triangle tree
   Array<Edge> edges_;
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
+  Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
   int32_t num_vertices_, num_triangles_, num_edges_;
   bool has_triangle_tree_, has_edge_tree_;
+  Reservation reserved_;
   typename X::Tree triangle_tree_, edge_tree_;
 };
 

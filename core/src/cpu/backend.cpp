@@ -2,7 +2,6 @@
 // TBB pass runner), and the backend's own input checks.
 #include <tbb/task_arena.h>
 
-#include <cmath>
 #include <cstring>
 #include <utility>
 
@@ -25,6 +24,8 @@ class CpuExecutor {
   explicit CpuExecutor(Device) {}
   struct Scope {};
   Scope scope() const { return {}; }
+  Scope scope_on(Stream) const { return {}; }  // asynchronous calls run to completion here
+  void wait(Stream) {}
   void hold() {}
   void release() {}
   void hold_for_teardown() noexcept {}
@@ -50,8 +51,36 @@ class CpuExecutor {
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                    const Pass&... passes) {
-    return cpu::run_passes<Work>(works, passes...);
+    const std::array<uint64_t, sizeof...(Pass)> totals = cpu::run_passes<Work>(works, passes...);
+    size_t k = 0;
+    auto write_count = [&](const auto& pass) {  // asynchronous queries: the count to caller memory
+      if (pass.out.count) *pass.out.count = totals[k];
+      ++k;
+    };
+    (write_count(passes), ...);
+    return totals;
   }
+
+  // Asynchronous calls: nothing to reserve (host vectors grow as they need), and the check
+  // before the copy needs no staging.
+  void reserve_staging(std::vector<Vec3>&, int32_t) {}
+  void reserve_pending() {}
+  void reserve_canonical(size_t) {}
+  template <class Boxes>
+  void reserve_build(CpuTree&, Boxes, int32_t) {}
+  template <class Boxes>
+  void reserve_sort(Boxes, int32_t) {}
+  void commit_finite(const Strided& values, std::vector<Vec3>&, std::vector<Vec3>& dst, PendingError::Call call) {
+    if (const int64_t bad = first_non_finite_host(values, 3); bad >= 0) {
+      if (pending_.call == PendingError::kNone) pending_ = {call, bad};
+      return;
+    }
+    gather(values, dst);
+  }
+  PendingError take_pending() { return std::exchange(pending_, PendingError{}); }
+
+ private:
+  PendingError pending_;
 };
 
 class CpuBackend final : public Backend {
@@ -60,16 +89,7 @@ class CpuBackend final : public Backend {
     return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads)";
   }
   bool is_cuda() const override { return false; }
-  int64_t first_non_finite(const Strided& values, int floats) override {
-    const char* base = static_cast<const char*>(values.data);
-    for (int64_t i = 0; i < values.count; ++i) {
-      float f[6];
-      std::memcpy(f, base + size_t(i) * values.stride, sizeof(float) * size_t(floats));
-      for (int k = 0; k < floats; ++k)
-        if (!std::isfinite(f[k])) return i;
-    }
-    return -1;
-  }
+  int64_t first_non_finite(const Strided& values, int floats) override { return first_non_finite_host(values, floats); }
   void copy_to_host(void* dst, const void* src, size_t bytes, Memory) override {
     if (bytes) std::memcpy(dst, src, bytes);
   }

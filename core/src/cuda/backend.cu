@@ -19,8 +19,19 @@ namespace {
 
 using namespace cuda;
 
+// The scope of one call: its device, then its stream (runtime.cuh's call stream).
+class CallScope {
+ public:
+  CallScope(int ordinal, cudaStream_t stream, bool asynchronous) : device_(ordinal), stream_(stream, asynchronous) {}
+
+ private:
+  DeviceScope device_;
+  StreamScope stream_;
+};
+
 // store.h's executor on a CUDA device. Every call selects the device for its duration
-// (scope()); a store's construction and teardown hold it from hold() on, so the members are
+// (scope(): blocking calls on the per-thread default stream; scope_on(): asynchronous ones on
+// the caller's); a store's construction and teardown hold it from hold() on, so the members are
 // allocated and freed on it even when a constructor fails; device_ (destroyed after every
 // member of the store) gives the caller's device back, or release() at the end of a
 // constructor. finish() synchronises the stream: a call's errors belong to that call.
@@ -32,11 +43,13 @@ class CudaExecutor {
   using Tree = CudaTree;
 
   explicit CudaExecutor(int ordinal) : ordinal_(ordinal) {}
-  DeviceScope scope() const { return DeviceScope(ordinal_); }
+  CallScope scope() const { return CallScope(ordinal_, cudaStreamPerThread, false); }
+  CallScope scope_on(Stream stream) const { return CallScope(ordinal_, static_cast<cudaStream_t>(stream), true); }
+  void wait(Stream stream) { check(cudaStreamSynchronize(static_cast<cudaStream_t>(stream)), "cudaStreamSynchronize"); }
   void hold() { check(device_.enter(ordinal_), "cudaGetDevice / cudaSetDevice"); }
   void release() noexcept { device_.leave(); }
   void hold_for_teardown() noexcept { device_.enter(ordinal_); }  // a destructor cannot report
-  void finish() { check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize"); }
+  void finish() { check(cudaStreamSynchronize(stream()), "cudaStreamSynchronize"); }
 
   template <class T>
   void gather(const Strided& values, DeviceBuffer<T>& dst) {
@@ -52,19 +65,64 @@ class CudaExecutor {
   }
   template <class Boxes>
   void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<int32_t>& ids) {
-    DeviceBuffer<uint64_t> keys;
-    cuda::sort_by_morton(boxes, n, keys, ids);
+    SortScratch local;
+    cuda::sort_by_morton(boxes, n, sort_reserved_ ? sort_ : local, ids);
   }
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                    const Pass&... passes) {
+    if constexpr (std::is_same<Work, NoWork>::value)  // asynchronous calls count no work
+      if ((passes.out.count || ...)) {                  // an asynchronous call's (all of its passes)
+        run_passes_async<Work>(ws_, passes...);
+        return {};
+      }
     return cuda::run_passes<Work>(ws_, works, passes...);
+  }
+
+  // Asynchronous calls.
+  void reserve_staging(DeviceBuffer<Vec3>& staging, int32_t n) { staging.ensure(size_t(n)); }
+  void reserve_pending() {
+    pending_.ensure(2);
+    zero(pending_, 2);
+  }
+  void reserve_canonical(size_t capacity) { cuda::reserve_canonical(ws_, capacity); }
+  template <class Boxes>
+  void reserve_build(CudaTree& tree, Boxes boxes, int32_t n) {
+    tree.reserve_build(boxes, n);
+  }
+  template <class Boxes>
+  void reserve_sort(Boxes boxes, int32_t n) {
+    cuda::reserve_sort(sort_, boxes, n);
+    sort_reserved_ = true;
+  }
+  // Gathers and checks into staging, then takes the vertices only if all are finite (runtime.cuh's
+  // two kernels): pending_[0] is this call's first bad vertex, pending_[1] the recorded error.
+  void commit_finite(const Strided& values, DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst,
+                     PendingError::Call call) {
+    if (values.count == 0) return;
+    check(cudaMemsetAsync(pending_.data(), 0xFF, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
+    launch("gather_checked_kernel launch", gather_checked_kernel, values.count, kThreads,
+           static_cast<const char*>(values.data), values.stride, values.count, is_aligned4(values), staging.data(),
+           pending_.data());
+    launch("commit_checked_kernel launch", commit_checked_kernel, values.count, kThreads, staging.data(), values.count,
+           static_cast<unsigned long long>(call), dst.data(), pending_.data());
+  }
+  PendingError take_pending() {
+    unsigned long long recorded = 0;
+    copy(&recorded, pending_.data() + 1, sizeof(recorded), cudaMemcpyDeviceToHost);
+    if (recorded == 0) return {};
+    zero(pending_.data() + 1, 1);
+    finish();
+    return {static_cast<PendingError::Call>(recorded >> 32), int64_t(recorded & 0xFFFFFFFFull)};
   }
 
  private:
   int ordinal_;
-  DeviceSwitch device_;  // declared before ws_: destroyed after it
+  DeviceSwitch device_;  // declared before the buffers: destroyed after them
   QueryWorkspace ws_;
+  SortScratch sort_;  // the VT query order's Morton sort, kept once reserved
+  bool sort_reserved_ = false;
+  DeviceBuffer<unsigned long long> pending_;  // asynchronous refits' checks (commit_finite)
 };
 
 class CudaBackend final : public Backend {

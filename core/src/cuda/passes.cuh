@@ -139,6 +139,12 @@ struct QueryWorkspace {
 };
 
 inline int bit_width(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }
+// The bits a canonical sort of pairs with query ids below num_queries covers.
+inline int pair_key_bits(int32_t num_queries) { return 32 + bit_width(uint64_t(num_queries)); }
+
+inline cudaError_t sort_keys(void* storage, size_t& bytes, QueryWorkspace& ws, int64_t n, int end_bit) {
+  return cub::DeviceRadixSort::SortKeys(storage, bytes, ws.keys.data(), ws.sorted_keys.data(), n, 0, end_bit, stream());
+}
 
 // Sorts n pairs in device memory lexicographically: as uint64 keys (query << 32 | prim).
 inline void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWorkspace& ws) {
@@ -146,11 +152,52 @@ inline void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWork
   ws.keys.ensure(size_t(n));
   ws.sorted_keys.ensure(size_t(n));
   launch("pack_pairs_kernel launch", pack_pairs_kernel, n, kThreads, pairs, n, ws.keys.data());
-  const int end_bit = 32 + bit_width(uint64_t(num_queries));  // query ids are < num_queries
+  const int end_bit = pair_key_bits(num_queries);  // query ids are < num_queries
   run_cub(ws.temp, "cub::DeviceRadixSort::SortKeys", [&](void* storage, size_t& bytes) {
-    return cub::DeviceRadixSort::SortKeys(storage, bytes, ws.keys.data(), ws.sorted_keys.data(), n, 0, end_bit, kStream);
+    return sort_keys(storage, bytes, ws, n, end_bit);
   });
   launch("unpack_pairs_kernel launch", unpack_pairs_kernel, n, kThreads, ws.sorted_keys.data(), n, pairs);
+}
+
+// Asynchronous queries sort their pairs without knowing their count on the host: all
+// `capacity` keys, those past the count (min(*count, capacity)) set to `pad`, above every pair's.
+static __global__ void pack_padded_kernel(const int32_t* pairs, int64_t capacity, const unsigned long long* count,
+                                          uint64_t pad, uint64_t* keys) {
+  const int64_t i = global_index();
+  if (i >= capacity) return;
+  keys[i] = uint64_t(i) < *count ? pack_pair(pairs[2 * i], pairs[2 * i + 1]) : pad;
+}
+static __global__ void unpack_counted_kernel(const uint64_t* keys, int64_t capacity, const unsigned long long* count,
+                                             int32_t* pairs) {
+  const int64_t i = global_index();
+  if (i >= capacity || uint64_t(i) >= *count) return;
+  const Pair pair = unpack_pair(keys[i]);
+  pairs[2 * i] = pair.first;
+  pairs[2 * i + 1] = pair.second;
+}
+
+// Sizes the workspace for asynchronous canonical sorts of up to `capacity` pairs (any number of
+// queries: sized for all 64 key bits), kept from then on.
+inline void reserve_canonical(QueryWorkspace& ws, size_t capacity) {
+  ws.keys.ensure(capacity);
+  ws.sorted_keys.ensure(capacity);
+  size_t bytes = 0;
+  check(sort_keys(nullptr, bytes, ws, int64_t(capacity), 64), "cub::DeviceRadixSort::SortKeys");
+  ws.temp.ensure(std::max<size_t>(bytes, 1));
+}
+
+// sort_pairs for an asynchronous query: the first min(*count, capacity) pairs, sorted in place.
+inline void sort_pairs_async(int32_t* pairs, int64_t capacity, const unsigned long long* count, int32_t num_queries,
+                             QueryWorkspace& ws) {
+  if (capacity < 2) return;
+  const int end_bit = pair_key_bits(num_queries);
+  const uint64_t pad = end_bit >= 64 ? ~uint64_t(0) : (uint64_t(1) << end_bit) - 1;  // above (num_queries - 1) << 32 | p
+  launch("pack_padded_kernel launch", pack_padded_kernel, capacity, kThreads, pairs, capacity, count, pad,
+         ws.keys.data());
+  run_cub(ws.temp, "cub::DeviceRadixSort::SortKeys",
+          [&](void* storage, size_t& bytes) { return sort_keys(storage, bytes, ws, capacity, end_bit); });
+  launch("unpack_counted_kernel launch", unpack_counted_kernel, capacity, kThreads, ws.sorted_keys.data(), capacity,
+         count, pairs);
 }
 
 // Host output goes through device scratch, sized first by a guess: the kind's last count, or
@@ -166,6 +213,31 @@ template <class Work, class... Pass>
 void launch_passes(const Pass&... passes) {
   const int64_t threads = (round_up_to_block(passes.pass.num_queries) + ...);
   launch("query_kernel launch", query_kernel<Work, Pass...>, threads, kQueryThreads, passes...);
+}
+
+// An asynchronous call's passes (outputs with count pointers, in device memory): one kernel
+// launch that counts into the callers' counts and writes pairs up to their capacities, then the
+// canonical sorts; nothing read back, nothing allocated (the workspace was reserved).
+template <class Work, class... Pass>
+void run_passes_async(QueryWorkspace& ws, const Pass&... passes) {
+  static_assert(std::is_same<Work, NoWork>::value, "asynchronous queries count no work");
+  int64_t first_thread = 0;
+  auto device_pass = [&](const auto& pass) {
+    auto* count = reinterpret_cast<unsigned long long*>(pass.out.count);
+    zero(count, 1);
+    const DevicePass<std::decay_t<decltype(pass)>> d{pass, first_thread, PairSlots{pass.out.pairs, pass.out.capacity, count},
+                                                     nullptr};
+    first_thread += round_up_to_block(pass.num_queries);
+    return d;
+  };
+  const auto device_passes = std::tuple{device_pass(passes)...};  // braces: built left to right
+  std::apply([](const auto&... d) { launch_passes<Work>(d...); }, device_passes);
+  auto sort = [&](const auto& pass) {
+    if (pass.out.canonical)
+      sort_pairs_async(pass.out.pairs, int64_t(pass.out.capacity),
+                       reinterpret_cast<const unsigned long long*>(pass.out.count), pass.num_queries, ws);
+  };
+  (sort(passes), ...);
 }
 
 // Runs the passes in one kernel launch and one count readback; returns each pass's total,
@@ -239,7 +311,7 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
     if (outs[k].memory == Memory::kHost)
       copy(outs[k].pairs, pairs[k], totals[k] * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
   }
-  check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");  // report kernel faults here
+  check(cudaStreamSynchronize(stream()), "cudaStreamSynchronize");  // report kernel faults here
   return totals;
 }
 

@@ -18,10 +18,37 @@
 
 namespace minkq::cuda {
 
-// All work runs on the per-thread default stream, so scenes used from different host threads
-// do not serialise on the legacy stream; every host read of device results synchronises it.
-inline const cudaStream_t kStream = cudaStreamPerThread;
 constexpr int kThreads = 256;  // element-wise kernels
+
+// The stream of the calling thread's current library call. Blocking calls run on the
+// per-thread default stream, so scenes used from different host threads do not serialise on
+// the legacy stream, and every host read of device results synchronises it. Asynchronous calls
+// run on the caller's stream and may neither allocate nor copy to or from the host (they may be
+// recorded into a CUDA graph): DeviceBuffer::ensure and copy() refuse, so that a missing
+// reservation is an error, not a broken capture.
+struct CallStream {
+  cudaStream_t stream = cudaStreamPerThread;
+  bool asynchronous = false;
+};
+inline CallStream& call_stream() {
+  static thread_local CallStream current;
+  return current;
+}
+inline cudaStream_t stream() { return call_stream().stream; }
+
+// Sets the calling thread's call stream for a scope and restores the previous one after.
+class StreamScope {
+ public:
+  StreamScope(cudaStream_t stream, bool asynchronous) : previous_(call_stream()) {
+    call_stream() = CallStream{stream, asynchronous};
+  }
+  StreamScope(const StreamScope&) = delete;
+  StreamScope& operator=(const StreamScope&) = delete;
+  ~StreamScope() { call_stream() = previous_; }
+
+ private:
+  CallStream previous_;
+};
 
 // ---- Errors and memory ------------------------------------------------------------------------
 
@@ -91,6 +118,9 @@ class DeviceBuffer {
   // Room for at least `count` elements; the contents are not kept when it has to grow.
   void ensure(size_t count) {
     if (count <= size_) return;
+    if (call_stream().asynchronous)
+      fail(Status::kInternal, "an asynchronous call needed " + std::to_string(count) + " elements of scratch where " +
+                                  std::to_string(size_) + " were reserved");
     if (count > std::numeric_limits<size_t>::max() / sizeof(T))
       fail(Status::kOutOfMemory, "device allocation size overflows");
     release();  // free first: growing must not need the old and the new block at once
@@ -112,16 +142,22 @@ class DeviceBuffer {
   size_t size_ = 0;
 };
 
-// cudaMemcpy on our stream, complete on return (the host may reuse or read its side at once).
+// cudaMemcpy on the call's stream, complete on return (the host may reuse or read its side at
+// once). Not in asynchronous calls.
 inline void copy(void* dst, const void* src, size_t bytes, cudaMemcpyKind kind) {
   if (bytes == 0) return;
-  check(cudaMemcpyAsync(dst, src, bytes, kind, kStream), "cudaMemcpyAsync");
-  check(cudaStreamSynchronize(kStream), "cudaStreamSynchronize");
+  if (call_stream().asynchronous) fail(Status::kInternal, "a host copy in an asynchronous call");
+  check(cudaMemcpyAsync(dst, src, bytes, kind, stream()), "cudaMemcpyAsync");
+  check(cudaStreamSynchronize(stream()), "cudaStreamSynchronize");
 }
 
 template <class T>
+void zero(T* data, size_t count) {
+  if (count) check(cudaMemsetAsync(data, 0, count * sizeof(T), stream()), "cudaMemsetAsync");
+}
+template <class T>
 void zero(DeviceBuffer<T>& buffer, size_t count) {
-  if (count) check(cudaMemsetAsync(buffer.data(), 0, count * sizeof(T), kStream), "cudaMemsetAsync");
+  zero(buffer.data(), count);
 }
 
 template <class T>
@@ -145,9 +181,10 @@ inline bool sync_each_launch() {
 template <class Kernel, class... Args>
 void launch(const char* name, Kernel kernel, int64_t n, int threads, Args... args) {
   if (n <= 0) return;
-  kernel<<<unsigned((n + threads - 1) / threads), threads, 0, kStream>>>(args...);
+  kernel<<<unsigned((n + threads - 1) / threads), threads, 0, stream()>>>(args...);
   check(cudaGetLastError(), name);
-  if (sync_each_launch()) check(cudaStreamSynchronize(kStream), name);
+  // Not in asynchronous calls: their stream may be capturing, where a wait is an error.
+  if (sync_each_launch() && !call_stream().asynchronous) check(cudaStreamSynchronize(stream()), name);
 }
 
 __device__ inline int64_t global_index() { return int64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
@@ -187,6 +224,34 @@ static __global__ void first_non_finite_kernel(const char* base, size_t stride, 
       atomicMin(first, static_cast<unsigned long long>(i));
       return;
     }
+}
+
+// Asynchronous refits: the caller's strided vertices gathered into `staging`, with the
+// smallest index of a vertex holding a NaN or infinity atomically kept in words[0] (set to
+// kNoVertex first).
+constexpr unsigned long long kNoVertex = ~0ull;
+static __global__ void gather_checked_kernel(const char* base, size_t stride, int64_t n, bool aligned, Vec3* staging,
+                                             unsigned long long* words) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  const char* record = base + size_t(i) * stride;
+  const Vec3 v{load_float(record, 0, aligned), load_float(record, 1, aligned), load_float(record, 2, aligned)};
+  staging[i] = v;
+  if (!isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z)) atomicMin(&words[0], static_cast<unsigned long long>(i));
+}
+
+// Then the staged vertices become the scene's if all were finite; otherwise thread 0 records
+// (call, vertex) in words[1] unless an earlier call's error is pending there (0: none).
+static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, unsigned long long call, Vec3* vertices,
+                                             unsigned long long* words) {
+  const int64_t i = global_index();
+  if (i >= n) return;
+  const unsigned long long bad = words[0];
+  if (bad == kNoVertex) {
+    vertices[i] = staging[i];
+  } else if (i == 0 && words[1] == 0) {
+    words[1] = (call << 32) | bad;  // vertex indices are below 2^31
+  }
 }
 
 // Packs strided Vec3 or Box records (host or device memory) into a device array.

@@ -47,49 +47,112 @@ static __global__ void collapse_kernel(const KarrasNode* karras, const int32_t* 
     collapse_node(int32_t(i), karras, new_index, leaf_size, nodes);
 }
 
+// Thread per child slot of the nodes that exist (*num_nodes of them, counted on the device).
 template <class Boxes>
-static __global__ void refit_kernel(Boxes boxes, int32_t num_nodes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
-                                    BvhNode* nodes, int32_t* arrivals) {
+static __global__ void refit_kernel(Boxes boxes, const int32_t* num_nodes, const int32_t* sorted_prims,
+                                    BoxGroup* leaf_groups, BvhNode* nodes, int32_t* arrivals) {
   const int64_t slot = global_index();
-  if (slot < 2 * int64_t(num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes, arrivals);
+  if (slot < 2 * int64_t(*num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes, arrivals);
+}
+
+// The node count of a build: the kept Karras nodes (n >= 2), or the one-leaf root (n == 1).
+static __global__ void count_nodes_kernel(const int32_t* new_index, const int32_t* kept, int32_t n, int32_t* num_nodes) {
+  *num_nodes = new_index[n - 2] + kept[n - 2];
+}
+static __global__ void one_leaf_kernel(BvhNode* nodes, int32_t* num_nodes) {
+  nodes[0] = one_leaf_root();
+  *num_nodes = 1;
+}
+
+// What a Morton sort needs besides its output; kept by a tree (or executor) that has reserved
+// it, else made for one build and freed after.
+struct SortScratch {
+  DeviceBuffer<Box> centre_bounds;
+  DeviceBuffer<uint64_t> keys, sorted_keys;  // sorted_keys: the build's input
+  DeviceBuffer<int32_t> order;
+  DeviceBuffer<char> temp;
+};
+
+// The CUB calls of a build, each run twice by run_cub (to size, then to run) and sized alone
+// by reserve(): the same arguments either way.
+template <class Boxes>
+cudaError_t reduce_centre_bounds(void* storage, size_t& bytes, Boxes boxes, int32_t n, Box* out) {
+  const thrust::counting_iterator<int32_t> ids(0);
+  return cub::DeviceReduce::TransformReduce(storage, bytes, ids, out, n, BoxUnion{}, CentreBox<Boxes>{boxes},
+                                            Box::empty(), stream());
+}
+// LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in the
+// CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
+inline cudaError_t sort_morton_pairs(void* storage, size_t& bytes, SortScratch& s, int32_t* sorted_ids, int32_t n) {
+  return cub::DeviceRadixSort::SortPairs(storage, bytes, s.keys.data(), s.sorted_keys.data(), s.order.data(),
+                                         sorted_ids, n, 0, 63, stream());
+}
+inline cudaError_t scan_kept(void* storage, size_t& bytes, const int32_t* kept, int32_t* new_index, int32_t n) {
+  return cub::DeviceScan::ExclusiveSum(storage, bytes, kept, new_index, n, stream());
+}
+
+// Sizes `s` for Morton sorts of n boxes, kept from then on.
+template <class Boxes>
+void reserve_sort(SortScratch& s, Boxes boxes, int32_t n) {
+  s.centre_bounds.ensure(1);
+  s.keys.ensure(size_t(n));
+  s.sorted_keys.ensure(size_t(n));
+  s.order.ensure(size_t(n));
+  size_t reduce_bytes = 0, sort_bytes = 0;
+  check(reduce_centre_bounds(nullptr, reduce_bytes, boxes, n, nullptr), "cub::DeviceReduce::TransformReduce");
+  check(sort_morton_pairs(nullptr, sort_bytes, s, nullptr, n), "cub::DeviceRadixSort::SortPairs");
+  s.temp.ensure(std::max<size_t>({reduce_bytes, sort_bytes, 1}));
 }
 
 // Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id: cpu/tree.h's
-// sort_by_morton on the device.
+// sort_by_morton on the device, the sorted codes in s.sorted_keys.
 template <class Boxes>
-void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<uint64_t>& sorted_keys, DeviceBuffer<int32_t>& sorted_ids) {
-  sorted_keys.ensure(size_t(n));
+void sort_by_morton(Boxes boxes, int32_t n, SortScratch& s, DeviceBuffer<int32_t>& sorted_ids) {
   sorted_ids.ensure(size_t(n));
   if (n == 0) return;
+  s.centre_bounds.ensure(1);
+  s.keys.ensure(size_t(n));
+  s.sorted_keys.ensure(size_t(n));
+  s.order.ensure(size_t(n));
   // Bounds of the centres: min/max are exact, so the reduction order does not matter.
-  DeviceBuffer<Box> centre_bounds(1);
-  DeviceBuffer<char> temp;
-  const thrust::counting_iterator<int32_t> ids(0);
-  run_cub(temp, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
-    return cub::DeviceReduce::TransformReduce(storage, bytes, ids, centre_bounds.data(), n, BoxUnion{},
-                                              CentreBox<Boxes>{boxes}, Box::empty(), kStream);
+  run_cub(s.temp, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
+    return reduce_centre_bounds(storage, bytes, boxes, n, s.centre_bounds.data());
   });
-  DeviceBuffer<uint64_t> keys(n);
-  DeviceBuffer<int32_t> order(n);
-  launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, centre_bounds.data(), keys.data(),
-         order.data());
-  // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in
-  // the CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
-  run_cub(temp, "cub::DeviceRadixSort::SortPairs", [&](void* storage, size_t& bytes) {
-    return cub::DeviceRadixSort::SortPairs(storage, bytes, keys.data(), sorted_keys.data(), order.data(),
-                                           sorted_ids.data(), n, 0, 63, kStream);
-  });
+  launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, s.centre_bounds.data(), s.keys.data(),
+         s.order.data());
+  run_cub(s.temp, "cub::DeviceRadixSort::SortPairs",
+          [&](void* storage, size_t& bytes) { return sort_morton_pairs(storage, bytes, s, sorted_ids.data(), n); });
 }
 
+// Node i's term of the area cost, for the nodes that exist (0 past *num_nodes).
 struct NodeArea {
   const BvhNode* nodes;
-  __host__ __device__ double operator()(int32_t i) const { return node_area(nodes[i]); }
+  const int32_t* num_nodes;
+  __device__ double operator()(int32_t i) const { return i < *num_nodes ? node_area(nodes[i]) : 0.0; }
 };
 struct DoubleSum {
   __host__ __device__ double operator()(double a, double b) const { return a + b; }
 };
+inline cudaError_t sum_node_areas(void* storage, size_t& bytes, const BvhNode* nodes, const int32_t* num_nodes,
+                                  int32_t capacity, double* out) {
+  const thrust::counting_iterator<int32_t> ids(0);
+  return cub::DeviceReduce::TransformReduce(storage, bytes, ids, out, capacity, DoubleSum{}, NodeArea{nodes, num_nodes},
+                                            0.0, stream());
+}
+// *cost = *sum over the root's half area (0 without nodes or area): tree.h's area_cost.
+static __global__ void area_cost_kernel(const BvhNode* nodes, const int32_t* num_nodes, const double* sum, double* cost) {
+  double value = 0.0;
+  if (*num_nodes > 0) {
+    const double root = root_half_area(nodes[0]);
+    if (root > 0.0) value = *sum / root;
+  }
+  *cost = value;
+}
 
-// CpuTree::build step by step.
+// CpuTree::build step by step. The node count stays on the device: a build enqueues its work
+// without a host read once reserve_build() has sized its scratch (nodes for the largest count,
+// n - 1, kept); an unreserved build reads the count back, allocates exactly that many nodes and
+// frees its scratch after.
 class CudaTree {
  public:
   template <class Boxes>
@@ -97,82 +160,125 @@ class CudaTree {
     n_ = n;
     sorted_prims_.ensure(size_t(n));
     leaf_groups_.ensure(size_t(box_group_count(n)));
+    counts_.ensure(1);
+    costs_.ensure(3);
     zero(sorted_prims_, size_t(n));
-    num_nodes_ = 0;
-    cost_at_build_ = 0.0;
-    if (n == 0) return;
-    if (n == 1) {
-      const BvhNode root = one_leaf_root();
-      num_nodes_ = 1;
-      nodes_.ensure(1);
-      arrivals_.ensure(1);
-      copy(nodes_.data(), &root, sizeof(root), cudaMemcpyHostToDevice);
-      refit(boxes);
-      cost_at_build_ = area_cost();
+    zero(counts_, 1);
+    node_capacity_ = 0;
+    if (n == 0) {
+      zero(costs_, 3);
       return;
     }
-    DeviceBuffer<uint64_t> sorted_keys;
-    sort_by_morton(boxes, n, sorted_keys, sorted_prims_);
-    DeviceBuffer<KarrasNode> karras(size_t(n - 1));
-    DeviceBuffer<int32_t> kept(size_t(n - 1)), new_index(size_t(n - 1));
-    launch("karras_kernel launch", karras_kernel, n - 1, kThreads, sorted_keys.data(), n, config.leaf_size, karras.data(),
-           kept.data());
-    DeviceBuffer<char> temp;
-    run_cub(temp, "cub::DeviceScan::ExclusiveSum", [&](void* storage, size_t& bytes) {
-      return cub::DeviceScan::ExclusiveSum(storage, bytes, kept.data(), new_index.data(), n - 1, kStream);
+    if (n == 1) {
+      node_capacity_ = 1;
+      nodes_.ensure(1);
+      arrivals_.ensure(1);
+      launch("one_leaf_kernel launch", one_leaf_kernel, 1, 1, nodes_.data(), counts_.data());
+      refit(boxes);
+      store_cost(costs_.data() + kCostAtBuild);
+      return;
+    }
+    BuildScratch local;
+    BuildScratch& s = reserved_ ? scratch_ : local;
+    sort_by_morton(boxes, n, s.sort, sorted_prims_);
+    s.karras.ensure(size_t(n - 1));
+    s.kept.ensure(size_t(n - 1));
+    s.new_index.ensure(size_t(n - 1));
+    launch("karras_kernel launch", karras_kernel, n - 1, kThreads, s.sort.sorted_keys.data(), n, config.leaf_size,
+           s.karras.data(), s.kept.data());
+    run_cub(s.sort.temp, "cub::DeviceScan::ExclusiveSum", [&](void* storage, size_t& bytes) {
+      return scan_kept(storage, bytes, s.kept.data(), s.new_index.data(), n - 1);
     });
-    int32_t last_index = 0, last_kept = 0;
-    copy(&last_index, new_index.data() + (n - 2), sizeof(int32_t), cudaMemcpyDeviceToHost);
-    copy(&last_kept, kept.data() + (n - 2), sizeof(int32_t), cudaMemcpyDeviceToHost);
-    num_nodes_ = last_index + last_kept;
-    nodes_.ensure(size_t(num_nodes_));
-    arrivals_.ensure(size_t(num_nodes_));
-    zero(nodes_, size_t(num_nodes_));
-    launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, karras.data(), new_index.data(), n,
+    launch("count_nodes_kernel launch", count_nodes_kernel, 1, 1, s.new_index.data(), s.kept.data(), n, counts_.data());
+    if (reserved_) {
+      node_capacity_ = n - 1;  // sized by reserve_build
+    } else {
+      copy(&node_capacity_, counts_.data(), sizeof(int32_t), cudaMemcpyDeviceToHost);
+      nodes_.ensure(size_t(node_capacity_));
+      arrivals_.ensure(size_t(node_capacity_));
+    }
+    zero(nodes_, size_t(node_capacity_));
+    launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, s.karras.data(), s.new_index.data(), n,
            config.leaf_size, nodes_.data());
     refit(boxes);
-    cost_at_build_ = area_cost();
+    store_cost(costs_.data() + kCostAtBuild);
+  }
+
+  // Keeps the scratch of builds over n primitives from now on (boxes: their type sizes CUB's
+  // calls), so that builds enqueue their work without allocating or reading back.
+  template <class Boxes>
+  void reserve_build(Boxes boxes, int32_t n) {
+    const int32_t inner = std::max(n - 1, 1);
+    reserve_sort(scratch_.sort, boxes, n);
+    scratch_.karras.ensure(size_t(inner));
+    scratch_.kept.ensure(size_t(inner));
+    scratch_.new_index.ensure(size_t(inner));
+    size_t scan_bytes = 0, area_bytes = 0;
+    check(scan_kept(nullptr, scan_bytes, nullptr, nullptr, inner), "cub::DeviceScan::ExclusiveSum");
+    check(sum_node_areas(nullptr, area_bytes, nullptr, nullptr, inner, nullptr), "cub::DeviceReduce::TransformReduce");
+    scratch_.sort.temp.ensure(std::max(scan_bytes, scratch_.sort.temp.size()));
+    area_temp_.ensure(std::max<size_t>(area_bytes, 1));
+    if (nodes_.size() < size_t(inner)) {  // room for every node count, keeping the tree built now
+      DeviceBuffer<BvhNode> grown(size_t(inner));
+      copy(grown.data(), nodes_.data(), size_t(node_capacity_) * sizeof(BvhNode), cudaMemcpyDeviceToDevice);
+      nodes_ = std::move(grown);
+    }
+    arrivals_.ensure(size_t(inner));  // zeroed by every refit
+    reserved_ = true;
   }
 
   template <class Boxes>
   void refit(Boxes boxes) {
-    zero(arrivals_, size_t(num_nodes_));
-    launch("refit_kernel launch", refit_kernel<Boxes>, int64_t(num_nodes_) * 2, kThreads, boxes, num_nodes_,
+    zero(arrivals_, size_t(node_capacity_));
+    launch("refit_kernel launch", refit_kernel<Boxes>, int64_t(node_capacity_) * 2, kThreads, boxes, counts_.data(),
            sorted_prims_.data(), leaf_groups_.data(), nodes_.data(), arrivals_.data());
   }
 
-  // CpuTree::area_cost, summed by a device reduction: equal up to rounding.
+  // CpuTree::area_cost, summed by a device reduction: equal up to rounding (a blocking call).
   double area_cost() const {
-    if (num_nodes_ == 0) return 0.0;
-    BvhNode root;
-    copy(&root, nodes_.data(), sizeof(root), cudaMemcpyDeviceToHost);
-    const double root_area = root_half_area(root);
-    if (!(root_area > 0.0)) return 0.0;
-    area_sum_.ensure(1);
-    const thrust::counting_iterator<int32_t> ids(0);
-    run_cub(area_temp_, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
-      return cub::DeviceReduce::TransformReduce(storage, bytes, ids, area_sum_.data(), num_nodes_, DoubleSum{},
-                                                NodeArea{nodes_.data()}, 0.0, kStream);
-    });
-    double total = 0.0;
-    copy(&total, area_sum_.data(), sizeof(total), cudaMemcpyDeviceToHost);
-    return total / root_area;
+    if (node_capacity_ == 0) return 0.0;
+    store_cost(costs_.data() + kCostNow);
+    return read_cost(kCostNow);
   }
-  double cost_at_build() const { return cost_at_build_; }
+  double cost_at_build() const { return node_capacity_ == 0 ? 0.0 : read_cost(kCostAtBuild); }
 
   BvhView view() const { return {nodes_.data(), leaf_groups_.data(), sorted_prims_.data(), n_}; }
 
  private:
+  struct BuildScratch {
+    SortScratch sort;  // its temp also serves the scan
+    DeviceBuffer<KarrasNode> karras;
+    DeviceBuffer<int32_t> kept, new_index;
+  };
+  enum : int { kCostAtBuild = 0, kCostNow = 1, kAreaSum = 2 };  // costs_ entries
+
+  // The area cost of the tree as it is now into *cost (device memory), enqueued.
+  void store_cost(double* cost) const {
+    run_cub(area_temp_, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
+      return sum_node_areas(storage, bytes, nodes_.data(), counts_.data(), node_capacity_, costs_.data() + kAreaSum);
+    });
+    launch("area_cost_kernel launch", area_cost_kernel, 1, 1, nodes_.data(), counts_.data(), costs_.data() + kAreaSum,
+           cost);
+  }
+  double read_cost(int entry) const {
+    double value = 0.0;
+    copy(&value, costs_.data() + entry, sizeof(value), cudaMemcpyDeviceToHost);
+    return value;
+  }
+
   int32_t n_ = 0;
-  double cost_at_build_ = 0.0;
-  int32_t num_nodes_ = 0;
+  int32_t node_capacity_ = 0;  // node records the refit and area kernels cover (those that exist: counts_[0])
+  bool reserved_ = false;
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> arrivals_;
+  DeviceBuffer<int32_t> counts_;  // [0]: the number of nodes
+  // [kCostAtBuild]: the area cost right after the last build; [kCostNow], [kAreaSum]: area_cost()'s.
+  mutable DeviceBuffer<double> costs_;
   DeviceBuffer<int32_t> sorted_prims_;  // primitive at each sorted leaf position
   DeviceBuffer<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
-  // area_cost()'s scratch, kept: growth is asked for every step, and a cudaFree would wait for
-  // the whole GPU.
-  mutable DeviceBuffer<double> area_sum_;
+  BuildScratch scratch_;                // kept once reserved
+  // The area reduction's scratch, kept: growth is asked for every step, and a cudaFree would
+  // wait for the whole GPU.
   mutable DeviceBuffer<char> area_temp_;
 };
 
