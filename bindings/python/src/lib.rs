@@ -13,9 +13,11 @@ use std::mem;
 use std::slice;
 use std::sync::{Mutex, MutexGuard};
 
+use std::ffi::c_void;
+
 use minkq::{
-    Buffer, Bvh, BvhBufferQuery, Device, Memory, Mode, PairsOut, Query, QueryFlags, QueryKind, Scene, SceneBuffers,
-    SceneFlags,
+    Buffer, Bvh, BvhBufferQuery, CountOut, Device, Memory, Mode, PairsOut, Query, QueryFlags, QueryKind, Reserve,
+    Scene, SceneBuffers, SceneFlags, Stream,
 };
 use pyo3::buffer::{Element, PyBuffer};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -73,11 +75,8 @@ impl<T: Element> Rows<T> {
         // pyo3 0.17's element check takes a byte-swapped buffer ('>' on a little-endian host) for
         // a native one: refuse one here rather than read its values swapped.
         let order = buffer.format().to_bytes().first().copied();
-        let swapped = if cfg!(target_endian = "little") {
-            matches!(order, Some(b'>') | Some(b'!'))
-        } else {
-            order == Some(b'<')
-        };
+        let swapped =
+            if cfg!(target_endian = "little") { matches!(order, Some(b'>') | Some(b'!')) } else { order == Some(b'<') };
         if swapped {
             return Err(PyTypeError::new_err(format!(
                 "{name}: expected native byte order, got buffer format {:?}",
@@ -156,6 +155,40 @@ impl<T: Element> Array<T> {
             }
         }
     }
+}
+
+impl Array<u64> {
+    /// The one-element array as a count output.
+    ///
+    /// # Safety
+    /// As `pairs_out`, for one u64.
+    unsafe fn count_out(&mut self) -> CountOut<'_> {
+        match self {
+            Array::Host { rows, .. } => CountOut::from_raw_parts(rows.buffer.buf_ptr() as *mut u64, Memory::Host),
+            Array::Raw { address, memory, .. } => CountOut::from_raw_parts(*address as *mut u64, *memory),
+        }
+    }
+
+    /// A writable one-element uint64 array (numpy, or a raw descriptor of one).
+    fn count(obj: &PyAny, name: &str) -> PyResult<Array<u64>> {
+        let array = Array::<u64>::get(obj, name, &[], true)?;
+        let rows = match &array {
+            Array::Host { rows, .. } => rows.rows,
+            Array::Raw { count, .. } => *count,
+        };
+        if rows != 1 {
+            return Err(PyValueError::new_err(format!("{name}: expected shape (1,), got {rows} elements")));
+        }
+        Ok(array)
+    }
+}
+
+/// The stream an asynchronous call is enqueued on, from its address (a cudaStream_t; 0: CUDA's
+/// default stream; ignored on the CPU).
+fn stream(address: usize) -> Stream {
+    // SAFETY: the package passes the stream of the arrays' library or the caller's own, alive
+    // while the work runs (the caller's promise, as for the arrays); a CPU device ignores it.
+    unsafe { Stream::from_raw(address as *mut c_void) }
 }
 
 fn parse_kind(kind: &str) -> PyResult<QueryKind> {
@@ -351,6 +384,104 @@ impl PyScene {
             .allow_threads(|| lock(scene).query_vt_ee_to(&vt, &ee, vt_pairs, ee_pairs))
             .map_err(|e| to_py_err(py, e))?;
         Ok(((vt_info.count, vt_info.digest), (ee_info.count, ee_info.digest)))
+    }
+
+    /// Reserves the scratch of the asynchronous calls (minkq_scene_reserve).
+    fn reserve(&self, py: Python<'_>, refit: bool, rebuild: bool, canonical_capacity: usize) -> PyResult<()> {
+        let mut flags = Reserve::empty();
+        if refit {
+            flags |= Reserve::REFIT;
+        }
+        if rebuild {
+            flags |= Reserve::REBUILD;
+        }
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).reserve(flags, canonical_capacity)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// minkq_scene_refit_async on the stream at `stream_address`.
+    fn refit_async(&self, py: Python<'_>, vertices: &PyAny, stream_address: usize) -> PyResult<()> {
+        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        // SAFETY: rows of 3 floats, alive in this frame (on CUDA, the caller keeps them alive
+        // until the enqueued work has run).
+        let vertices = unsafe { vertices.buffer() };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).refit_async(vertices, stream(stream_address))).map_err(|e| to_py_err(py, e))
+    }
+
+    /// minkq_scene_rebuild_async on the stream at `stream_address`.
+    fn rebuild_async(&self, py: Python<'_>, vertices: &PyAny, stream_address: usize) -> PyResult<()> {
+        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        // SAFETY: as in refit_async.
+        let vertices = unsafe { vertices.buffer() };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).rebuild_async(vertices, stream(stream_address))).map_err(|e| to_py_err(py, e))
+    }
+
+    /// minkq_scene_query_async into `out` ((capacity, 2) int32) and `count` ((1,) uint64).
+    #[allow(clippy::too_many_arguments)]
+    fn query_async(
+        &self,
+        py: Python<'_>,
+        out: &PyAny,
+        count: &PyAny,
+        kind: &str,
+        mode: &str,
+        radius: f32,
+        leaf_exact: bool,
+        canonical: bool,
+        stream_address: usize,
+    ) -> PyResult<()> {
+        let query = Query::new(parse_kind(kind)?, parse_mode(mode)?, radius)
+            .with_flags(query_flags(leaf_exact, canonical, false));
+        let mut out = Array::<i32>::get(out, "out_pairs", &[2], true)?;
+        let mut count = Array::count(count, "out_count")?;
+        // SAFETY: rows of 2 int32 and one u64, writable, packed, used only by this query (on
+        // CUDA, kept alive by the caller until the enqueued work has run).
+        let (pairs, count) = unsafe { (out.pairs_out(), count.count_out()) };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).query_async(&query, pairs, count, stream(stream_address)))
+            .map_err(|e| to_py_err(py, e))
+    }
+
+    /// minkq_scene_query_vt_ee_async into two (capacity, 2) int32 arrays and two (1,) uint64
+    /// counts.
+    #[allow(clippy::too_many_arguments)]
+    fn query_vt_ee_async(
+        &self,
+        py: Python<'_>,
+        vt_out: &PyAny,
+        vt_count: &PyAny,
+        ee_out: &PyAny,
+        ee_count: &PyAny,
+        vt_mode: &str,
+        ee_mode: &str,
+        radius: f32,
+        leaf_exact: bool,
+        canonical: bool,
+        stream_address: usize,
+    ) -> PyResult<()> {
+        let flags = query_flags(leaf_exact, canonical, false);
+        let vt = Query::new(QueryKind::Vt, parse_mode(vt_mode)?, radius).with_flags(flags);
+        let ee = Query::new(QueryKind::Ee, parse_mode(ee_mode)?, radius).with_flags(flags);
+        let mut vt_out = Array::<i32>::get(vt_out, "vt_pairs", &[2], true)?;
+        let mut vt_count = Array::count(vt_count, "vt_count")?;
+        let mut ee_out = Array::<i32>::get(ee_out, "ee_pairs", &[2], true)?;
+        let mut ee_count = Array::count(ee_count, "ee_count")?;
+        // SAFETY: as in query_async (the library refuses one count for both queries).
+        let outs = unsafe { (vt_out.pairs_out(), vt_count.count_out(), ee_out.pairs_out(), ee_count.count_out()) };
+        let scene = &self.inner;
+        py.allow_threads(|| {
+            let (vt_pairs, vt_count, ee_pairs, ee_count) = outs;
+            lock(scene).query_vt_ee_async(&vt, &ee, vt_pairs, vt_count, ee_pairs, ee_count, stream(stream_address))
+        })
+        .map_err(|e| to_py_err(py, e))
+    }
+
+    /// minkq_scene_async_status: waits for the stream, raises the pending error and clears it.
+    fn async_status(&self, py: Python<'_>, stream_address: usize) -> PyResult<()> {
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).async_status(stream(stream_address))).map_err(|e| to_py_err(py, e))
     }
 
     /// Runs a query with MINKQ_QUERY_STATS (pairs discarded); returns (nodes_visited,

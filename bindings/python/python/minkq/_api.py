@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _native
 from ._errors import CapacityError, IndexOutOfRangeError
-from ._interop import Like, allocate_pairs, checked, has_protocol, head, like, view
+from ._interop import Like, allocate_pairs, checked, checked_count, has_protocol, head, like, stream_handle, view
 
 if TYPE_CHECKING:
     from typing import Literal
@@ -127,14 +127,16 @@ class _Args:
     protocol), arrays of other libraries as raw descriptors of their memory (DLPack, the CUDA
     array interface), whose views this object keeps alive until the call has returned."""
 
-    def __init__(self, device: "Device") -> None:
+    def __init__(self, device: "Device", stream: Optional[int] = None) -> None:
         self.device = device
+        self.stream = stream
+        """None for the blocking calls; the cudaStream_t of a stream-ordered call."""
         self.views: list = []
 
     def rows(self, value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> Any:
         if not has_protocol(value):
             return _rows(value, name, dtype, trailing)
-        array = checked(view(value, name, self.device), name, dtype, trailing)
+        array = checked(view(value, name, self.device, self.stream), name, dtype, trailing)
         self.views.append(array)
         return array.descriptor()
 
@@ -146,10 +148,20 @@ class _Args:
         self.views.append(array)
         return array.descriptor()
 
-    def out(self, value: Any) -> Any:
+    def out(self, value: Any, name: str = "out") -> Any:
         if isinstance(value, np.ndarray) or not has_protocol(value):
-            return _out(value)
-        array = checked(view(value, "out", self.device), "out", np.int32, (2,), writable=True, packed=True)
+            return _out(value, name)
+        array = view(value, name, self.device, self.stream)
+        array = checked(array, name, np.int32, (2,), writable=True, packed=True)
+        self.views.append(array)
+        return array.descriptor()
+
+    def count(self, value: Any, name: str) -> Any:
+        """A stream-ordered query's count: a writable (1,) uint64 or int64 array, passed as
+        uint64 (a view of the same memory for a numpy int64 array: nothing is copied)."""
+        if isinstance(value, np.ndarray) or not has_protocol(value):
+            return _count(value, name)
+        array = checked_count(view(value, name, self.device, self.stream), name)
         self.views.append(array)
         return array.descriptor()
 
@@ -177,20 +189,38 @@ def _choice(value: Any, name: str, choices: Tuple[str, ...]) -> str:
     return str(value)
 
 
-def _out(out: Any) -> np.ndarray:
+def _out(out: Any, name: str = "out") -> np.ndarray:
     if not isinstance(out, np.ndarray):
         raise TypeError(
-            f"out: expected a numpy array or an array with __dlpack__ or __cuda_array_interface__, got {type(out).__name__}"
+            f"{name}: expected a numpy array or an array with __dlpack__ or __cuda_array_interface__, got {type(out).__name__}"
         )
     if out.dtype != np.int32:
-        raise TypeError(f"out: expected an int32 array, got {out.dtype}")
+        raise TypeError(f"{name}: expected an int32 array, got {out.dtype}")
     if out.ndim != 2 or out.shape[1] != 2:
-        raise ValueError(f"out: expected shape (capacity, 2), got {out.shape}")
+        raise ValueError(f"{name}: expected shape (capacity, 2), got {out.shape}")
     if not (out.flags.c_contiguous and out.flags.aligned):
-        raise ValueError("out: expected a C-contiguous array")
+        raise ValueError(f"{name}: expected a C-contiguous array")
     if not out.flags.writeable:
-        raise ValueError("out: the array is read-only")
+        raise ValueError(f"{name}: the array is read-only")
     return out
+
+
+def _count(count: Any, name: str) -> np.ndarray:
+    """A numpy (1,) uint64 / int64 count as a uint64 view of the same memory."""
+    if not isinstance(count, np.ndarray):
+        raise TypeError(
+            f"{name}: expected a (1,) uint64 numpy array or an array with __dlpack__ or __cuda_array_interface__, got "
+            f"{type(count).__name__}"
+        )
+    if count.dtype not in (np.dtype(np.uint64), np.dtype(np.int64)) or not count.dtype.isnative:
+        raise TypeError(f"{name}: expected a uint64 or int64 array, got {count.dtype}")
+    if count.shape != (1,):
+        raise ValueError(f"{name}: expected shape (1,), got {count.shape}")
+    if not count.flags.aligned:
+        raise ValueError(f"{name}: the data address is not 8-byte aligned")
+    if not count.flags.writeable:
+        raise ValueError(f"{name}: the array is read-only")
+    return count.view(np.uint64)
 
 
 def _with_headroom(count: int) -> int:
@@ -343,6 +373,7 @@ class Scene(_SizedQueries):
         if edges is not None:
             edges = args.rows(edges, "edges", np.int32, (2,))
         self._native = _native.Scene(device._native, vertices, triangles, edges, bool(vt), bool(ee), bool(drop_incident))
+        self._stream = 0  # the stream of the last stream-ordered call, for async_status
 
     @property
     def vertex_count(self) -> int:
@@ -520,6 +551,137 @@ class Scene(_SizedQueries):
             lambda e: 0 if e.message.startswith("VT:") else 1,  # the first short buffer, VT before EE
         )
         return vt, ee
+
+    # ---- Stream-ordered calls ----------------------------------------------------------------
+
+    def reserve(self, refit: bool = True, rebuild: bool = False, canonical_capacity: int = 0) -> None:
+        """Reserves, on the scene's device, the scratch the stream-ordered calls use, so that
+        they never allocate: ``refit`` for :meth:`refit_async`, ``rebuild`` for
+        :meth:`rebuild_async` (and refits), and ``canonical_capacity`` pairs for the sort of
+        ``canonical=True`` :meth:`query_async` calls (whose capacity may not exceed it; other
+        queries need no reservation). Reservations only grow and last as long as the scene. A
+        blocking call (it may allocate and synchronise): call it before capturing a graph.
+
+        >>> import numpy as np, minkq
+        >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> scene.reserve(refit=True, canonical_capacity=64)
+        >>> pairs, count = np.zeros((64, 2), np.int32), np.zeros(1, np.uint64)
+        >>> v[3:, 2] = 0.15
+        >>> scene.refit_async(v)
+        >>> scene.query_async(pairs, count, "vt", "sphere", 0.2, canonical=True)
+        >>> scene.async_status()  # waits for the stream; raises if a refit met a NaN
+        >>> int(count[0]), pairs[: count[0]].tolist()
+        (6, [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]])
+        """
+        if isinstance(canonical_capacity, bool) or not isinstance(canonical_capacity, (int, np.integer)):
+            raise TypeError(f"canonical_capacity: expected an int, got {type(canonical_capacity).__name__}")
+        if canonical_capacity < 0:
+            raise ValueError(f"canonical_capacity: expected a count >= 0, got {canonical_capacity}")
+        self._native.reserve(bool(refit), bool(rebuild), int(canonical_capacity))
+
+    def refit_async(self, vertices: Any, stream: Any = None) -> None:
+        """:meth:`refit`, enqueued on ``stream`` without waiting, allocating or synchronising
+        (``minkq_scene_refit_async``), so that it can be captured into a CUDA graph (e.g. in
+        ``wp.ScopedCapture``). On a CUDA device ``vertices`` are device memory (a Warp, PyTorch
+        or CuPy array on the scene's GPU), read when the stream runs the work: keep them alive
+        (for a captured graph, as long as it is replayed). On the CPU they are host memory
+        (numpy, or a Warp CPU array) and the refit has run when this returns.
+
+        ``stream``: None for the current stream of the array's library (Warp:
+        ``wp.get_stream(device)``, the capture stream inside ``wp.ScopedCapture``; PyTorch:
+        ``torch.cuda.current_stream(device)``; CuPy: ``cupy.cuda.get_current_stream()``), or an
+        int (a ``cudaStream_t``) or a stream with ``.cuda_stream`` / ``.ptr``; ignored on the
+        CPU. Needs :meth:`reserve` (``refit=True``): :class:`InvalidArgumentError` without it.
+        A NaN or infinity is no error here: the scene keeps its positions and
+        :meth:`async_status` raises :class:`NonFiniteError`, naming the call and the vertex."""
+        self._move_async(vertices, stream, self._native.refit_async)
+
+    def rebuild_async(self, vertices: Any, stream: Any = None) -> None:
+        """:meth:`rebuild`, enqueued on ``stream`` as :meth:`refit_async` is
+        (``minkq_scene_rebuild_async``). Needs :meth:`reserve` with ``rebuild=True``."""
+        self._move_async(vertices, stream, self._native.rebuild_async)
+
+    def query_async(
+        self,
+        out_pairs: Any,
+        out_count: Any,
+        kind: "Kind",
+        mode: "Mode",
+        radius: float,
+        *,
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        stream: Any = None,
+    ) -> None:
+        """:meth:`query_into`, enqueued on ``stream`` (``minkq_scene_query_async``): writes the
+        exact number of pairs to ``out_count[0]`` (a (1,) uint64 or int64 array), also when it
+        exceeds the capacity of ``out_pairs`` ((capacity, 2) int32, C-contiguous), and at most
+        that many pairs, never past it (which ones, when they do not all fit, is unspecified;
+        the CPU writes none). Never :class:`CapacityError`: read the count, and grow the array
+        between steps when it says so. On a CUDA device both arrays are device memory on the
+        scene's GPU, written when the stream runs the work (the count is never copied to the
+        host); on the CPU they are host memory, written when this returns. ``stream`` as in
+        :meth:`refit_async` (None: the current stream of ``out_pairs``'s library).
+        ``canonical=True`` sorts the pairs when they fit and needs the capacity reserved
+        (:meth:`reserve`)."""
+        kind = _choice(kind, "kind", KINDS)
+        mode = _choice(mode, "mode", MODES)
+        r = _radius(radius)
+        handle = stream_handle(stream, self.device, (out_pairs, out_count))
+        args = _Args(self.device, handle)
+        native = (args.out(out_pairs, "out_pairs"), args.count(out_count, "out_count"))
+        self._native.query_async(*native, kind, mode, r, bool(leaf_exact), bool(canonical), handle)
+        self._stream = handle
+
+    def query_vt_ee_async(
+        self,
+        vt_pairs: Any,
+        vt_count: Any,
+        ee_pairs: Any,
+        ee_count: Any,
+        radius: float,
+        *,
+        vt_mode: "Mode" = "box",
+        ee_mode: "Mode" = "box",
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        stream: Any = None,
+    ) -> None:
+        """:meth:`query_vt_ee`, enqueued on ``stream`` (``minkq_scene_query_vt_ee_async``: one
+        kernel launch on CUDA): each query's pairs and count as :meth:`query_async` writes them
+        alone. ``vt_count`` and ``ee_count`` must be different arrays."""
+        vt_mode = _choice(vt_mode, "vt_mode", MODES)
+        ee_mode = _choice(ee_mode, "ee_mode", MODES)
+        r = _radius(radius)
+        handle = stream_handle(stream, self.device, (vt_pairs, vt_count, ee_pairs, ee_count))
+        args = _Args(self.device, handle)
+        native = (
+            args.out(vt_pairs, "vt_pairs"),
+            args.count(vt_count, "vt_count"),
+            args.out(ee_pairs, "ee_pairs"),
+            args.count(ee_count, "ee_count"),
+        )
+        self._native.query_vt_ee_async(*native, vt_mode, ee_mode, r, bool(leaf_exact), bool(canonical), handle)
+        self._stream = handle
+
+    def async_status(self, stream: Any = None) -> None:
+        """Waits for the work enqueued on ``stream`` (CUDA; None: the stream of this scene's
+        last stream-ordered call), then raises the scene's pending error and clears it:
+        :class:`NonFiniteError` when a :meth:`refit_async` or :meth:`rebuild_async` since the
+        last call met a NaN or infinity (the first such call, named in the message with the
+        vertex; the scene kept its positions). Afterwards the counts and pairs of the queries
+        enqueued on the stream are ready. A blocking call: not for inside a graph capture."""
+        handle = self._stream if stream is None else stream_handle(stream, self.device)
+        self._native.async_status(handle)
+
+    def _move_async(self, vertices: Any, stream: Any, call: Callable[[Any, int], None]) -> None:
+        handle = stream_handle(stream, self.device, (vertices,))
+        args = _Args(self.device, handle)
+        native = args.rows(vertices, "vertices", np.float32, (3,))
+        call(native, handle)
+        self._like = _like(args.last)
+        self._stream = handle
 
     def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
         """Runs the query once with the library's work counters on and returns them (the pairs

@@ -14,6 +14,13 @@ each call returns. So
   one without (versions 0-2, or ``None``) promises the data are ready;
 - results written by minkq are complete when the call returns, so any stream may read them.
 
+The stream-ordered calls (``Scene.refit_async``, ``query_async``, ...) are enqueued on a stream
+of the caller's instead (:func:`stream_handle`: by default the current stream of the arrays'
+library), and read the arrays through the same code with that stream: a DLPack producer is
+asked for its tensor on it, and a CUDA array interface stream other than it is ordered before
+it with an event (``cuStreamWaitEvent``), never synchronised on the host, so that the calls can
+be captured into a CUDA graph.
+
 A CUDA array given to a CPU device, or one on another GPU than the minkq device, raises
 :class:`~minkq.InvalidArgumentError` naming the argument; nothing is copied to make it fit.
 """
@@ -116,14 +123,17 @@ def has_protocol(value: Any) -> bool:
     )
 
 
-def view(value: Any, name: str, device: Any) -> Foreign:
+def view(value: Any, name: str, device: Any, stream: Optional[int] = None) -> Foreign:
     """``value`` viewed in place, checked against the minkq ``device`` (a minkq.Device): a CUDA
-    array needs a CUDA device of the same ordinal."""
+    array needs a CUDA device of the same ordinal. ``stream``: None for the blocking calls
+    (minkq's per-thread default stream, data ready on the host); for a stream-ordered call the
+    cudaStream_t it is enqueued on (0: CUDA's default stream), which the array's pending work
+    is ordered before."""
     if hasattr(value, "__dlpack__") and hasattr(value, "__dlpack_device__"):
         device_type, device_id = (int(x) for x in value.__dlpack_device__())
         if device_type in (DL_CUDA, DL_CUDA_MANAGED):
             _require_cuda(name, device, device_id, type(value), "DLPack")
-            capsule = value.__dlpack__(stream=MINKQ_STREAM)
+            capsule = value.__dlpack__(stream=MINKQ_STREAM if stream is None else _dlpack_stream(stream))
         elif device_type in (DL_CPU, DL_CUDA_HOST):
             capsule = value.__dlpack__()
         else:
@@ -133,7 +143,7 @@ def view(value: Any, name: str, device: Any) -> Foreign:
             )
         return _from_capsule(value, capsule, name)
     if hasattr(value, "__cuda_array_interface__"):
-        return _from_cuda_array_interface(value, name, device)
+        return _from_cuda_array_interface(value, name, device, stream)
     raise TypeError(f"{name}: {_type_name(value)} has neither __dlpack__ nor __cuda_array_interface__")
 
 
@@ -178,7 +188,13 @@ def _from_capsule(value: Any, capsule: Any, name: str) -> Foreign:
     return Foreign(value, address, shape, strides, dtype, cuda, False, "dlpack", capsule)
 
 
-def _from_cuda_array_interface(value: Any, name: str, device: Any) -> Foreign:
+def _dlpack_stream(handle: int) -> int:
+    """DLPack's number for a cudaStream_t: 1 for the legacy default stream (NULL, which DLPack
+    does not allow), the handle itself otherwise (2 is the per-thread default stream)."""
+    return 1 if handle == 0 else handle
+
+
+def _from_cuda_array_interface(value: Any, name: str, device: Any, consumer: Optional[int] = None) -> Foreign:
     cai = value.__cuda_array_interface__
     if cai.get("mask") is not None:
         raise TypeError(f"{name}: masked CUDA arrays are not supported")
@@ -193,7 +209,11 @@ def _from_cuda_array_interface(value: Any, name: str, device: Any) -> Foreign:
     _require_cuda(name, device, ordinal, type(value), "__cuda_array_interface__")
     stream = cai.get("stream")
     if stream is not None:
-        cuda_driver().stream_synchronize(int(stream))
+        if consumer is None:
+            cuda_driver().stream_synchronize(int(stream))
+        elif _dlpack_stream(int(stream)) != _dlpack_stream(consumer):
+            # The CUDA array interface's stream numbers are DLPack's (1 legacy, 2 per-thread).
+            cuda_driver().stream_wait(consumer, int(stream))
     return Foreign(value, address, shape, strides, dtype, ordinal, bool(readonly), "cuda_array_interface")
 
 
@@ -236,6 +256,75 @@ def checked(array: Foreign, name: str, dtype: Any, trailing: Tuple[int, ...], *,
     if rows and array.address % dtype.itemsize:
         raise ValueError(f"{name}: the data address is not {dtype.itemsize}-byte aligned")
     return array
+
+
+def checked_count(array: Foreign, name: str) -> Foreign:
+    """``array`` if it is a writable one-element uint64 or int64 array (a stream-ordered query's
+    exact count), 8-byte aligned; TypeError / ValueError naming the argument otherwise."""
+    if array.dtype not in (np.dtype("<u8"), np.dtype("<i8")):
+        raise TypeError(f"{name}: expected a uint64 or int64 array, got {array.dtype.name} ({array.kind}, {array.where})")
+    checked(array, name, array.dtype, (), writable=True, packed=True)
+    if array.shape != (1,):
+        raise ValueError(f"{name}: expected shape (1,), got {array.shape}")
+    return array
+
+
+# ---- Streams of the stream-ordered calls ----------------------------------------------------------
+
+
+def stream_handle(stream: Any, device: Any, arrays: Tuple[Any, ...] = ()) -> int:
+    """The cudaStream_t (as an int; 0 is CUDA's default stream) that a stream-ordered call on the
+    minkq ``device`` is enqueued on. ``stream``: an int (a cudaStream_t), an object with
+    ``.cuda_stream`` (Warp, PyTorch streams) or ``.ptr`` (CuPy streams), or None: on a CUDA
+    device, the current stream of the library of the first array of ``arrays`` that has one
+    (Warp: ``wp.get_stream(array.device)``, which inside ``wp.ScopedCapture`` is the capture
+    stream; PyTorch: ``torch.cuda.current_stream(array.device)``; CuPy:
+    ``cupy.cuda.get_current_stream()``; another library's CUDA array interface stream), else
+    CUDA's default stream. A CPU device ignores the stream (it is still checked)."""
+    if stream is not None:
+        return _explicit_stream(stream)
+    if getattr(device, "backend", None) != "cuda":
+        return 0
+    for value in arrays:
+        if value is None or isinstance(value, np.ndarray) or not has_protocol(value):
+            continue
+        kind = type(value).__module__.split(".")[0]
+        if kind == "warp":
+            import warp as wp
+
+            return int(wp.get_stream(value.device).cuda_stream)
+        if kind == "torch":
+            import torch
+
+            return int(torch.cuda.current_stream(value.device).cuda_stream)
+        if kind == "cupy":
+            import cupy
+
+            return int(cupy.cuda.get_current_stream().ptr)
+        cai = getattr(value, "__cuda_array_interface__", None)
+        if isinstance(cai, dict) and cai.get("stream") is not None:
+            handle = int(cai["stream"])
+            return 0 if handle == 1 else handle
+    return 0
+
+
+def _explicit_stream(stream: Any) -> int:
+    if isinstance(stream, bool):
+        raise TypeError("stream: expected None, an int (a cudaStream_t) or a stream object, got bool")
+    if isinstance(stream, (int, np.integer)):
+        handle = int(stream)
+    elif hasattr(stream, "cuda_stream"):
+        handle = int(stream.cuda_stream)
+    elif hasattr(stream, "ptr"):
+        handle = int(stream.ptr)
+    else:
+        raise TypeError(
+            f"stream: expected None, an int (a cudaStream_t) or a stream with .cuda_stream (Warp, PyTorch) or .ptr "
+            f"(CuPy), got {_type_name(stream)}"
+        )
+    if handle < 0:
+        raise ValueError(f"stream: expected a cudaStream_t (an address >= 0), got {handle}")
+    return handle
 
 
 # ---- Results of the caller's kind ---------------------------------------------------------------
@@ -307,9 +396,11 @@ def head(pairs: Any, count: int, compact: bool) -> Any:
 
 class _Driver:
     """The few CUDA driver calls the CUDA array interface needs, through libcuda.so.1 (present
-    wherever a GPU is usable): the device of a pointer and stream synchronisation."""
+    wherever a GPU is usable): the device of a pointer, stream synchronisation, and the ordering
+    of one stream after another (stream-ordered calls)."""
 
     CU_POINTER_ATTRIBUTE_DEVICE_ORDINAL = 9
+    CU_EVENT_DISABLE_TIMING = 2
 
     def __init__(self) -> None:
         try:
@@ -332,6 +423,19 @@ class _Driver:
 
     def stream_synchronize(self, stream: int) -> None:
         self._check(self._lib.cuStreamSynchronize(ctypes.c_void_p(stream)), "cuStreamSynchronize")
+
+    def stream_wait(self, consumer: int, producer: int) -> None:
+        """Orders ``consumer`` after the work enqueued on ``producer`` so far, on the device (an
+        event recorded on one and waited for by the other), without blocking the host."""
+        event = ctypes.c_void_p()
+        flags = ctypes.c_uint(self.CU_EVENT_DISABLE_TIMING)
+        self._check(self._lib.cuEventCreate(ctypes.byref(event), flags), "cuEventCreate")
+        try:
+            self._check(self._lib.cuEventRecord(event, ctypes.c_void_p(producer)), "cuEventRecord")
+            wait = self._lib.cuStreamWaitEvent(ctypes.c_void_p(consumer), event, ctypes.c_uint(0))
+            self._check(wait, "cuStreamWaitEvent")
+        finally:
+            self._lib.cuEventDestroy_v2(event)
 
 
 _driver: Optional[_Driver] = None

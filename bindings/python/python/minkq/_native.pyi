@@ -1,7 +1,9 @@
 """Type stubs for the extension module minkq._native (bindings/python/src/lib.rs). Use the
 typed wrappers in the minkq package; this layer expects arrays already checked by it: numpy
 arrays (the buffer protocol) or raw descriptors (address, byte_stride, count, device memory)
-that minkq._interop built from DLPack / CUDA array interface objects it keeps alive."""
+that minkq._interop built from DLPack / CUDA array interface objects it keeps alive. The
+*_async methods take the cudaStream_t they are enqueued on as an int (``stream_address``; 0:
+CUDA's default stream; ignored on the CPU)."""
 
 from typing import Optional, Tuple, Union
 
@@ -57,6 +59,34 @@ class Scene:
         digest: bool,
     ) -> Tuple[Tuple[int, Optional[int]], Tuple[int, Optional[int]]]: ...
     def work(self, kind: str, mode: str, radius: float, leaf_exact: bool) -> Tuple[int, int, int, int]: ...
+    def reserve(self, refit: bool, rebuild: bool, canonical_capacity: int) -> None: ...
+    def refit_async(self, vertices: Union[npt.NDArray[np.float32], Raw], stream_address: int) -> None: ...
+    def rebuild_async(self, vertices: Union[npt.NDArray[np.float32], Raw], stream_address: int) -> None: ...
+    def query_async(
+        self,
+        out: Union[npt.NDArray[np.int32], Raw],
+        count: Union[npt.NDArray[np.uint64], Raw],
+        kind: str,
+        mode: str,
+        radius: float,
+        leaf_exact: bool,
+        canonical: bool,
+        stream_address: int,
+    ) -> None: ...
+    def query_vt_ee_async(
+        self,
+        vt_out: Union[npt.NDArray[np.int32], Raw],
+        vt_count: Union[npt.NDArray[np.uint64], Raw],
+        ee_out: Union[npt.NDArray[np.int32], Raw],
+        ee_count: Union[npt.NDArray[np.uint64], Raw],
+        vt_mode: str,
+        ee_mode: str,
+        radius: float,
+        leaf_exact: bool,
+        canonical: bool,
+        stream_address: int,
+    ) -> None: ...
+    def async_status(self, stream_address: int) -> None: ...
 
 class Bvh:
     box_count: int

@@ -446,6 +446,54 @@ extern "C" {
         ee_info: *mut minkq_query_info,
     ) -> minkq_status;
 }
+pub type minkq_stream = *mut ::std::os::raw::c_void;
+pub const MINKQ_RESERVE_REFIT: minkq_reserve_flags = 1;
+pub const MINKQ_RESERVE_REBUILD: minkq_reserve_flags = 2;
+pub type minkq_reserve_flags = ::std::os::raw::c_uint;
+extern "C" {
+    pub fn minkq_scene_reserve(scene: *mut minkq_scene, flags: u32, canonical_capacity: usize) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_refit_async(
+        scene: *mut minkq_scene,
+        vertices: minkq_buffer,
+        stream: minkq_stream,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_rebuild_async(
+        scene: *mut minkq_scene,
+        vertices: minkq_buffer,
+        stream: minkq_stream,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_query_async(
+        scene: *mut minkq_scene,
+        query: *const minkq_query_desc,
+        out_pairs: *mut i32,
+        capacity: usize,
+        out_count: *mut u64,
+        stream: minkq_stream,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_query_vt_ee_async(
+        scene: *mut minkq_scene,
+        vt_query: *const minkq_query_desc,
+        ee_query: *const minkq_query_desc,
+        vt_pairs: *mut i32,
+        vt_capacity: usize,
+        vt_count: *mut u64,
+        ee_pairs: *mut i32,
+        ee_capacity: usize,
+        ee_count: *mut u64,
+        stream: minkq_stream,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_async_status(scene: *mut minkq_scene, stream: minkq_stream) -> minkq_status;
+}
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
 pub struct minkq_result {

@@ -305,6 +305,8 @@ fn rust_declarations_match_the_c_header() {
         "SAME_VALUE(MINKQ_ERROR_INTERNAL)",
         "SAME_VALUE(MINKQ_MODE_CAPSULE_EXACT)",
         "SAME_VALUE(MINKQ_SHAPE_BOX)",
+        "SAME_VALUE(MINKQ_RESERVE_REBUILD)",
+        "SAME_LAYOUT(minkq_reserve_flags)",
         "SAME_VALUE(MINKQ_ABI_VERSION)",
     ] {
         assert!(unit.contains(expected), "the round trip lost {expected}:\n{unit}");

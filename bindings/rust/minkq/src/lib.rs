@@ -62,11 +62,46 @@
 //! memory or, on a CUDA device, in device memory read in place ([`Scene::from_buffers`],
 //! [`Scene::refit_buffer`], [`Scene::rebuild_buffer`], [`Scene::query_to`] with a
 //! [`PairsOut`], and the same on [`Bvh`]). A buffer over a raw pointer is built with the
-//! `unsafe` [`Buffer::from_raw_parts`]; every call taking it is safe. The C API has no stream
-//! argument: on a CUDA device the library works on the calling thread's per-thread default
+//! `unsafe` [`Buffer::from_raw_parts`]; every call taking it is safe. The blocking calls take
+//! no stream: on a CUDA device the library works on the calling thread's per-thread default
 //! stream and synchronises it before each call returns, so inputs must be ready (or ordered
 //! before that stream) when a call is made, and outputs are ready for every stream when it
 //! returns.
+//!
+//! # Stream-ordered calls
+//! A simulator that records its step into a CUDA graph uses the scene's asynchronous calls
+//! instead: [`Scene::refit_async`], [`Scene::rebuild_async`], [`Scene::query_async`] and
+//! [`Scene::query_vt_ee_async`] enqueue their work on a [`Stream`] and return without
+//! synchronising, allocating or reading results on the host. Their buffers are device memory
+//! on CUDA (host memory on the CPU, where the calls run to completion and the stream is
+//! ignored: a program tested on the CPU keeps the same rules); a query writes its exact pair
+//! count to a [`CountOut`] and at most its capacity of pairs, never [`Error::Capacity`].
+//! [`Scene::reserve`] reserves their scratch beforehand, and [`Scene::async_status`] waits for
+//! the stream and reports a refit or rebuild that met a non-finite vertex (the scene then kept
+//! its positions).
+//!
+//! ```
+//! use minkq::{Buffer, CountOut, Device, Mode, PairsOut, Query, QueryFlags, Reserve, Scene, SceneDesc, Stream};
+//!
+//! let mut vertices = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+//!                         [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+//! let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&vertices, &[[0, 1, 2], [3, 4, 5]]))?;
+//! let mut pairs = vec![[0i32; 2]; 64];
+//! scene.reserve(Reserve::REFIT, pairs.len())?; // before capturing: the calls below never allocate
+//! let query = Query::vt(Mode::Box, 0.2).with_flags(QueryFlags::LEAF_EXACT | QueryFlags::CANONICAL);
+//! let mut count = 0u64;
+//! for _step in 0..3 {
+//!     for v in &mut vertices[3..] {
+//!         v[2] += 0.01;
+//!     }
+//!     scene.refit_async(Buffer::from_slice(&vertices), Stream::null())?;
+//!     scene.query_async(&query, PairsOut::from_slice(&mut pairs), CountOut::from_mut(&mut count), Stream::null())?;
+//!     scene.async_status(Stream::null())?; // waits for the stream; Ok: every vertex was finite
+//!     assert!(count as usize <= pairs.len()); // else grow `pairs` (and the reservation) and run again
+//! }
+//! assert_eq!(count, 6);
+//! # Ok::<(), minkq::Error>(())
+//! ```
 //!
 //! # Linking
 //! `minkq-sys` links `libminkq.so` from `MINKQ_LIB_DIR` (the CMake build's `capi/` folder) or
@@ -80,6 +115,7 @@ mod error;
 mod pairs;
 mod query;
 mod scene;
+mod stream;
 
 /// The raw FFI bindings (`minkq-sys`), for what the safe API does not cover.
 ///
@@ -93,8 +129,9 @@ pub use bvh::{Aabb, Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
 pub use pairs::PairBuffer;
-pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, SceneFlags, WorkStats};
+pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, Reserve, SceneFlags, WorkStats};
 pub use scene::{Scene, SceneBuffers, SceneDesc};
+pub use stream::{CountOut, Stream};
 
 /// The ABI version this crate was generated against (`MINKQ_ABI_VERSION`).
 ///

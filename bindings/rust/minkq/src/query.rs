@@ -237,6 +237,25 @@ flags! {
     }
 }
 
+flags! {
+    /// The scratch [`Scene::reserve`](crate::Scene::reserve) reserves for a scene's
+    /// asynchronous calls (`minkq_reserve_flags`), so that they never allocate.
+    ///
+    /// ```
+    /// use minkq::Reserve;
+    /// let both = Reserve::REFIT | Reserve::REBUILD;
+    /// assert!(both.contains(Reserve::REBUILD) && !Reserve::REFIT.contains(Reserve::REBUILD));
+    /// ```
+    Reserve {
+        /// Scratch for [`Scene::refit_async`](crate::Scene::refit_async) (a copy of the
+        /// vertices) and the pending error.
+        REFIT = sys::MINKQ_RESERVE_REFIT;
+        /// Also the tree builds' scratch (about the trees' size again), for
+        /// [`Scene::rebuild_async`](crate::Scene::rebuild_async).
+        REBUILD = sys::MINKQ_RESERVE_REBUILD;
+    }
+}
+
 /// A mesh query: kind, mode, flags and radius (`minkq_query_desc`).
 ///
 /// ```
