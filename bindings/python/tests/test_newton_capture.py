@@ -1,0 +1,186 @@
+"""minkq.newton inside Warp graph captures on the CPU."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+wp = pytest.importorskip("warp")
+newton = pytest.importorskip("newton")
+
+wp.config.quiet = True
+
+import minkq.newton as mn  # noqa: E402
+import newton_scenes as ns  # noqa: E402
+from newton._src.geometry.tri_mesh_collision import TriMeshCollisionDetector as NewtonDetector  # noqa: E402
+from test_newton import ROOMY, read  # noqa: E402
+
+
+def _same(a, b) -> None:
+    assert np.array_equal(a.vt, b.vt) and np.array_equal(a.ee, b.ee)
+    assert np.array_equal(a.vt_count, b.vt_count) and np.array_equal(a.ee_count, b.ee_count)
+    assert np.array_equal(a.vt_min, b.vt_min) and np.array_equal(a.ee_min, b.ee_min)
+    assert np.array_equal(a.tri_min, b.tri_min) and np.array_equal(a.flags, b.flags)
+
+
+def _squashed(rest: np.ndarray, step: int) -> np.ndarray:
+    moved = rest.copy()
+    squash = (0.97, 0.94, 0.9, 0.88)[step]
+    moved[:, 0] *= squash  # the roll tightens: contacts come and go
+    moved[:, 2] *= squash
+    moved[:, 1] += 0.01 * step
+    return moved
+
+
+def _eager(model, positions, r, rebuild=False, **kwargs):
+    detector = mn.TriMeshCollisionDetector(model, init_collision_info=True, vertex_positions=positions, **kwargs)
+    (detector.rebuild if rebuild else detector.refit)(positions)
+    detector.vertex_triangle_collision_detection(r)
+    detector.edge_edge_collision_detection(r)
+    return read(detector)
+
+
+# ---- CPU graph capture ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("update", ["refit", "rebuild"])
+def test_captured_detection_replays_on_moved_vertices_as_eager(update):
+    """refit (or rebuild) + VT + EE recorded once; every replay on new positions (written into
+    the array the graph was recorded with) gives the rows, counts, minimum distances and flags
+    of an eager detector on the same positions."""
+    scene = ns.scenes()["cloth_hanging"]()
+    model = ns.cloth_model(scene.meshes)
+    r = scene.radius
+    small = dict(vertex_collision_buffer_pre_alloc=8, edge_collision_buffer_pre_alloc=16)  # rows overflow too
+    for kwargs in (ROOMY, small):
+        positions = wp.clone(model.particle_q)
+        detector = mn.TriMeshCollisionDetector(model, init_collision_info=True, vertex_positions=positions, **kwargs)
+        with wp.ScopedCapture(device=model.device) as capture:
+            getattr(detector, update)(positions)
+            detector.vertex_triangle_collision_detection(r)
+            detector.edge_edge_collision_detection(r)
+        # Recorded, not run: nothing was written yet.
+        assert not detector.vertex_colliding_triangles_count.numpy().any()
+        assert detector.replayed_calls == 0
+        rest = model.particle_q.numpy()
+        seen = []
+        for step in range(4):
+            positions.assign(_squashed(rest, step))
+            detector.resize_flags.zero_()
+            mn.capture_launch(capture.graph)
+            replayed = read(detector)
+            _same(replayed, _eager(model, positions, r, rebuild=update == "rebuild", **kwargs))
+            seen.append(int(replayed.vt_count.sum() + replayed.ee_count.sum()))
+        assert detector.replayed_calls == 12 and detector.replay_failures == 0
+        assert len(set(seen)) == len(seen) and min(seen) > 0, seen  # the contacts changed at every step
+        if kwargs is small:
+            assert replayed.flags.any()
+
+
+def test_capture_inside_a_newton_solver_step_graph():
+    """SolverVBD with self-contact (install()) recorded into a CPU graph and replayed: the states
+    equal those of the same steps run eagerly."""
+    xyz, tris = ns.grid(16, 16, 0.05, 0.05)
+    xyz = ns.roll(xyz, 1.5, 0.012)
+
+    def make():
+        builder = newton.ModelBuilder(gravity=(0.0, 0.0, -9.8))
+        builder.add_cloth_mesh(
+            pos=wp.vec3(0.0, 0.0, 1.0), rot=wp.quat_identity(), scale=1.0, vel=wp.vec3(0.0, 0.0, 0.0),
+            vertices=xyz, indices=tris.reshape(-1), density=0.2, tri_ke=1e3, tri_ka=1e3, tri_kd=2e-4,
+        )
+        builder.color()
+        model = builder.finalize(device="cpu")
+        solver = newton.solvers.SolverVBD(
+            model, iterations=3, particle_enable_self_contact=True, particle_self_contact_margin=0.01,
+            particle_self_contact_gap=0.005,
+        )
+        return model, solver, model.state(), model.state(), model.control()
+
+    def two_steps(solver, s0, s1, control):
+        for _ in range(2):
+            s0.clear_forces()
+            solver.step(s0, s1, control, None, 1.0 / 600)
+            s0, s1 = s1, s0
+
+    mn.install()
+    try:
+        model, solver, s0, s1, control = make()
+        detector = solver.trimesh_collision_detector
+        assert type(detector) is mn.TriMeshCollisionDetector
+        with wp.ScopedCapture(device="cpu") as capture:
+            two_steps(solver, s0, s1, control)
+        for _ in range(3):
+            mn.capture_launch(capture.graph)
+        captured = s0.particle_q.numpy()
+        contacts = int(detector.vertex_colliding_triangles_count.numpy().sum() + detector.edge_colliding_edges_count.numpy().sum())
+        assert detector.replayed_calls > 0 and detector.replay_failures == 0
+        _, solver, s0, s1, control = make()
+        for _ in range(3):
+            two_steps(solver, s0, s1, control)
+        eager_detector = solver.trimesh_collision_detector
+        eager_contacts = int(eager_detector.vertex_colliding_triangles_count.numpy().sum() + eager_detector.edge_colliding_edges_count.numpy().sum())
+    finally:
+        mn.uninstall()
+    assert contacts == eager_contacts > 0
+    assert np.isfinite(captured).all() and np.array_equal(captured, s0.particle_q.numpy())
+
+
+def test_warp_bvhs_first_read_inside_a_capture_follow_the_replays():
+    scene = ns.scenes()["cloth_bending"]()
+    model = ns.cloth_model(scene.meshes)
+    positions = wp.clone(model.particle_q)
+    ours = mn.TriMeshCollisionDetector(model, init_collision_info=True, vertex_positions=positions)
+    with wp.ScopedCapture(device="cpu") as capture:
+        ours.refit(positions)
+        bvh = ours.bvh_tris  # built now, outside the recording
+    assert isinstance(bvh, wp.Bvh) and "bvh_tris" in ours.__dict__
+    moved = model.particle_q.numpy() * np.float32(1.25) + np.float32(0.1)
+    positions.assign(moved)
+    wp.capture_launch(capture.graph)
+    theirs = NewtonDetector(model, init_collision_info=True, vertex_positions=wp.array(moved, dtype=wp.vec3, device="cpu"))
+    for name in ("lower_bounds_tris", "upper_bounds_tris", "lower_bounds_edges", "upper_bounds_edges"):
+        assert np.array_equal(getattr(ours, name).numpy(), getattr(theirs, name).numpy()), name
+    assert ours.bvh_tris is bvh
+
+
+def test_a_failure_during_a_replay_is_printed_kept_and_raised(capfd):
+    scene = ns.scenes()["cloth_bending"]()
+    model = ns.cloth_model(scene.meshes)
+    detector = mn.TriMeshCollisionDetector(model, init_collision_info=True)
+    with wp.ScopedCapture(device="cpu") as capture:
+        detector.refit()
+        detector.edge_edge_collision_detection(scene.radius)
+
+    def broken(*args, **kwargs):
+        raise ValueError("injected failure")
+
+    detector._scene.query_into = broken
+    wp.capture_launch(capture.graph)  # Warp's own replay cannot raise it...
+    err = capfd.readouterr().err
+    assert "edge_edge_collision_detection failed during a Warp graph replay" in err and "injected failure" in err
+    assert "Traceback" in err  # the first failure with its traceback
+    assert detector.replay_failures == 1 and detector.replayed_calls == 1  # the refit ran
+    with pytest.raises(mn.ReplayError, match="injected failure") as caught:  # ...the detector's next call does
+        detector.refit()
+    assert isinstance(caught.value.__cause__, ValueError)
+    detector.check_replays()  # raised once
+    with pytest.raises(mn.ReplayError, match="2 failed"):  # minkq.newton.capture_launch raises at once
+        mn.capture_launch(capture.graph)
+    del detector._scene.query_into
+    mn.capture_launch(capture.graph)  # and works again
+    assert detector.replay_failures == 2 and detector.replayed_calls == 4
+
+
+@pytest.mark.gpu
+def test_cuda_capture_is_refused_with_a_clear_error():
+    import minkq
+
+    if minkq.cuda_device_count() == 0 or not wp.is_cuda_available():
+        pytest.skip("needs a CUDA GPU and a libminkq built with CUDA (none here)")
+    scene = ns.scenes()["cloth_bending"]()
+    model = ns.cloth_model(scene.meshes, device="cuda:0")
+    detector = mn.TriMeshCollisionDetector(model, init_collision_info=True)
+    with pytest.raises(RuntimeError, match="not supported yet"):
+        with wp.ScopedCapture(device="cuda:0"):
+            detector.refit()
