@@ -1,4 +1,5 @@
-"""minkq.newton inside Warp graph captures on the CPU."""
+"""minkq.newton inside Warp graph captures on the CPU, and the scale-free edge-edge evaluation
+that install() gives SolverVBD."""
 
 from __future__ import annotations
 
@@ -184,3 +185,98 @@ def test_cuda_capture_is_refused_with_a_clear_error():
     with pytest.raises(RuntimeError, match="not supported yet"):
         with wp.ScopedCapture(device="cuda:0"):
             detector.refit()
+
+
+# ---- Scale-free edge-edge evaluation in SolverVBD ----------------------------------------------
+
+
+@wp.kernel
+def _solver_ee_test(
+    pos: wp.array(dtype=wp.vec3),
+    edges: wp.array2d(dtype=wp.int32),
+    pairs: wp.array2d(dtype=wp.int32),
+    radius: float,
+    epsilon: float,
+    passes: wp.array(dtype=wp.int32),
+):
+    # What SolverVBD's evaluate_edge_edge_contact does before applying a force.
+    i = wp.tid()
+    e = pairs[i, 0]
+    f = pairs[i, 1]
+    st = wp.closest_point_edge_edge(pos[edges[e, 2]], pos[edges[e, 3]], pos[edges[f, 2]], pos[edges[f, 3]], epsilon)
+    if st[2] < radius:
+        passes[i] = 1
+
+
+def _fine_rolled_cloth():
+    xyz, tris = ns.grid(40, 30, 0.002, 0.002)  # edges 2 mm, diagonals 2.8 mm
+    xyz = ns.roll(xyz, 5.6, 0.0006)  # 80 mm rolled into 5.6 turns 0.6 mm apart: edges keep their length
+    return xyz, tris
+
+
+def test_solver_vbd_evaluates_every_edge_edge_contact_minkq_reports(capsys):
+    """On a fine mesh (edges 2-2.8 mm, squared lengths under Newton's 1e-5), every EE pair minkq
+    reports within the radius passes the solver's test (closest_point_edge_edge with the
+    epsilon the patched solver uses, distance < radius); with Newton's default epsilon many
+    fail. uninstall() restores Newton's epsilon."""
+    xyz, tris = _fine_rolled_cloth()
+    margin, gap = 0.0008, 0.0004
+
+    def solver_for():
+        builder = newton.ModelBuilder(gravity=(0.0, 0.0, 0.0))
+        builder.add_cloth_mesh(
+            pos=wp.vec3(0.0, 0.0, 0.0), rot=wp.quat_identity(), scale=1.0, vel=wp.vec3(0.0, 0.0, 0.0),
+            vertices=xyz, indices=tris.reshape(-1), density=0.2,
+        )
+        builder.color()
+        model = builder.finalize(device="cpu")
+        solver = newton.solvers.SolverVBD(
+            model, iterations=1, particle_enable_self_contact=True, particle_self_contact_margin=margin,
+            particle_self_contact_gap=gap, particle_edge_contact_buffer_size=256,
+        )
+        return model, solver
+
+    mn.install()
+    try:
+        model, solver = solver_for()
+    finally:
+        mn.uninstall()
+    _, newton_solver = solver_for()
+    assert newton_solver._self_contact_edge_edge_parallel_epsilon == 1e-5
+    assert type(newton_solver.trimesh_collision_detector) is NewtonDetector
+    epsilon = solver._self_contact_edge_edge_parallel_epsilon
+    assert epsilon == 0.0 and solver.newton_edge_edge_parallel_epsilon == 1e-5
+
+    detector = solver.trimesh_collision_detector
+    radius = margin  # the force kernels' collision radius (detection queries margin + gap)
+    detector.refit(model.particle_q)
+    detector.edge_edge_collision_detection(radius)
+    ee, _, _ = ns.rows(
+        detector.edge_colliding_edges, detector.edge_colliding_edges_offsets, detector.edge_colliding_edges_count,
+        detector.edge_colliding_edges_buffer_sizes,
+    )
+    assert not detector.resize_flags.numpy().any()
+    pairs = ns.unordered(ee)
+    # Away from the radius (float distances may decide either way within 1e-5 r of it).
+    edges = model.edge_indices.numpy()[:, 2:4].copy()
+    truth = ns.ee_truth(model.particle_q.numpy(), edges, radius)
+    pairs = np.setdiff1d(pairs, truth.band(radius))
+    assert len(pairs) > 1000
+    pair_array = wp.array(np.stack([pairs >> 32, pairs & 0xFFFFFFFF], 1).astype(np.int32), dtype=wp.int32, device="cpu")
+    lengths = np.linalg.norm(np.diff(model.particle_q.numpy()[edges], axis=1)[:, 0], axis=1)
+    assert lengths.max() < 3e-3 and (lengths**2).max() < 1e-5  # every edge is a "point" to Newton's epsilon
+
+    def passing(eps):
+        passes = wp.zeros(len(pairs), dtype=wp.int32, device="cpu")
+        wp.launch(_solver_ee_test, dim=len(pairs), inputs=[model.particle_q, model.edge_indices, pair_array, radius, eps, passes], device="cpu")
+        return passes.numpy().astype(bool)
+
+    assert passing(epsilon).all()
+    lost = 1.0 - passing(1e-5).mean()
+    assert lost > 0.2, lost  # Newton's epsilon: contacts reported but given no force
+    with capsys.disabled():
+        print(
+            f"\n  fine rolled cloth (edges {lengths.min() * 1e3:.2f}-{lengths.max() * 1e3:.2f} mm), radius {radius}: "
+            f"{len(pairs)} EE pairs; solver test passes all with epsilon {epsilon}, loses {100 * lost:.1f}% with 1e-5",
+            end="",
+        )

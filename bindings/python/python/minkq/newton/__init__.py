@@ -18,8 +18,11 @@ pair within the radius, no absolute epsilon)::
     detector.edge_edge_collision_detection(radius)
     detector.vertex_colliding_triangles, detector.edge_colliding_edges_count, ...
 
-For Newton's own users of the class (``SolverVBD``, ``CollisionPipeline``), :func:`install`
-swaps it in. The class subclasses Newton's, so the result struct
+For Newton's own users of the class (``SolverVBD``, ``CollisionPipeline``, and the name
+``newton._src.solvers.vbd.tri_mesh_collision.TriMeshCollisionDetector`` its tests import),
+:func:`install` swaps it in, and makes ``SolverVBD`` give a force to every edge-edge contact it
+reports (below); ``python -m minkq.newton.examples <example> [options]`` runs any of Newton's
+examples with it installed (:mod:`minkq.newton.examples`). The class subclasses Newton's, so the result struct
 (``collision_info``: a Newton ``TriMeshCollisionInfo``), its accessors, the filter-list
 building, ``resize_flags`` and ``isinstance`` checks are Newton's own.
 
@@ -97,6 +100,18 @@ Deliberate differences (documented choices):
   RuntimeError instead of recording a graph whose replays would reuse stale pairs (run them
   outside the captured region, or use Newton's detector in captured CUDA loops). A
   stream-ordered minkq API for it is in progress.
+- Solver evaluation (``install()``). Newton's VBD force kernels recompute each edge-edge
+  contact with Warp's ``closest_point_edge_edge(..., particle_edge_parallel_epsilon)`` and apply
+  a force only if that distance is below the contact radius. The epsilon (1e-5 by default) is
+  compared with *squared* edge lengths: an edge under 3.2e-3 is taken for a point (both edges:
+  the distance of their first vertices), so on fine meshes most contacts this detector reports
+  get no force. :func:`install` makes ``SolverVBD`` use epsilon 0 there (``install(None)`` keeps
+  Newton's): Warp's function is safe at 0 (it divides by a squared length only when it is
+  > 0, by ``a e - b^2`` only when that is > 0, takes s = 0 for exactly parallel edges and clamps
+  every parameter to [0, 1], so finite input gives finite points on the edges; only zero-length
+  edges are points), and 0 is scale-free, where a value relative to the mesh's edge lengths at
+  construction would still drop the contacts of edges that shrink under compression. Newton's
+  value stays readable as ``solver.newton_edge_edge_parallel_epsilon``.
 - Device. The model's device: minkq's CPU backend for ``"cpu"``, its CUDA backend for
   ``"cuda:N"`` (positions read in place on the GPU, no host round trip; a libminkq built
   without CUDA raises :class:`~minkq.UnsupportedError`).
@@ -926,26 +941,66 @@ class TriMeshCollisionDetector(_NewtonDetector):
 _PATCHED = (
     "newton._src.solvers.vbd.solver_vbd",
     "newton._src.sim.collide",
+    "newton._src.solvers.vbd.tri_mesh_collision",  # the VBD package's name for the class (Newton's tests use it)
 )
 _originals: dict = {}
+_SOLVER_EPSILON_ATTRIBUTE = "_self_contact_edge_edge_parallel_epsilon"  # SolverVBD's, read by its force kernels
 
 
-def install() -> None:
+def _solver_vbd_class() -> Any:
+    from newton._src.solvers.vbd.solver_vbd import SolverVBD
+
+    return SolverVBD
+
+
+def _patch_solver_epsilon(epsilon: Optional[float]) -> None:
+    """Wraps ``SolverVBD._init_particle_system`` (where Newton stores
+    ``particle_edge_parallel_epsilon`` for its self-contact force kernels) so that solvers built
+    from now on use ``epsilon`` there; Newton's value stays readable as
+    ``solver.newton_edge_edge_parallel_epsilon``."""
+    solver = _solver_vbd_class()
+    original = _originals.setdefault("SolverVBD._init_particle_system", solver.__dict__["_init_particle_system"])
+    if epsilon is None:
+        solver._init_particle_system = original
+        return
+    value = float(epsilon)
+
+    def _init_particle_system(self, *args, **kwargs):
+        original(self, *args, **kwargs)
+        if _SOLVER_EPSILON_ATTRIBUTE in self.__dict__:  # self-contact on
+            self.newton_edge_edge_parallel_epsilon = self.__dict__[_SOLVER_EPSILON_ATTRIBUTE]
+            setattr(self, _SOLVER_EPSILON_ATTRIBUTE, value)
+
+    _init_particle_system.__wrapped__ = original
+    _init_particle_system.__doc__ = original.__doc__
+    solver._init_particle_system = _init_particle_system
+
+
+def install(edge_edge_parallel_epsilon: Optional[float] = 0.0) -> None:
     """Makes Newton's ``SolverVBD`` and ``CollisionPipeline`` (soft self-contact) construct this
-    detector instead of their own. :func:`uninstall` undoes it. Call it before creating the
-    solver or pipeline."""
+    detector instead of their own, and makes ``SolverVBD``'s self-contact force kernels evaluate
+    every edge-edge contact the detector reports: solvers built from now on pass
+    ``edge_edge_parallel_epsilon`` (default 0: see the module's documentation) to Warp's
+    ``closest_point_edge_edge`` instead of their ``particle_edge_parallel_epsilon`` (None keeps
+    Newton's). :func:`uninstall` undoes both. Call it before creating the solver or pipeline;
+    calling it again replaces the epsilon."""
     import importlib
 
     for name in _PATCHED:
         module = importlib.import_module(name)
         _originals.setdefault(name, module.TriMeshCollisionDetector)
         module.TriMeshCollisionDetector = TriMeshCollisionDetector
+    _patch_solver_epsilon(edge_edge_parallel_epsilon)
 
 
 def uninstall() -> None:
-    """Restores Newton's own detector where :func:`install` replaced it."""
+    """Restores Newton's own detector and ``SolverVBD``'s epsilon handling where :func:`install`
+    replaced them (solvers already built keep what they were built with)."""
     import importlib
 
     for name, original in list(_originals.items()):
-        importlib.import_module(name).TriMeshCollisionDetector = original
+        if name == "SolverVBD._init_particle_system":
+            _solver_vbd_class()._init_particle_system = original
+        else:
+            importlib.import_module(name).TriMeshCollisionDetector = original
         del _originals[name]
