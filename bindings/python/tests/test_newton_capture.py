@@ -1,7 +1,16 @@
-"""minkq.newton inside Warp graph captures on the CPU, and the scale-free edge-edge evaluation
-that install() gives SolverVBD."""
+"""minkq.newton inside Warp graph captures on the CPU, Newton's own cloth examples and collision
+tests with install() applied, the example runner, and the scale-free edge-edge evaluation that
+install() gives SolverVBD.
+
+Tests marked slow (Newton examples that take minutes on two cores) run only with
+MINKQ_SLOW_TESTS=1."""
 
 from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -15,6 +24,9 @@ import minkq.newton as mn  # noqa: E402
 import newton_scenes as ns  # noqa: E402
 from newton._src.geometry.tri_mesh_collision import TriMeshCollisionDetector as NewtonDetector  # noqa: E402
 from test_newton import ROOMY, read  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+slow = pytest.mark.skipif(os.environ.get("MINKQ_SLOW_TESTS") != "1", reason="slow (minutes): set MINKQ_SLOW_TESTS=1")
 
 
 def _same(a, b) -> None:
@@ -185,6 +197,87 @@ def test_cuda_capture_is_refused_with_a_clear_error():
     with pytest.raises(RuntimeError, match="not supported yet"):
         with wp.ScopedCapture(device="cuda:0"):
             detector.refit()
+
+
+# ---- Newton's examples, its collision tests, the runner ------------------------------------------
+
+
+def _run(args, timeout=1200):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (HERE, env.get("PYTHONPATH")) if p)
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env, timeout=timeout, check=False)
+
+
+def _run_example(name, *options):
+    """The example through the runner (install() + Newton's entry point), graph capture as the
+    example does it, headless; returns the probe's summary of the detectors it built."""
+    process = _run([os.path.join(HERE, "newton_example_probe.py"), name, "--viewer", "null", "--device", "cpu", "--quiet", *options])
+    assert process.returncode == 0, process.stdout[-3000:] + process.stderr[-6000:]
+    summary = json.loads(process.stdout.strip().splitlines()[-1])
+    assert summary["status"] == 0 and summary["detectors"], summary
+    for detector in summary["detectors"]:
+        assert detector["replay_failures"] == 0, summary
+    return summary
+
+
+# (example, options, whether it records its step into a graph on the CPU)
+EXAMPLES = [
+    ("cloth_twist", ("--num-frames", "3"), True),
+    ("cloth_hanging", ("--num-frames", "3", "--width", "32", "--height", "16"), True),
+    ("cloth_bending", ("--num-frames", "3"), True),
+    pytest.param("cloth_rollers", ("--num-frames", "2"), True, marks=slow),
+    pytest.param("cloth_poker_cards", ("--num-frames", "2"), False, marks=slow),
+    pytest.param("softbody_gift", ("--num-frames", "2"), True, marks=slow),
+    pytest.param("softbody_dropping_to_cloth", ("--num-frames", "2"), True, marks=slow),
+    pytest.param("vbd_dat_rigid_soft", ("--num-frames", "2"), False, marks=slow),
+]
+
+
+@pytest.mark.parametrize("name, options, captured", EXAMPLES)
+def test_newton_example_runs_with_the_detector_installed(name, options, captured, capsys):
+    summary = _run_example(name, *options)
+    replayed = sum(d["replayed_calls"] for d in summary["detectors"])
+    if captured:
+        assert replayed > 0, summary  # minkq's work ran inside the example's graph replays
+    with capsys.disabled():
+        print(f"\n  {name} {' '.join(options)}: {summary['detectors']}", end="")
+
+
+def test_runner_lists_newtons_examples():
+    process = _run(["-m", "minkq.newton.examples", "--list"], timeout=300)
+    assert process.returncode == 0, process.stderr
+    marked = {line.split()[1] for line in process.stdout.splitlines() if line.strip().startswith("*")}
+    assert {"cloth_twist", "cloth_hanging", "cloth_bending", "cloth_rollers", "cloth_poker_cards"} <= marked
+    usage = _run(["-m", "minkq.newton.examples"], timeout=300)
+    assert usage.returncode == 2 and "usage: python -m minkq.newton.examples" in usage.stdout
+
+
+def test_runner_runs_an_example_headless():
+    process = _run(["-m", "minkq.newton.examples", "cloth_bending", "--viewer", "null", "--num-frames", "2", "--device", "cpu", "--quiet"])
+    assert process.returncode == 0, process.stderr[-6000:]
+
+
+def test_newtons_cloth_collision_tests_pass_with_the_detector_installed(tmp_path, capsys):
+    """Newton's own test_collision_cloth.py (its TestCollision cases), run by pytest with a
+    plugin that calls install() before the module is imported."""
+    (tmp_path / "minkq_install_plugin.py").write_text(
+        "import minkq.newton\n"
+        "minkq.newton.install()\n"
+        "from newton._src.solvers.vbd import tri_mesh_collision\n"
+        "assert tri_mesh_collision.TriMeshCollisionDetector is minkq.newton.TriMeshCollisionDetector\n"
+    )
+    tests = os.path.join(os.path.dirname(newton.__file__), "tests", "test_collision_cloth.py")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(tmp_path), os.environ.get("PYTHONPATH")) if p))
+    process = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "minkq_install_plugin", "-rs",
+         f"{tests}::TestCollision"],
+        capture_output=True, text=True, env=env, timeout=1800, check=False, cwd=str(tmp_path),
+    )
+    tail = process.stdout.strip().splitlines()[-1] if process.stdout.strip() else ""
+    assert process.returncode == 0, process.stdout[-6000:] + process.stderr[-3000:]
+    assert "passed" in tail and "failed" not in tail and "error" not in tail, tail
+    with capsys.disabled():
+        print(f"\n  newton test_collision_cloth.py::TestCollision with install(): {tail}", end="")
 
 
 # ---- Scale-free edge-edge evaluation in SolverVBD ----------------------------------------------
