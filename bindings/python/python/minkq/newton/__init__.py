@@ -18,8 +18,11 @@ pair within the radius, no absolute epsilon)::
     detector.edge_edge_collision_detection(radius)
     detector.vertex_colliding_triangles, detector.edge_colliding_edges_count, ...
 
-For Newton's own users of the class (``SolverVBD``, ``CollisionPipeline``), :func:`install`
-swaps it in. The class subclasses Newton's, so the result struct
+For Newton's own users of the class (``SolverVBD``, ``CollisionPipeline``, and the name
+``newton._src.solvers.vbd.tri_mesh_collision.TriMeshCollisionDetector`` its tests import),
+:func:`install` swaps it in, and makes ``SolverVBD`` give a force to every edge-edge contact it
+reports (below); ``python -m minkq.newton.examples <example> [options]`` runs any of Newton's
+examples with it installed (:mod:`minkq.newton.examples`). The class subclasses Newton's, so the result struct
 (``collision_info``: a Newton ``TriMeshCollisionInfo``), its accessors, the filter-list
 building, ``resize_flags`` and ``isinstance`` checks are Newton's own.
 
@@ -66,11 +69,49 @@ Deliberate differences (documented choices):
   Newton builds them the first time one is read, and from then on refit and rebuilt with the
   detector; a detector whose BVHs nobody reads never builds them. minkq's pairs never come
   from them. ``collision_detection_block_size`` is unused.
-- Graph capture. Detection reads the pair count on the host and calls minkq (which
-  synchronises its stream), so it cannot be recorded into a Warp graph (``wp.ScopedCapture``,
-  on CUDA or, with Warp's APIC, on the CPU); Newton's detection launches only kernels. Inside a
-  capture, ``refit``, ``rebuild`` and the detections raise RuntimeError instead of recording a
-  graph whose replays would reuse stale pairs: run them outside the captured region.
+- Graph capture. On the CPU, ``refit``, ``rebuild``, both detections (and the first read of
+  Newton's Warp BVHs) work inside ``wp.ScopedCapture``, and every ``wp.capture_launch`` redoes
+  minkq's work on the data of that moment. Warp 1.19 records a CPU graph (APIC) as a stream of
+  kernel launches, memsets and copies that ``capture_launch`` replays in C++; while recording,
+  ``wp.launch`` and ``fill_`` / ``zero_`` only record (they run at replay), ``device.is_capturing``
+  is true, and a Python call made meanwhile (minkq's query, the host read of the pair count)
+  would run once, at record time, and never again. So inside a CPU capture each of these
+  methods records one launch of a one-thread kernel whose ``wp.func_native`` snippet calls a
+  host function pointer (a ctypes callback kept by this module); the replay calls back into
+  Python and runs the method's normal eager body then (no capture is active at replay: its
+  launches, sorts and scans execute at once, between the graph's other operations, in recorded
+  order). The body runs with the arguments of the recorded call and the ``vertex_positions``
+  array of that moment, as a graph bakes its pointers: write new positions into the recorded
+  arrays (Newton's states are), do not rebind them. A recorded call lives as long as its graph
+  (``replayed_calls`` counts the replayed calls run). Newton's Warp BVHs, if first read inside a
+  capture, are built then with the capture paused (Warp's ``capture_pause``), from the current
+  positions; the recorded refits and rebuilds keep them current.
+
+  Errors. An exception cannot cross Warp's kernel back into ``wp.capture_launch``. A body that
+  fails at replay prints a message (the first failure with its traceback) to stderr, counts in
+  ``replay_failures``, leaves that call's results invalid, and is kept: the detector's next call
+  raises :class:`ReplayError` (its ``__cause__`` the original exception), as does
+  :meth:`TriMeshCollisionDetector.check_replays`; :func:`capture_launch` (use it instead of
+  ``wp.capture_launch``) raises it as soon as the replay returns. Later replays run the bodies
+  again. Replaying such a graph inside another CPU capture is refused the same way.
+
+  CUDA. Not supported yet: minkq's CUDA path reads the pair count on the host and synchronises
+  its stream, which a CUDA graph cannot record; inside a CUDA capture these methods raise
+  RuntimeError instead of recording a graph whose replays would reuse stale pairs (run them
+  outside the captured region, or use Newton's detector in captured CUDA loops). A
+  stream-ordered minkq API for it is in progress.
+- Solver evaluation (``install()``). Newton's VBD force kernels recompute each edge-edge
+  contact with Warp's ``closest_point_edge_edge(..., particle_edge_parallel_epsilon)`` and apply
+  a force only if that distance is below the contact radius. The epsilon (1e-5 by default) is
+  compared with *squared* edge lengths: an edge under 3.2e-3 is taken for a point (both edges:
+  the distance of their first vertices), so on fine meshes most contacts this detector reports
+  get no force. :func:`install` makes ``SolverVBD`` use epsilon 0 there (``install(None)`` keeps
+  Newton's): Warp's function is safe at 0 (it divides by a squared length only when it is
+  > 0, by ``a e - b^2`` only when that is > 0, takes s = 0 for exactly parallel edges and clamps
+  every parameter to [0, 1], so finite input gives finite points on the edges; only zero-length
+  edges are points), and 0 is scale-free, where a value relative to the mesh's edge lengths at
+  construction would still drop the contacts of edges that shrink under compression. Newton's
+  value stays readable as ``solver.newton_edge_edge_parallel_epsilon``.
 - Device. The model's device: minkq's CPU backend for ``"cpu"``, its CUDA backend for
   ``"cuda:N"`` (positions read in place on the GPU, no host round trip; a libminkq built
   without CUDA raises :class:`~minkq.UnsupportedError`).
@@ -78,7 +119,11 @@ Deliberate differences (documented choices):
 
 from __future__ import annotations
 
-from typing import Any, Optional
+import ctypes
+import sys
+import traceback
+import weakref
+from typing import Any, Callable, Optional
 
 import numpy as np
 import warp as wp
@@ -92,10 +137,10 @@ from newton._src.geometry.kernels import (
     init_triangle_collision_data_kernel,
 )
 
-from . import _api
-from ._errors import CapacityError, UnsupportedError
+from .. import _api
+from .._errors import CapacityError, UnsupportedError
 
-__all__ = ["TriMeshCollisionDetector", "install", "uninstall"]
+__all__ = ["ReplayError", "TriMeshCollisionDetector", "capture_launch", "install", "uninstall"]
 
 VERTEX_OVERFLOW, TRIANGLE_OVERFLOW, EDGE_OVERFLOW = 0, 1, 2  # resize_flags (Newton's indices)
 
@@ -187,6 +232,86 @@ def _same_world(group_a: int, group_b: int, global_group: int):
 @wp.func
 def _row_key(source: int, other: int):
     return (wp.int64(source) << wp.int64(32)) | wp.int64(other)
+
+
+# ---- Graph capture on the CPU: host calls recorded as kernel launches ----------------------
+#
+# Warp's CPU graphs (APIC) record kernel launches, memsets and copies and replay them in C++;
+# a Python call made during the capture runs once, at record time, and never again. What a
+# replay does repeat is a kernel, and a CPU kernel may call a host function pointer: each
+# detector method called inside a CPU capture records one launch of _host_call_kernel
+# (dim 1) whose token names the method's body with its arguments, and the replay calls back
+# into Python to run that body eagerly (no capture is active then) on the current data.
+
+
+class ReplayError(RuntimeError):
+    """A detector method recorded into a Warp CPU graph failed while the graph was replayed
+    (``wp.capture_launch``); raised by the detector's next call or :meth:`check_replays`, or by
+    :func:`capture_launch`, with the original exception as ``__cause__``."""
+
+
+_HostCall = ctypes.CFUNCTYPE(None, ctypes.c_uint64)
+# token -> (detector weakref, method name, body, arguments, vertex_positions at record time); an
+# entry lives as long as the graph that recorded it.
+_recorded: dict = {}
+_next_token = [1]
+
+
+def _dispatch(token: int) -> None:
+    # Called from a Warp CPU kernel during capture_launch. Nothing may escape into C: a failure
+    # is kept on the detector (and printed) for the next call to raise.
+    entry = _recorded.get(token)
+    if entry is None:
+        return
+    ref, what, body, args, positions = entry
+    detector = ref()
+    if detector is None:
+        return
+    try:
+        if wp.get_device("cpu").is_capturing:
+            raise RuntimeError("a graph holding minkq's detection was replayed inside another CPU graph capture")
+        detector.vertex_positions = positions  # as a graph bakes its pointers
+        body(detector, *args)
+        detector.replayed_calls += 1
+    except BaseException as error:  # noqa: BLE001 - reported, never swallowed
+        detector._replay_failed(what, error)
+
+
+_dispatch_pointer_keepalive = _HostCall(_dispatch)
+_DISPATCH = ctypes.cast(_dispatch_pointer_keepalive, ctypes.c_void_p).value
+
+
+@wp.func_native(
+    """
+    typedef void (*minkq_host_call)(unsigned long long);
+    ((minkq_host_call)fn)(token);
+    """
+)
+def _call_host(fn: wp.uint64, token: wp.uint64): ...
+
+
+@wp.kernel
+def _host_call_kernel(fn: wp.uint64, token: wp.uint64):
+    _call_host(fn, token)
+
+
+def _graph_being_captured() -> Any:
+    # The Graph object a CPU capture is recording into (Warp keeps it on its runtime).
+    runtime = getattr(getattr(wp, "_src", None), "context", None)
+    runtime = getattr(runtime, "runtime", None)
+    return getattr(runtime, "_apic_graph", None)
+
+
+def capture_launch(graph: Any) -> None:
+    """``wp.capture_launch(graph)``, then raises :class:`ReplayError` if a minkq detector
+    method recorded into a CPU graph failed during a replay (``wp.capture_launch`` itself
+    cannot: the failure happens inside a kernel). Use it in place of ``wp.capture_launch``
+    where a failure must stop the loop at once."""
+    wp.capture_launch(graph)
+    for ref, _, _, _, _ in list(_recorded.values()):
+        detector = ref()
+        if detector is not None:
+            detector.check_replays()
 
 
 # ---- Pairs to rows ---------------------------------------------------------------------------
@@ -356,7 +481,10 @@ def _minkq_device_for(device: Any) -> _api.Device:
         ) from None
 
 
-class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
+_NewtonDetector = _newton_tmc.TriMeshCollisionDetector  # Newton's class, whatever install() swaps
+
+
+class TriMeshCollisionDetector(_NewtonDetector):
     """Newton's ``TriMeshCollisionDetector`` (newton 1.8) with minkq's VT and EE queries: same
     constructor, methods, result arrays and layout (see the module's documentation for the
     few deliberate differences). Every vertex-triangle and edge-edge pair within the query
@@ -396,6 +524,9 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         init_collision_info: bool = False,
     ):
         # Newton's constructor, step by step, without its Warp BVHs.
+        self._replay_error: Optional[tuple] = None
+        self.replayed_calls = 0  # calls recorded into Warp CPU graphs, run by their replays
+        self.replay_failures = 0  # replayed calls that failed (see ReplayError)
         self.model = model
         self.record_triangle_contacting_vertices = record_triangle_contacting_vertices
         self.vertex_positions = model.particle_q if vertex_positions is None else vertex_positions
@@ -474,13 +605,57 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         self._scene: Optional[_api.Scene] = None
         self._build_scene()
 
-    def _not_capturing(self, what: str) -> None:
-        if getattr(self.device, "is_capturing", False):
+    # ---- Now, or at every replay of a CPU graph --------------------------------------------
+
+    def _call(self, what: str, body: Callable, *args: Any) -> None:
+        """Runs ``body(self, *args)`` now or, inside a Warp graph capture on the CPU, records it
+        to run at every replay with these arguments and the ``vertex_positions`` of now."""
+        self.check_replays()
+        device = self.device
+        if not getattr(device, "is_capturing", False):
+            body(self, *args)
+            return
+        if device.is_cuda:
             raise RuntimeError(
-                f"minkq.newton.TriMeshCollisionDetector.{what} cannot run inside a Warp graph capture on {self.device}: "
-                "it reads the pair count on the host and calls minkq, which a graph replay would not repeat. Run "
-                "collision detection outside wp.ScopedCapture, or use Newton's detector in captured loops."
+                f"minkq.newton.TriMeshCollisionDetector.{what} cannot run inside a Warp graph capture on {device}: "
+                "minkq's CUDA path reads the pair count on the host and synchronises its stream, which a CUDA graph "
+                "cannot record (not supported yet). Run collision detection outside wp.ScopedCapture on CUDA, or use "
+                "Newton's detector in captured CUDA loops; captures on the CPU device are supported."
             )
+        token = _next_token[0]
+        _next_token[0] += 1
+        _recorded[token] = (weakref.ref(self), what, body, args, self.vertex_positions)
+        graph = _graph_being_captured()
+        if graph is not None:
+            weakref.finalize(graph, _recorded.pop, token, None)  # the entry lives as long as the graph
+        wp.launch(_host_call_kernel, dim=1, inputs=[wp.uint64(_DISPATCH), wp.uint64(token)], device=device)
+
+    def _replay_failed(self, what: str, error: BaseException) -> None:
+        self.replay_failures += 1
+        first = self._replay_error is None
+        if first:
+            self._replay_error = (what, error)
+        print(
+            f"minkq.newton: TriMeshCollisionDetector.{what} failed during a Warp graph replay ({type(error).__name__}: "
+            f"{error}); its results in this replay are not valid. The detector's next call, check_replays() or "
+            "minkq.newton.capture_launch() raises it.",
+            file=sys.stderr,
+        )
+        if first:
+            traceback.print_exception(type(error), error, error.__traceback__, file=sys.stderr)
+
+    def check_replays(self) -> None:
+        """Raises :class:`ReplayError` (once) if a call recorded into a Warp CPU graph failed
+        during a replay since the last check; the first such failure is its ``__cause__``."""
+        pending = self._replay_error
+        if pending is None:
+            return
+        self._replay_error = None
+        what, error = pending
+        raise ReplayError(
+            f"minkq.newton.TriMeshCollisionDetector.{what} failed during a Warp graph replay "
+            f"({self.replay_failures} failed replayed call(s) so far): {type(error).__name__}: {error}"
+        ) from error
 
     # ---- Trees ---------------------------------------------------------------------------
 
@@ -499,27 +674,31 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     def rebuild(self, new_pos=None):
         """Rebuilds both trees from ``new_pos`` (or the current ``vertex_positions``) in place:
         the scene keeps its topology and buffers (``Scene.rebuild``)."""
-        self._not_capturing("rebuild")
         if new_pos is not None:
             self.vertex_positions = new_pos
+        self._call("rebuild", TriMeshCollisionDetector._rebuild_now)
+
+    def _rebuild_now(self) -> None:
         if self._scene is not None:
             self._scene.rebuild(self.vertex_positions)
         else:
             self._build_scene()
         if self._warp_bvhs_built():
-            _newton_tmc.TriMeshCollisionDetector.rebuild(self)
+            _NewtonDetector.rebuild(self)
 
     def refit(self, new_pos=None):
         """Refits both trees to ``new_pos`` (or the current ``vertex_positions``), read in place
         on the model's device: the per-step call."""
-        self._not_capturing("refit")
         if new_pos is not None:
             self.vertex_positions = new_pos
+        self._call("refit", TriMeshCollisionDetector._refit_now)
+
+    def _refit_now(self) -> None:
         if self._scene is not None:
             self._scene.refit(self.vertex_positions)
         if self._warp_bvhs_built():  # Newton's own per-tree refits (its refit() calls the overrides below)
-            _newton_tmc.TriMeshCollisionDetector.refit_triangles(self)
-            _newton_tmc.TriMeshCollisionDetector.refit_edges(self)
+            _NewtonDetector.refit_triangles(self)
+            _NewtonDetector.refit_edges(self)
 
     def refit_triangles(self):
         """Refits the trees to ``vertex_positions`` (minkq refits both trees together)."""
@@ -573,8 +752,13 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     def vertex_triangle_collision_detection(self, max_query_radius, min_query_radius=0.0, min_distance_filtering_ref_pos=None):
         """Fills each vertex's row with the triangles within ``max_query_radius`` (and, when
         recording, each triangle's row with the vertices); see the module documentation."""
-        self._not_capturing("vertex_triangle_collision_detection")
         self._require_collision_info()
+        self._call(
+            "vertex_triangle_collision_detection", TriMeshCollisionDetector._vertex_triangle_now, max_query_radius,
+            min_query_radius, min_distance_filtering_ref_pos,
+        )
+
+    def _vertex_triangle_now(self, max_query_radius, min_query_radius, min_distance_filtering_ref_pos) -> None:
         model = self.model
         r = float(max_query_radius)
         self.vertex_colliding_triangles.fill_(-1)
@@ -634,8 +818,13 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
     def edge_edge_collision_detection(self, max_query_radius, min_query_radius=0.0, min_distance_filtering_ref_pos=None):
         """Fills each edge's row with the edges within ``max_query_radius`` (each contact in
         both edges' rows); see the module documentation."""
-        self._not_capturing("edge_edge_collision_detection")
         self._require_collision_info()
+        self._call(
+            "edge_edge_collision_detection", TriMeshCollisionDetector._edge_edge_now, max_query_radius,
+            min_query_radius, min_distance_filtering_ref_pos,
+        )
+
+    def _edge_edge_now(self, max_query_radius, min_query_radius, min_distance_filtering_ref_pos) -> None:
         model = self.model
         r = float(max_query_radius)
         self.edge_colliding_edges.fill_(-1)
@@ -695,7 +884,27 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
         """Newton's BVHs of the triangles and edges, grouped by world, over ``vertex_positions``
         (those of the last refit or rebuild), with Newton's kernels: the attributes its
         constructor makes."""
-        self._not_capturing("bvh_tris / bvh_edges (first access)")
+        device = self.device
+        if getattr(device, "is_capturing", False):
+            if device.is_cuda:
+                raise RuntimeError(
+                    f"minkq.newton.TriMeshCollisionDetector: Newton's Warp BVHs (bvh_tris, bvh_edges) were first read "
+                    f"inside a Warp graph capture on {device}, which minkq does not support on CUDA yet; read them once "
+                    "before the capture."
+                )
+            # CPU: build them now, outside the recording (the graph only keeps their ids); the
+            # recorded refits and rebuilds keep them current at every replay.
+            from warp._src.context import capture_pause, capture_resume
+
+            graph = capture_pause(device=device)
+            try:
+                self._build_warp_bvhs_now()
+            finally:
+                capture_resume(graph, device=device)
+            return
+        self._build_warp_bvhs_now()
+
+    def _build_warp_bvhs_now(self) -> None:
         model, device = self.model, self.device
         built = {}
         # Per kind, as Newton keeps them: the groups' attribute name, whether an empty set still
@@ -732,26 +941,66 @@ class TriMeshCollisionDetector(_newton_tmc.TriMeshCollisionDetector):
 _PATCHED = (
     "newton._src.solvers.vbd.solver_vbd",
     "newton._src.sim.collide",
+    "newton._src.solvers.vbd.tri_mesh_collision",  # the VBD package's name for the class (Newton's tests use it)
 )
 _originals: dict = {}
+_SOLVER_EPSILON_ATTRIBUTE = "_self_contact_edge_edge_parallel_epsilon"  # SolverVBD's, read by its force kernels
 
 
-def install() -> None:
+def _solver_vbd_class() -> Any:
+    from newton._src.solvers.vbd.solver_vbd import SolverVBD
+
+    return SolverVBD
+
+
+def _patch_solver_epsilon(epsilon: Optional[float]) -> None:
+    """Wraps ``SolverVBD._init_particle_system`` (where Newton stores
+    ``particle_edge_parallel_epsilon`` for its self-contact force kernels) so that solvers built
+    from now on use ``epsilon`` there; Newton's value stays readable as
+    ``solver.newton_edge_edge_parallel_epsilon``."""
+    solver = _solver_vbd_class()
+    original = _originals.setdefault("SolverVBD._init_particle_system", solver.__dict__["_init_particle_system"])
+    if epsilon is None:
+        solver._init_particle_system = original
+        return
+    value = float(epsilon)
+
+    def _init_particle_system(self, *args, **kwargs):
+        original(self, *args, **kwargs)
+        if _SOLVER_EPSILON_ATTRIBUTE in self.__dict__:  # self-contact on
+            self.newton_edge_edge_parallel_epsilon = self.__dict__[_SOLVER_EPSILON_ATTRIBUTE]
+            setattr(self, _SOLVER_EPSILON_ATTRIBUTE, value)
+
+    _init_particle_system.__wrapped__ = original
+    _init_particle_system.__doc__ = original.__doc__
+    solver._init_particle_system = _init_particle_system
+
+
+def install(edge_edge_parallel_epsilon: Optional[float] = 0.0) -> None:
     """Makes Newton's ``SolverVBD`` and ``CollisionPipeline`` (soft self-contact) construct this
-    detector instead of their own. :func:`uninstall` undoes it. Call it before creating the
-    solver or pipeline."""
+    detector instead of their own, and makes ``SolverVBD``'s self-contact force kernels evaluate
+    every edge-edge contact the detector reports: solvers built from now on pass
+    ``edge_edge_parallel_epsilon`` (default 0: see the module's documentation) to Warp's
+    ``closest_point_edge_edge`` instead of their ``particle_edge_parallel_epsilon`` (None keeps
+    Newton's). :func:`uninstall` undoes both. Call it before creating the solver or pipeline;
+    calling it again replaces the epsilon."""
     import importlib
 
     for name in _PATCHED:
         module = importlib.import_module(name)
         _originals.setdefault(name, module.TriMeshCollisionDetector)
         module.TriMeshCollisionDetector = TriMeshCollisionDetector
+    _patch_solver_epsilon(edge_edge_parallel_epsilon)
 
 
 def uninstall() -> None:
-    """Restores Newton's own detector where :func:`install` replaced it."""
+    """Restores Newton's own detector and ``SolverVBD``'s epsilon handling where :func:`install`
+    replaced them (solvers already built keep what they were built with)."""
     import importlib
 
     for name, original in list(_originals.items()):
-        importlib.import_module(name).TriMeshCollisionDetector = original
+        if name == "SolverVBD._init_particle_system":
+            _solver_vbd_class()._init_particle_system = original
+        else:
+            importlib.import_module(name).TriMeshCollisionDetector = original
         del _originals[name]
