@@ -56,13 +56,24 @@ def _eager(model, positions, r, rebuild=False, **kwargs):
 # ---- CPU graph capture ---------------------------------------------------------------------------
 
 
+def _needs_cuda(device: str) -> None:
+    import minkq
+
+    if device != "cpu" and (minkq.cuda_device_count() == 0 or not wp.is_cuda_available()):
+        pytest.skip("needs a CUDA GPU and a libminkq built with CUDA (none here)")
+
+
+@pytest.mark.parametrize("device", ["cpu", pytest.param("cuda:0", marks=pytest.mark.gpu)])
 @pytest.mark.parametrize("update", ["refit", "rebuild"])
-def test_captured_detection_replays_on_moved_vertices_as_eager(update):
+def test_captured_detection_replays_on_moved_vertices_as_eager(update, device):
     """refit (or rebuild) + VT + EE recorded once; every replay on new positions (written into
     the array the graph was recorded with) gives the rows, counts, minimum distances and flags
-    of an eager detector on the same positions."""
+    of an eager detector on the same positions. On the CPU the replays call the recorded
+    bodies back; on CUDA the graph holds only device work (minkq's stream-ordered calls and
+    Warp's kernels on the capture stream) and nothing runs on the host."""
+    _needs_cuda(device)
     scene = ns.scenes()["cloth_hanging"]()
-    model = ns.cloth_model(scene.meshes)
+    model = ns.cloth_model(scene.meshes, device=device)
     r = scene.radius
     small = dict(vertex_collision_buffer_pre_alloc=8, edge_collision_buffer_pre_alloc=16)  # rows overflow too
     for kwargs in (ROOMY, small):
@@ -80,11 +91,11 @@ def test_captured_detection_replays_on_moved_vertices_as_eager(update):
         for step in range(4):
             positions.assign(_squashed(rest, step))
             detector.resize_flags.zero_()
-            mn.capture_launch(capture.graph)
+            (mn.capture_launch if device == "cpu" else wp.capture_launch)(capture.graph)
             replayed = read(detector)
             _same(replayed, _eager(model, positions, r, rebuild=update == "rebuild", **kwargs))
             seen.append(int(replayed.vt_count.sum() + replayed.ee_count.sum()))
-        assert detector.replayed_calls == 12 and detector.replay_failures == 0
+        assert detector.replayed_calls == (12 if device == "cpu" else 0) and detector.replay_failures == 0
         assert len(set(seen)) == len(seen) and min(seen) > 0, seen  # the contacts changed at every step
         if kwargs is small:
             assert replayed.flags.any()
@@ -185,18 +196,69 @@ def test_a_failure_during_a_replay_is_printed_kept_and_raised(capfd):
     assert detector.replay_failures == 2 and detector.replayed_calls == 4
 
 
-@pytest.mark.gpu
-def test_cuda_capture_is_refused_with_a_clear_error():
-    import minkq
+@pytest.mark.parametrize("update", ["refit", "rebuild"])
+def test_the_bodies_a_cuda_capture_records_give_the_eager_rows(update):
+    """The bodies a CUDA capture records (minkq's stream-ordered refit or rebuild and queries,
+    Warp's kernels over every slot of the passes' fixed pair buffers, the counts left in device
+    arrays), run here on the CPU, where the stream-ordered calls run at once: the rows, counts,
+    minimum distances and flags of the eager bodies; a pass's buffer smaller than its pairs
+    sets Newton's resize flag."""
+    scene = ns.scenes()["cloth_hanging"]()
+    model = ns.cloth_model(scene.meshes)
+    r = scene.radius
+    rest = model.particle_q.numpy()
+    for kwargs in (ROOMY, dict(vertex_collision_buffer_pre_alloc=8, edge_collision_buffer_pre_alloc=16)):
+        positions = wp.clone(model.particle_q)
+        detector = mn.TriMeshCollisionDetector(model, init_collision_info=True, vertex_positions=positions, **kwargs)
+        detector._scene.reserve(refit=True, rebuild=True)  # done when the scene is made on CUDA only
+        detector._in_cuda_capture = True
+        compared = 0
+        for step in range(3):
+            positions.assign(_squashed(rest, step))
+            detector.resize_flags.zero_()
+            getattr(detector, update)(positions)
+            detector.vertex_triangle_collision_detection(r)
+            detector.edge_edge_collision_detection(r)
+            slots = {kind: detector._scratch.arrays[kind + "_pairs"].shape[0] for kind in ("vt", "ee")}
+            found = {kind: int(detector._found[kind].numpy()[0]) for kind in ("vt", "ee")}
+            assert slots["vt"] >= detector._capture_capacity("vt") and slots["ee"] >= detector._capture_capacity("ee")
+            lost = {kind: found[kind] > slots[kind] for kind in ("vt", "ee")}
+            if not any(lost.values()):
+                _same(read(detector), _eager(model, positions, r, rebuild=update == "rebuild", **kwargs))
+                compared += 1
+            flags = detector.resize_flags.numpy()  # pairs past a pass's buffer are lost: the flag says so
+            assert not lost["vt"] or flags[mn.VERTEX_OVERFLOW] == 1
+            assert not lost["ee"] or flags[mn.EDGE_OVERFLOW] == 1
+        if kwargs is ROOMY:
+            assert compared == 3
+    # A buffer too small for the pairs: the flag.
+    positions = wp.clone(model.particle_q)
+    detector = mn.TriMeshCollisionDetector(model, init_collision_info=True, vertex_positions=positions,
+                                           vertex_collision_buffer_pre_alloc=1, edge_collision_buffer_pre_alloc=1)
+    detector._scene.reserve(refit=True)
+    detector._in_cuda_capture = True
+    detector.refit(positions)
+    detector.edge_edge_collision_detection(4 * r)
+    assert int(detector._found["ee"].numpy()[0]) > detector._scratch.arrays["ee_pairs"].shape[0]
+    assert detector.resize_flags.numpy()[mn.EDGE_OVERFLOW] == 1
 
-    if minkq.cuda_device_count() == 0 or not wp.is_cuda_available():
-        pytest.skip("needs a CUDA GPU and a libminkq built with CUDA (none here)")
-    scene = ns.scenes()["cloth_bending"]()
+
+@pytest.mark.gpu
+def test_cuda_captured_query_buffer_too_small_sets_the_resize_flag():
+    """A CUDA graph whose query buffer is smaller than a replay's pairs: Newton's resize flag,
+    never a write past it."""
+    _needs_cuda("cuda:0")
+    scene = ns.scenes()["cloth_hanging"]()
     model = ns.cloth_model(scene.meshes, device="cuda:0")
-    detector = mn.TriMeshCollisionDetector(model, init_collision_info=True)
-    with pytest.raises(RuntimeError, match="not supported yet"):
-        with wp.ScopedCapture(device="cuda:0"):
-            detector.refit()
+    positions = wp.clone(model.particle_q)
+    detector = mn.TriMeshCollisionDetector(model, init_collision_info=True, vertex_positions=positions,
+                                           vertex_collision_buffer_pre_alloc=1, edge_collision_buffer_pre_alloc=1)
+    with wp.ScopedCapture(device="cuda:0") as capture:
+        detector.refit(positions)
+        detector.edge_edge_collision_detection(4 * scene.radius)
+    wp.capture_launch(capture.graph)
+    assert int(detector._found["ee"].numpy()[0]) > detector._scratch.arrays["ee_pairs"].shape[0]
+    assert detector.resize_flags.numpy()[mn.EDGE_OVERFLOW] == 1
 
 
 # ---- Newton's examples, its collision tests, the runner ------------------------------------------

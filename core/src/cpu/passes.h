@@ -30,16 +30,21 @@ void run_block(const Pass& pass, int32_t block, std::vector<int32_t>& part, Work
 }
 
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
-// total, writing nothing if it exceeds the capacity.
+// total. If it exceeds the capacity, a blocking query's output gets nothing and an asynchronous
+// one's (out.count set) the first `capacity` pairs, unsorted.
 inline uint64_t write_pass(const std::vector<int32_t>* parts, int32_t blocks, const PairOutput& out) {
   uint64_t total = 0;
   for (int32_t b = 0; b < blocks; ++b) total += parts[b].size() / 2;
-  if (total > out.capacity) return total;
+  if (total > out.capacity && !out.count) return total;
   int32_t* cursor = out.pairs;
-  for (int32_t b = 0; b < blocks; ++b) {
-    if (!parts[b].empty()) std::memcpy(cursor, parts[b].data(), parts[b].size() * sizeof(int32_t));
-    cursor += parts[b].size();
+  size_t room = 2 * size_t(std::min<uint64_t>(total, out.capacity));  // int32 words
+  for (int32_t b = 0; b < blocks && room > 0; ++b) {
+    const size_t words = std::min(parts[b].size(), room);
+    if (words) std::memcpy(cursor, parts[b].data(), words * sizeof(int32_t));
+    cursor += words;
+    room -= words;
   }
+  if (total > out.capacity) return total;
   if (out.canonical) {
     std::vector<uint64_t> packed(total);
     parallel_for_each(int64_t(total), [&](int64_t i) { packed[i] = pack_pair(out.pairs[2 * i], out.pairs[2 * i + 1]); });

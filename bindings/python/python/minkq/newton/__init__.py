@@ -95,11 +95,16 @@ Deliberate differences (documented choices):
   ``wp.capture_launch``) raises it as soon as the replay returns. Later replays run the bodies
   again. Replaying such a graph inside another CPU capture is refused the same way.
 
-  CUDA. Not supported yet: minkq's CUDA path reads the pair count on the host and synchronises
-  its stream, which a CUDA graph cannot record; inside a CUDA capture these methods raise
-  RuntimeError instead of recording a graph whose replays would reuse stale pairs (run them
-  outside the captured region, or use Newton's detector in captured CUDA loops). A
-  stream-ordered minkq API for it is in progress.
+  CUDA. Inside a CUDA capture the same bodies run at once, recording only device work on
+  Warp's capture stream: minkq's stream-ordered calls (``Scene.refit_async``,
+  ``rebuild_async``, ``query_async``, their scratch reserved when the scene is made) and Warp's
+  kernels, sorts and scans, over every slot of each pass's pair buffer (slots past the pairs a
+  replay finds carry none), so no count is read on the host. Each pass's buffer holds at least
+  as many pairs as Newton's rows of that kind (a detection outside a capture grows it to what
+  it found); a replay finding more loses the pairs past it and sets Newton's resize flag, as a
+  full row does. The arrays a graph recorded are kept as long as the detector. Newton's Warp
+  BVHs must be read once before a CUDA capture that uses them. Not run on a GPU yet (the tests
+  marked gpu).
 - Solver evaluation (``install()``). Newton's VBD force kernels recompute each edge-edge
   contact with Warp's ``closest_point_edge_edge(..., particle_edge_parallel_epsilon)`` and apply
   a force only if that distance is below the contact radius. The epsilon (1e-5 by default) is
@@ -119,11 +124,12 @@ Deliberate differences (documented choices):
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import sys
 import traceback
 import weakref
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Tuple
 
 import numpy as np
 import warp as wp
@@ -320,6 +326,7 @@ def capture_launch(graph: Any) -> None:
 @wp.kernel
 def _vertex_triangle_pairs_kernel(
     pairs: wp.array2d(dtype=wp.int32),
+    found: wp.array(dtype=wp.int64),
     pos: wp.array(dtype=wp.vec3),
     tri_indices: wp.array2d(dtype=wp.int32),
     ref_pos: wp.array(dtype=wp.vec3),
@@ -341,12 +348,16 @@ def _vertex_triangle_pairs_kernel(
     tri_count: wp.array(dtype=wp.int32),
     tri_min_dist: wp.array(dtype=float),
 ):
+    # Slot i holds a pair if i < found[0] (the pairs found; a captured query's slots past them
+    # hold none).
     i = wp.tid()
-    v = pairs[i, 0]
-    t = pairs[i, 1]
     vertex_keys[i] = _row_key(num_vertices, 0)  # dropped: sorts after every row
     if record_triangles:
         tri_keys[i] = _row_key(num_triangles, 0)
+    if wp.int64(i) >= found[0]:
+        return
+    v = pairs[i, 0]
+    t = pairs[i, 1]
     if not _same_world(vertex_group[v], tri_group[t], global_group):
         return
     if use_filter:
@@ -371,6 +382,7 @@ def _vertex_triangle_pairs_kernel(
 @wp.kernel
 def _edge_edge_pairs_kernel(
     pairs: wp.array2d(dtype=wp.int32),
+    found: wp.array(dtype=wp.int64),
     num_pairs: int,
     pos: wp.array(dtype=wp.vec3),
     edge_indices: wp.array2d(dtype=wp.int32),
@@ -387,13 +399,16 @@ def _edge_edge_pairs_kernel(
     edge_count: wp.array(dtype=wp.int32),
     edge_min_dist: wp.array(dtype=float),
 ):
-    # Pair i (e, f), e < f, goes to f's row at slot i and to e's row at slot num_pairs + i.
+    # Pair i (e, f), e < f, goes to f's row at slot i and to e's row at slot num_pairs + i;
+    # slot i holds a pair if i < found[0].
     i = wp.tid()
-    e = pairs[i, 0]
-    f = pairs[i, 1]
     dropped = _row_key(num_edges, 0)
     edge_keys[i] = dropped
     edge_keys[num_pairs + i] = dropped
+    if wp.int64(i) >= found[0]:
+        return
+    e = pairs[i, 0]
+    f = pairs[i, 1]
     if not _same_world(edge_group[e], edge_group[f], global_group):
         return
     e0 = edge_indices[e, 2]
@@ -455,12 +470,40 @@ def _write_rows_kernel(
         resize_flags[flag_index] = 1
 
 
+@wp.kernel
+def _flag_lost_pairs_kernel(found: wp.array(dtype=wp.int64), capacity: int, flag_index: int,
+                            resize_flags: wp.array(dtype=wp.int32)):
+    # A captured query found more pairs than its buffer holds: those past it are lost, as pairs
+    # past a full row are, and Newton's resize flag says so.
+    if found[0] > wp.int64(capacity):
+        resize_flags[flag_index] = 1
+
+
+@contextlib.contextmanager
+def _capture_paused(device: Any):
+    """Runs the block outside a Warp graph capture in progress on ``device`` (Warp's
+    ``capture_pause`` / ``capture_resume``), or as it is when none is."""
+    if not getattr(device, "is_capturing", False):
+        yield
+        return
+    from warp._src.context import capture_pause, capture_resume
+
+    graph = capture_pause(device=device)
+    try:
+        yield
+    finally:
+        capture_resume(graph, device=device)
+
+
 class _Scratch:
-    """Device arrays of one pass kept between calls, grown geometrically."""
+    """Device arrays of one pass kept between calls, grown geometrically. While ``pinned`` is a
+    list (inside a CUDA graph capture) every array handed out is also kept there: a graph bakes
+    their addresses, so they must outlive any later growth."""
 
     def __init__(self, device: Any) -> None:
         self.device = device
         self.arrays: dict = {}
+        self.pinned: Optional[list] = None
 
     def get(self, name: str, dtype: Any, size: int, shape_tail: tuple = ()) -> wp.array:
         array = self.arrays.get(name)
@@ -468,6 +511,8 @@ class _Scratch:
             capacity = max(size, 2 * (array.shape[0] if array is not None else 0), 16)
             array = wp.empty(shape=(capacity,) + shape_tail, dtype=dtype, device=self.device)
             self.arrays[name] = array
+        if self.pinned is not None:
+            self.pinned.append(array)
         return array
 
 
@@ -601,6 +646,10 @@ class TriMeshCollisionDetector(_NewtonDetector):
         self._tri_group = wp.array(vertex_group[tri_indices[:, 0]], dtype=wp.int32, device=self.device)
         self._edge_group = wp.array(vertex_group[edge_indices[:, 2]], dtype=wp.int32, device=self.device)
         self._scratch = _Scratch(self.device)
+        self._found = {kind: wp.zeros(1, dtype=wp.int64, device=self.device) for kind in ("vt", "ee")}
+        self._in_cuda_capture = False
+        self._graph_arrays: list = []  # arrays CUDA graphs recorded (see _Scratch)
+        self._row_slots: dict = {}
         self._empty_int = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._scene: Optional[_api.Scene] = None
         self._build_scene()
@@ -615,13 +664,15 @@ class TriMeshCollisionDetector(_NewtonDetector):
         if not getattr(device, "is_capturing", False):
             body(self, *args)
             return
-        if device.is_cuda:
-            raise RuntimeError(
-                f"minkq.newton.TriMeshCollisionDetector.{what} cannot run inside a Warp graph capture on {device}: "
-                "minkq's CUDA path reads the pair count on the host and synchronises its stream, which a CUDA graph "
-                "cannot record (not supported yet). Run collision detection outside wp.ScopedCapture on CUDA, or use "
-                "Newton's detector in captured CUDA loops; captures on the CPU device are supported."
-            )
+        if device.is_cuda:  # the body again, with minkq's stream-ordered calls on Warp's capture stream
+            self._scratch.pinned = self._graph_arrays
+            self._in_cuda_capture = True
+            try:
+                body(self, *args)
+            finally:
+                self._in_cuda_capture = False
+                self._scratch.pinned = None
+            return
         token = _next_token[0]
         _next_token[0] += 1
         _recorded[token] = (weakref.ref(self), what, body, args, self.vertex_positions)
@@ -670,6 +721,8 @@ class TriMeshCollisionDetector(_NewtonDetector):
         edges = model.edge_indices[:, 2:4] if ee else np.zeros((0, 2), np.int32)
         triangles = model.tri_indices if vt else np.zeros((0, 3), np.int32)
         self._scene = _api.Scene(self.minkq_device, self.vertex_positions, triangles, edges, vt=vt, ee=ee, drop_incident=True)
+        if self.device.is_cuda:  # the scratch of the stream-ordered refits and rebuilds of CUDA captures
+            self._scene.reserve(refit=True, rebuild=True)
 
     def rebuild(self, new_pos=None):
         """Rebuilds both trees from ``new_pos`` (or the current ``vertex_positions``) in place:
@@ -679,7 +732,9 @@ class TriMeshCollisionDetector(_NewtonDetector):
         self._call("rebuild", TriMeshCollisionDetector._rebuild_now)
 
     def _rebuild_now(self) -> None:
-        if self._scene is not None:
+        if self._scene is not None and self._in_cuda_capture:
+            self._scene.rebuild_async(self.vertex_positions)
+        elif self._scene is not None:
             self._scene.rebuild(self.vertex_positions)
         else:
             self._build_scene()
@@ -694,7 +749,9 @@ class TriMeshCollisionDetector(_NewtonDetector):
         self._call("refit", TriMeshCollisionDetector._refit_now)
 
     def _refit_now(self) -> None:
-        if self._scene is not None:
+        if self._scene is not None and self._in_cuda_capture:
+            self._scene.refit_async(self.vertex_positions)
+        elif self._scene is not None:
             self._scene.refit(self.vertex_positions)
         if self._warp_bvhs_built():  # Newton's own per-tree refits (its refit() calls the overrides below)
             _NewtonDetector.refit_triangles(self)
@@ -710,16 +767,40 @@ class TriMeshCollisionDetector(_NewtonDetector):
 
     # ---- Queries -----------------------------------------------------------------------------
 
-    def _pairs(self, kind: str, mode: str, radius: float) -> wp.array:
-        """minkq's leaf-exact pairs, written in place into a device array of the model's device."""
+    def _pairs(self, kind: str, mode: str, radius: float) -> Tuple[wp.array, wp.array, int]:
+        """minkq's leaf-exact pairs, written in place into a device array of the model's device:
+        (pairs, found, slots): slot i < slots holds a pair if i < found[0] (a one-element device
+        array). Now: exactly the pairs found, found[0] == slots. Inside a CUDA capture: a
+        stream-ordered query into the pass's buffer as it is (Newton's row capacity at least),
+        found[0] the exact count; pairs past the buffer set Newton's resize flag."""
         name = kind + "_pairs"
+        found = self._found[kind]
+        if self._in_cuda_capture:
+            pairs = self._scratch.get(name, wp.int32, self._capture_capacity(kind), (2,))
+            self._scene.query_async(pairs, found, kind, mode, radius, leaf_exact=True)
+            flag = VERTEX_OVERFLOW if kind == "vt" else EDGE_OVERFLOW
+            wp.launch(_flag_lost_pairs_kernel, dim=1, inputs=[found, pairs.shape[0], flag], outputs=[self.resize_flags],
+                      device=self.device)
+            return pairs, found, pairs.shape[0]
         pairs = self._scratch.get(name, wp.int32, 0, (2,))
         try:
             info = self._scene.query_into(pairs, kind, mode, radius, leaf_exact=True)
         except CapacityError as e:
             pairs = self._scratch.get(name, wp.int32, e.needed + e.needed // 4, (2,))
             info = self._scene.query_into(pairs, kind, mode, radius, leaf_exact=True)
-        return pairs[: info.count]
+        found.fill_(info.count)
+        return pairs[: info.count], found, info.count
+
+    def _capture_capacity(self, kind: str) -> int:
+        """Pairs a captured query's buffer holds at least: as many as Newton's rows of that kind
+        hold (a pair fills one vertex row slot, or two edge row slots)."""
+        info = self.collision_info
+        offsets = info.vertex_colliding_triangles_offsets if kind == "vt" else info.edge_colliding_edges_offsets
+        key = (kind, offsets.ptr)
+        if key not in self._row_slots:  # read once, outside the capture: Newton's offsets are fixed
+            with _capture_paused(self.device):
+                self._row_slots[key] = int(offsets[-1:].numpy()[0])
+        return self._row_slots[key]
 
     def _filter(self, values: Any, offsets: Any):
         if values is None or offsets is None:
@@ -776,8 +857,7 @@ class TriMeshCollisionDetector(_NewtonDetector):
         self.vertex_colliding_triangles_min_dist.fill_(r)
         if self._scene is None or model.tri_count == 0:
             return
-        pairs = self._pairs("vt", self.vt_mode, r)
-        k = pairs.shape[0]
+        pairs, found, k = self._pairs("vt", self.vt_mode, r)
         if k == 0:
             return
         record = bool(self.record_triangle_contacting_vertices)
@@ -792,7 +872,7 @@ class TriMeshCollisionDetector(_NewtonDetector):
             _vertex_triangle_pairs_kernel,
             dim=k,
             inputs=[
-                pairs, self.vertex_positions, model.tri_indices, ref_pos, min_r, self._vertex_group, self._tri_group,
+                pairs, found, self.vertex_positions, model.tri_indices, ref_pos, min_r, self._vertex_group, self._tri_group,
                 self._global_group, filter_list, filter_offsets, use_filter, int(record), model.particle_count,
                 model.tri_count,
             ],
@@ -832,8 +912,7 @@ class TriMeshCollisionDetector(_NewtonDetector):
         self.edge_colliding_edges_min_dist.fill_(r)
         if self._scene is None or model.edge_count == 0:
             return
-        pairs = self._pairs("ee", self.ee_mode, r)
-        k = pairs.shape[0]
+        pairs, found, k = self._pairs("ee", self.ee_mode, r)
         if k == 0:
             return
         edge_keys = self._scratch.get("edge_keys", wp.int64, 4 * k)
@@ -843,7 +922,7 @@ class TriMeshCollisionDetector(_NewtonDetector):
             _edge_edge_pairs_kernel,
             dim=k,
             inputs=[
-                pairs, k, self.vertex_positions, model.edge_indices, ref_pos, min_r, self._edge_group, self._global_group,
+                pairs, found, k, self.vertex_positions, model.edge_indices, ref_pos, min_r, self._edge_group, self._global_group,
                 filter_list, filter_offsets, use_filter, model.edge_count,
             ],
             outputs=[edge_keys, self.edge_colliding_edges_count, self.edge_colliding_edges_min_dist],
@@ -894,13 +973,8 @@ class TriMeshCollisionDetector(_NewtonDetector):
                 )
             # CPU: build them now, outside the recording (the graph only keeps their ids); the
             # recorded refits and rebuilds keep them current at every replay.
-            from warp._src.context import capture_pause, capture_resume
-
-            graph = capture_pause(device=device)
-            try:
+            with _capture_paused(device):
                 self._build_warp_bvhs_now()
-            finally:
-                capture_resume(graph, device=device)
             return
         self._build_warp_bvhs_now()
 
