@@ -11,6 +11,13 @@
 // there is none. Failed calls must leave a message, successful ones none; a failed refit or
 // rebuild must leave the previous positions; successful queries must return valid, canonical, duplicate-free
 // pairs whose count and digest match the library-owned result path.
+//
+// The stream-ordered calls (minkq_scene_reserve, the *_async calls, minkq_scene_async_status)
+// are about 30% of the ops. The model keeps each scene's reservation and pending error (the
+// call and first non-finite vertex of the first failing asynchronous refit or rebuild since the
+// last status call); asynchronous refits and rebuilds must give what the blocking call with the
+// same vertices gives, asynchronous queries the blocking query's count and pairs, within their
+// capacity (guard words after it), and the status call the modelled error once.
 #include <fuzzer/FuzzedDataProvider.h>
 #include <tbb/global_control.h>
 #include <xxhash.h>
