@@ -11,6 +11,13 @@
 // there is none. Failed calls must leave a message, successful ones none; a failed refit or
 // rebuild must leave the previous positions; successful queries must return valid, canonical, duplicate-free
 // pairs whose count and digest match the library-owned result path.
+//
+// The stream-ordered calls (minkq_scene_reserve, the *_async calls, minkq_scene_async_status)
+// are about 30% of the ops. The model keeps each scene's reservation and pending error (the
+// call and first non-finite vertex of the first failing asynchronous refit or rebuild since the
+// last status call); asynchronous refits and rebuilds must give what the blocking call with the
+// same vertices gives, asynchronous queries the blocking query's count and pairs, within their
+// capacity (guard words after it), and the status call the modelled error once.
 #include <fuzzer/FuzzedDataProvider.h>
 #include <tbb/global_control.h>
 #include <xxhash.h>
@@ -49,7 +56,13 @@ namespace {
 
 constexpr size_t kMaxElements = size_t(INT32_MAX) - 1;  // 2^31 - 2, minkq.h's SIZE_OVERFLOW limit
 uint64_t g_calls = 0, g_inputs = 0, g_errors = 0;
+// Stream-ordered calls that got past the checks: refits/rebuilds with finite and with
+// non-finite vertices, queries whose pairs fit and did not, pending errors reported.
+uint64_t g_async_moves = 0, g_async_non_finite = 0, g_async_fit = 0, g_async_short = 0, g_async_pending = 0;
 bool g_verbose = false;  // MINKQ_FUZZ_VERBOSE=1: print every input's calls
+// MINKQ_FUZZ_INJECT=1 (self-test): the model records each pending error one vertex too far on,
+// so the first NON_FINITE minkq_scene_async_status reports must fail the message check.
+bool g_inject = false;
 
 std::string log_text;
 void note(const std::string& line) {
@@ -111,6 +124,30 @@ struct Buffer {
   int32_t max_index = 0, min_index = 0;
   bool honest = true;
   const float* floats(size_t i) const { return reinterpret_cast<const float*>(storage.data() + i * stride); }
+  // The first record (3 floats) with a non-finite coordinate, from the bytes generated: -1 if
+  // none. Only meaningful for an honest buffer whose records do not overlap (stride >= 12).
+  int64_t first_non_finite3() const {
+    if (!honest || stride < 12) return -1;
+    for (size_t i = 0; i < count; ++i) {
+      float f[3];
+      std::memcpy(f, storage.data() + i * stride, sizeof f);
+      if (!std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2])) return int64_t(i);
+    }
+    return -1;
+  }
+  // Replaces the non-finite coordinates of every record (3 floats) by finite ones: most
+  // generated vertex buffers of a few dozen records hold a NaN somewhere.
+  void make_finite3() {
+    if (!honest || stride < 12) return;
+    for (size_t i = 0; i < count; ++i) {
+      float f[3];
+      std::memcpy(f, storage.data() + i * stride, sizeof f);
+      for (float& x : f)
+        if (!std::isfinite(x)) x = 0.5f;
+      std::memcpy(storage.data() + i * stride, f, sizeof f);
+    }
+    non_finite = false;
+  }
 };
 
 class Generator {
@@ -243,11 +280,22 @@ class Generator {
 
 // ---- Objects held across calls ----------------------------------------------------------------
 
+// The pending error of a scene's asynchronous refits and rebuilds, as minkq.h defines it: the
+// first non-finite vertex of the first failing call since the last minkq_scene_async_status.
+struct PendingModel {
+  int call = 0;  // 0 none, 1 minkq_scene_refit_async, 2 minkq_scene_rebuild_async
+  int64_t vertex = -1;
+};
 struct SceneSlot {
   minkq_scene* handle = nullptr;
   int device = -1;
   uint32_t flags = 0;
   size_t vertices = 0, triangles = 0, edges = 0;
+  // minkq_scene_reserve so far (reservations only grow): REFIT (or REBUILD) allows
+  // refit_async, REBUILD rebuild_async; canonical asynchronous queries up to this capacity.
+  bool reserved_refit = false, reserved_rebuild = false;
+  size_t reserved_canonical = 0;
+  PendingModel pending;
 };
 struct BvhSlot {
   minkq_bvh* handle = nullptr;
@@ -312,6 +360,32 @@ uint64_t scene_state(const SceneSlot& s) {
   if (st != MINKQ_SUCCESS) failure("state query failed: " + name(st));
   return digest;
 }
+// A fuller digest of a scene's state for the asynchronous calls: every kind the scene has, in
+// box mode and in a finer mode with leaf-exact filtering, counts and digests of canonical pairs.
+uint64_t scene_full_state(const SceneSlot& s) {
+  const minkq::cxx::Result r = own_result();
+  std::vector<uint64_t> parts;
+  for (int kind = 0; kind < 2; ++kind) {
+    if (!(s.flags & (kind == MINKQ_QUERY_VT ? MINKQ_SCENE_VT : MINKQ_SCENE_EE))) continue;
+    for (int fine = 0; fine < 2; ++fine) {
+      minkq_query_desc d;
+      const int mode = !fine ? MINKQ_MODE_BOX : kind == MINKQ_QUERY_VT ? MINKQ_MODE_SPHERE : MINKQ_MODE_CAPSULE_EXACT;
+      shim_query_desc(&d, kind, mode, MINKQ_QUERY_DIGEST | (fine ? MINKQ_QUERY_LEAF_EXACT : 0u), fine ? 0.25f : 0.5f);
+      const minkq_status st = minkq_scene_query_result(s.handle, &d, r.get());
+      if (st != MINKQ_SUCCESS) failure("state query failed: " + name(st));
+      parts.push_back(minkq_result_digest(r.get()));
+      parts.push_back(minkq_result_count(r.get()));
+    }
+  }
+  return XXH64(parts.data(), parts.size() * sizeof(uint64_t), 0);
+}
+double scene_growth(const SceneSlot& s) {
+  double g = -1.0;
+  const minkq_status st = minkq_scene_tree_growth(s.handle, &g);
+  if (st != MINKQ_SUCCESS) failure("minkq_scene_tree_growth failed: " + name(st));
+  return g;
+}
+
 uint64_t bvh_state(const BvhSlot& b) {
   const float points[6] = {0, 0, 0, 1, 1, 1};
   minkq_bvh_query_desc d;
@@ -331,7 +405,8 @@ class Session {
   void run() {
     const int ops = in_.ConsumeIntegralInRange<int>(1, 40);
     for (int i = 0; i < ops && in_.remaining_bytes() > 0; ++i) {
-      switch (gen_.choice(14)) {
+      // 0-13: the blocking calls; 14-19 (30%): the stream-ordered ones.
+      switch (gen_.choice(20)) {
         case 0: device_create(); break;
         case 1: device_release(); break;
         case 2: case 3: scene_create(); break;
@@ -345,7 +420,14 @@ class Session {
         case 10: bvh_create(); break;
         case 11: bvh_refit(); break;
         case 12: bvh_query(); break;
-        default: misc(); break;
+        case 13: misc(); break;
+        case 14: scene_reserve(); break;
+        case 15: case 16: scene_refit_async(); break;
+        case 17: scene_query_async(); break;
+        case 18:
+          if (gen_.choice(2)) scene_query_async(); else scene_query_vt_ee_async();
+          break;
+        default: scene_async_status(); break;
       }
     }
   }
@@ -446,11 +528,18 @@ class Session {
       return;
     }
     SceneSlot& slot_ref = st_.scenes[slot];
-    slot_ref = {out, d, flags, minkq_scene_vertex_count(out), minkq_scene_triangle_count(out),
-                minkq_scene_edge_count(out)};
+    slot_ref = SceneSlot{};  // no reservation, no pending error
+    slot_ref.handle = out;
+    slot_ref.device = d;
+    slot_ref.flags = flags;
+    slot_ref.vertices = minkq_scene_vertex_count(out);
+    slot_ref.triangles = minkq_scene_triangle_count(out);
+    slot_ref.edges = minkq_scene_edge_count(out);
     if (slot_ref.vertices != v.count || slot_ref.triangles != t.count) failure("scene counts differ from the desc");
     if (e.count > 0 && slot_ref.edges != e.count) failure("scene edge count differs from the given edges");
     if (e.count == 0 && !(flags & MINKQ_SCENE_EE) && slot_ref.edges != 0) failure("edges derived for a VT-only scene");
+    // Often reserve at once (the stream-ordered calls need it), as a simulator would.
+    if (gen_.choice(2) == 0) reserve_on(&slot_ref, false, reserve_flags(), reserve_capacity());
   }
 
   void scene_release() {
@@ -464,6 +553,54 @@ class Session {
     SceneSlot& s = st_.scenes[gen_.choice(3)];
     *null_scene = s.handle == nullptr;
     return &s;
+  }
+  // A slot for the stream-ordered calls: an empty one (a NULL scene) less often than scene();
+  // when every slot is empty, mostly a valid scene made for the purpose.
+  SceneSlot* live_scene(bool* null_scene) {
+    SceneSlot* s = scene(null_scene);
+    if (!*null_scene || gen_.choice(4) == 0) return s;
+    for (auto& other : st_.scenes)
+      if (other.handle) {
+        *null_scene = false;
+        return &other;
+      }
+    *null_scene = false;
+    return valid_scene();
+  }
+
+  // A small valid scene (a CPU device made if there is none) in a random slot, often with a
+  // reservation: something for the stream-ordered calls to act on.
+  SceneSlot* valid_scene() {
+    int d = st_.devices[0] ? 0 : st_.devices[1] ? 1 : -1;
+    if (d < 0) {
+      expect("minkq_device_create (for a valid scene)", minkq_device_create("cpu", &st_.devices[0]), Misuse{});
+      d = 0;
+    }
+    SceneSlot& slot = st_.scenes[gen_.choice(3)];
+    minkq_scene_release(slot.handle);
+    slot = SceneSlot{};
+    const int nv = 3 + gen_.choice(22), nt = 1 + gen_.choice(24);
+    std::vector<float> xyz(3 * size_t(nv));
+    for (float& x : xyz) x = float(gen_.choice(33) - 16) / 8.0f;
+    std::vector<int32_t> tri(3 * size_t(nt));
+    for (int32_t& v : tri) v = gen_.choice(nv);
+    const uint32_t flags = uint32_t(1 + gen_.choice(3)) | (gen_.choice(2) ? uint32_t(MINKQ_SCENE_DROP_INCIDENT) : 0u);
+    minkq_scene_desc desc{};
+    desc.flags = flags;
+    desc.vertices = shim_buffer(xyz.data(), 0, size_t(nv), MINKQ_MEMORY_HOST);
+    desc.triangles = shim_buffer(tri.data(), 0, size_t(nt), MINKQ_MEMORY_HOST);
+    desc.edges = shim_buffer(nullptr, 0, 0, MINKQ_MEMORY_HOST);
+    minkq_scene* out = nullptr;
+    expect("minkq_scene_create (a valid scene)", minkq_scene_create(st_.devices[d], &desc, &out), Misuse{});
+    slot.handle = out;
+    slot.device = d;
+    slot.flags = flags;
+    slot.vertices = minkq_scene_vertex_count(out);
+    slot.triangles = minkq_scene_triangle_count(out);
+    slot.edges = minkq_scene_edge_count(out);
+    if (slot.vertices != size_t(nv) || slot.triangles != size_t(nt)) failure("scene counts differ from the desc");
+    if (gen_.choice(4) != 0) reserve_on(&slot, false, reserve_flags(), reserve_capacity());
+    return &slot;
   }
 
   void scene_refit() {
@@ -510,13 +647,17 @@ class Session {
     float r = 0;
     Misuse misuse;
   };
-  QueryArgs query_args(const SceneSlot* s, bool null_scene) {
+  // `want_kind` >= 0: mostly that kind (the fused calls); `async`: mostly flags an asynchronous
+  // query supports (no DIGEST, no STATS), so that most asynchronous queries get past the checks.
+  QueryArgs query_args(const SceneSlot* s, bool null_scene, int want_kind = -1, bool async = false) {
     QueryArgs a;
     const int k = gen_.choice(12);
     a.kind = k < 5 ? MINKQ_QUERY_VT : k < 10 ? MINKQ_QUERY_EE : (k == 10 ? 2 : -1);
+    if (want_kind >= 0 && gen_.choice(6) != 0) a.kind = want_kind;
     const int md = gen_.choice(14);
     a.mode = md < 12 ? md % 4 : (md == 12 ? 4 : 99);
     a.flags = uint32_t(gen_.choice(16)) | (gen_.rarely() ? 16u << gen_.choice(20) : 0u);
+    if (async && gen_.choice(4) != 0) a.flags &= ~uint32_t(MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS);
     a.r = gen_.radius();
     a.null_desc = gen_.rarely() && gen_.choice(2);
     shim_query_desc(&a.desc, a.kind, a.mode, a.flags, a.r);
@@ -819,6 +960,357 @@ class Session {
     check_pairs("minkq_bvh_query", o.pairs.data(), info.count, first.count, b.boxes, false, flags, info.digest);
   }
 
+  // ---- Stream-ordered calls (minkq.h, "Stream-ordered calls"): on the CPU they run at once,
+  // on host memory, the stream ignored; non-finite vertices become the scene's pending error.
+
+  // A stream argument: ignored on the CPU, so any value (never dereferenced) must do.
+  minkq_stream stream() {
+    switch (gen_.choice(4)) {
+      case 0: return reinterpret_cast<minkq_stream>(uintptr_t(0x5eed));
+      case 1: return reinterpret_cast<minkq_stream>(&st_);
+      default: return nullptr;
+    }
+  }
+
+  // Reservation flags and capacities: mostly valid, sometimes unknown bits or overflowing sizes.
+  uint32_t reserve_flags() {
+    switch (gen_.choice(8)) {
+      case 0: return 0u;
+      case 1: case 2: return MINKQ_RESERVE_REFIT;
+      case 3: return MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD;
+      case 4: return uint32_t(gen_.choice(4)) | (4u << gen_.choice(29));  // unknown bits
+      default: return MINKQ_RESERVE_REBUILD;
+    }
+  }
+  size_t reserve_capacity() {
+    switch (gen_.choice(12)) {
+      case 0: return 0;
+      case 1: return size_t(gen_.choice(8));
+      case 2: case 3: return size_t(gen_.choice(1024));
+      case 4: return size_t(1) << 20;
+      case 5: return kMaxElements + 1;
+      case 6: return SIZE_MAX / 16;      // the largest minkq.cpp accepts (2 uint64_t per pair)
+      case 7: return SIZE_MAX / 16 + 1;  // its byte size overflows: SIZE_OVERFLOW
+      case 8: return SIZE_MAX;
+      default: return size_t(gen_.choice(256));
+    }
+  }
+
+  // One minkq_scene_reserve call on `s` (NULL scene when null_scene), checked and modelled.
+  void reserve_on(SceneSlot* s, bool null_scene, uint32_t flags, size_t capacity) {
+    Misuse m;
+    m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+    m.add(flags & ~uint32_t(MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD), MINKQ_ERROR_INVALID_ARGUMENT,
+          "unknown reserve flags");
+    m.add(capacity > SIZE_MAX / (2 * sizeof(uint64_t)), MINKQ_ERROR_SIZE_OVERFLOW, "canonical_capacity overflows");
+    const uint64_t before = null_scene ? 0 : scene_full_state(*s);
+    const minkq_status st = minkq_scene_reserve(null_scene ? nullptr : s->handle, flags, capacity);
+    // A valid reservation beyond 2^31 pairs may be refused for memory (not on the CPU, which
+    // reserves nothing, but minkq.h allows it).
+    if (m.none() && capacity > kMaxElements && st == MINKQ_ERROR_OUT_OF_MEMORY) {
+      Misuse oom;
+      oom.add(true, MINKQ_ERROR_OUT_OF_MEMORY, "a huge valid reservation");
+      expect("minkq_scene_reserve", st, oom);
+    } else {
+      expect("minkq_scene_reserve", st, m);
+    }
+    if (null_scene) return;
+    if (scene_full_state(*s) != before) failure("minkq_scene_reserve changed the scene's pairs");
+    if (st != MINKQ_SUCCESS) return;
+    s->reserved_refit |= (flags & (MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD)) != 0;
+    s->reserved_rebuild |= (flags & MINKQ_RESERVE_REBUILD) != 0;
+    s->reserved_canonical = std::max(s->reserved_canonical, capacity);
+  }
+
+  void scene_reserve() {
+    bool null_scene;
+    SceneSlot* s = live_scene(&null_scene);
+    const uint32_t flags = reserve_flags();
+    const size_t capacity = reserve_capacity();
+    reserve_on(s, null_scene, flags, capacity);
+  }
+
+  // minkq_scene_refit_async / minkq_scene_rebuild_async: the blocking calls' buffer misuses
+  // (minus NON_FINITE), the reservation, the vertex count. Non-finite coordinates succeed, keep
+  // the positions and become the pending error (the first one only); finite ones give the state
+  // the blocking call gives for the same vertices.
+  void scene_refit_async() {
+    bool null_scene;
+    SceneSlot* s = live_scene(&null_scene);
+    const bool rebuild = gen_.choice(3) == 0;
+    const char* call = rebuild ? "minkq_scene_rebuild_async" : "minkq_scene_refit_async";
+    // Half the scenes without the reservation get it now (a simulator reserves before its loop).
+    if (!null_scene && !(rebuild ? s->reserved_rebuild : s->reserved_refit) && gen_.choice(2))
+      reserve_on(s, false, rebuild || gen_.choice(2) ? MINKQ_RESERVE_REBUILD : MINKQ_RESERVE_REFIT, reserve_capacity());
+    Buffer v = gen_.buffer(12, Fill::kCoordinates, "vertices", null_scene ? SIZE_MAX : s->vertices, 0, 32);
+    switch (gen_.choice(4)) {
+      case 0: case 1: v.make_finite3(); break;
+      case 2:  // one NaN or infinity at a chosen record and axis (maybe after others)
+        if (v.honest && v.stride >= 12 && v.count > 0) {
+          const size_t i = size_t(gen_.choice(int(std::min<size_t>(v.count, 64))));
+          const float bad_value = gen_.choice(2) ? std::numeric_limits<float>::quiet_NaN() : (gen_.choice(2) ? INFINITY : -INFINITY);
+          std::memcpy(v.storage.data() + i * v.stride + 4 * size_t(gen_.choice(3)), &bad_value, 4);
+          v.non_finite = true;
+        }
+        break;
+      default: break;  // as generated
+    }
+    Misuse m;
+    m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+    if (!null_scene) {
+      m.add(rebuild ? !s->reserved_rebuild : !s->reserved_refit, MINKQ_ERROR_INVALID_ARGUMENT,
+            rebuild ? "no MINKQ_RESERVE_REBUILD" : "no MINKQ_RESERVE_REFIT");
+      m.add(v.count != s->vertices, MINKQ_ERROR_INVALID_ARGUMENT, "vertex count differs");
+    }
+    m.merge(v.misuse);
+    const int64_t bad = m.none() ? v.first_non_finite3() : -1;
+    if (m.none() && (bad >= 0) != v.non_finite) failure("harness: first_non_finite3 disagrees with the generator");
+    const uint64_t before = null_scene ? 0 : scene_full_state(*s);
+    const double growth_before = null_scene ? 0.0 : scene_growth(*s);
+    const minkq_stream strm = stream();
+    minkq_scene* handle = null_scene ? nullptr : s->handle;
+    const minkq_status st = rebuild ? minkq_scene_rebuild_async(handle, v.desc, strm)
+                                    : minkq_scene_refit_async(handle, v.desc, strm);
+    expect(call, st, m);
+    if (null_scene) return;
+    const uint64_t after = scene_full_state(*s);
+    const double growth = scene_growth(*s);
+    if (st != MINKQ_SUCCESS) {
+      if (after != before) failure(std::string("a failed ") + call + " changed the scene's positions");
+      if (growth != growth_before) failure(std::string("a failed ") + call + " changed the tree growth");
+      return;
+    }
+    if (rebuild && growth != 1.0)
+      failure(std::string(call) + ": tree growth " + std::to_string(growth) + " after the rebuild, not 1");
+    if (bad >= 0) {
+      note("  (non-finite vertex " + std::to_string(bad) + ": pending " +
+           (s->pending.call ? "already set" : "recorded") + ")");
+      if (after != before) failure(std::string(call) + " with a non-finite vertex changed the scene's positions");
+      // A refit to the kept positions leaves every box, so the growth, as it was.
+      if (!rebuild && growth != growth_before)
+        failure(std::string(call) + " with a non-finite vertex changed the tree growth from " +
+                std::to_string(growth_before) + " to " + std::to_string(growth));
+      if (s->pending.call == 0) s->pending = {rebuild ? 2 : 1, bad + (g_inject ? 1 : 0)};
+      ++g_async_non_finite;
+      if (gen_.choice(3) == 0) scene_query_async_on(s, false);
+      if (gen_.choice(2) == 0) async_status_on(s, false);
+      return;
+    }
+    // The reference: the blocking call with the same vertices must leave the same state (a
+    // refit to the positions the scene already holds changes no pair and no box).
+    const minkq_status bs = rebuild ? minkq_scene_rebuild(s->handle, v.desc) : minkq_scene_refit(s->handle, v.desc);
+    expect(rebuild ? "minkq_scene_rebuild (reference)" : "minkq_scene_refit (reference)", bs, Misuse{});
+    if (scene_full_state(*s) != after)
+      failure(std::string(call) + ": the scene's pairs differ from those of the blocking call with the same vertices");
+    ++g_async_moves;
+    const double blocking_growth = scene_growth(*s);
+    if (blocking_growth != growth)
+      failure(std::string(call) + ": tree growth " + std::to_string(growth) + " but the blocking call then gives " +
+              std::to_string(blocking_growth));
+    if (gen_.choice(3) == 0) scene_query_async_on(s, false);
+    if (gen_.choice(4) == 0) async_status_on(s, false);
+  }
+
+  // An asynchronous query's outputs: exactly `capacity` pairs followed by guard words (all
+  // preset), a count word, or declarations that must be rejected.
+  static constexpr int32_t kGuard = -777;
+  static constexpr size_t kGuardWords = 6;
+  static constexpr uint64_t kCountSentinel = 0xDEADBEEFCAFEull;
+  struct AsyncOutput {
+    std::vector<int32_t> raw;  // 2 * capacity + kGuardWords (only the guards for declared-only capacities)
+    int32_t* data = nullptr;
+    size_t capacity = 0;
+    bool declared_only = false;  // capacity not held: rejected
+    Misuse misuse;
+  };
+  AsyncOutput async_output(uint64_t needed) {
+    AsyncOutput o;
+    switch (gen_.choice(8)) {
+      case 0: o.capacity = 0; break;
+      case 1: o.capacity = needed > 0 ? size_t(needed - 1) : 0; break;
+      case 2: o.capacity = size_t(needed) + size_t(gen_.choice(4)); break;
+      case 3: o.capacity = size_t(gen_.choice(4)); break;
+      default: o.capacity = size_t(needed); break;
+    }
+    o.raw.assign(2 * o.capacity + kGuardWords, kGuard);
+    o.data = o.capacity || gen_.choice(2) ? o.raw.data() : nullptr;
+    if (gen_.rarely()) {
+      const int c = gen_.choice(3);
+      o.declared_only = true;
+      o.raw.assign(kGuardWords, kGuard);
+      if (c == 0) {
+        o.data = nullptr;
+        o.capacity = 1 + size_t(gen_.choice(3));
+        o.misuse.add(true, MINKQ_ERROR_INVALID_ARGUMENT, "out_pairs NULL with capacity");
+      } else {
+        o.data = o.raw.data();
+        o.capacity = c == 1 ? SIZE_MAX : SIZE_MAX / 8 + 1;
+        o.misuse.add(true, MINKQ_ERROR_SIZE_OVERFLOW, "capacity overflows");
+      }
+    }
+    return o;
+  }
+
+  // Checks an asynchronous query's outputs after the call: `ok` whether it succeeded; `needed`
+  // and `expected` the blocking query's count and canonical pairs.
+  void check_async_output(const char* call, bool ok, const AsyncOutput& o, const uint64_t* count_word,
+                          uint64_t count_value, const SceneSlot& s, const QueryArgs& a, uint64_t needed,
+                          const std::vector<int32_t>& expected) {
+    const size_t held = o.declared_only ? 0 : 2 * o.capacity;
+    for (size_t i = held; i < o.raw.size(); ++i)
+      if (o.raw[i] != kGuard) failure(std::string(call) + " wrote past the capacity (guard word " + std::to_string(i - held) + ")");
+    if (!ok) {
+      if (count_word && count_value != kCountSentinel) failure(std::string(call) + " failed but wrote the count");
+      for (size_t i = 0; i < held; ++i)
+        if (o.raw[i] != kGuard) failure(std::string(call) + " failed but wrote pairs");
+      return;
+    }
+    if (count_value != needed)
+      failure(std::string(call) + ": count " + std::to_string(count_value) + " but the blocking query finds " +
+              std::to_string(needed));
+    ++(needed > o.capacity ? g_async_short : g_async_fit);
+    if (needed > o.capacity) {  // the CPU writes none (minkq.h)
+      for (size_t i = 0; i < held; ++i)
+        if (o.raw[i] != kGuard) failure(std::string(call) + ": the pairs do not fit, yet the CPU wrote some");
+      return;
+    }
+    for (size_t i = 2 * size_t(needed); i < held; ++i)
+      if (o.raw[i] != kGuard) failure(std::string(call) + " wrote past the pairs it counted");
+    const uint32_t flags = a.flags & uint32_t(MINKQ_QUERY_CANONICAL);  // no digest here
+    check_pairs(call, o.raw.data(), needed, queries_of(s, a.kind), prims_of(s, a.kind), a.kind == MINKQ_QUERY_EE,
+                flags, 0);
+    std::vector<int32_t> got(o.raw.begin(), o.raw.begin() + 2 * std::ptrdiff_t(needed));
+    if (a.flags & MINKQ_QUERY_CANONICAL) {
+      if (got != expected) failure(std::string(call) + ": canonical pairs differ from the blocking query's (in order)");
+      return;
+    }
+    auto as_set = [](const std::vector<int32_t>& flat) {
+      std::vector<std::pair<int32_t, int32_t>> p(flat.size() / 2);
+      for (size_t i = 0; i < p.size(); ++i) p[i] = {flat[2 * i], flat[2 * i + 1]};
+      std::sort(p.begin(), p.end());
+      return p;
+    };
+    if (as_set(got) != as_set(expected)) failure(std::string(call) + ": pairs differ from the blocking query's set");
+  }
+
+  // The asynchronous checks of one description beyond the blocking query's: DIGEST and STATS
+  // are unsupported, canonical order needs the capacity reserved.
+  void async_desc_misuse(Misuse& m, const QueryArgs& a, const SceneSlot* s, bool null_scene, size_t capacity,
+                         const char* which) {
+    if (a.null_desc) return;
+    m.add(a.flags & uint32_t(MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS), MINKQ_ERROR_UNSUPPORTED,
+          std::string(which) + " DIGEST or STATS");
+    if (!null_scene)
+      m.add((a.flags & MINKQ_QUERY_CANONICAL) && capacity > s->reserved_canonical, MINKQ_ERROR_INVALID_ARGUMENT,
+            std::string(which) + " canonical capacity " + std::to_string(capacity) + " over the reservation " +
+                std::to_string(s->reserved_canonical));
+  }
+
+  void scene_query_async() {
+    bool null_scene;
+    SceneSlot* s = live_scene(&null_scene);
+    scene_query_async_on(s, null_scene);
+  }
+  void scene_query_async_on(SceneSlot* s, bool null_scene) {
+    QueryArgs a = query_args(s, null_scene, -1, true);
+    Misuse m = a.misuse;
+    uint64_t needed = 0;
+    std::vector<int32_t> expected;
+    const bool desc_ok = m.none() && !(a.flags & (MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS));
+    if (desc_ok && !reference_count(s->handle, a.desc, &needed, &expected))
+      failure("a valid query failed through minkq_scene_query_result: " + std::string(minkq_last_error_message()));
+    AsyncOutput o = async_output(needed);
+    m.merge(o.misuse);
+    async_desc_misuse(m, a, s, null_scene, o.capacity, "query");
+    const bool null_count = gen_.rarely() && gen_.choice(2);
+    m.add(null_count, MINKQ_ERROR_INVALID_ARGUMENT, "out_count NULL");
+    uint64_t count = kCountSentinel;
+    const uint64_t before = null_scene ? 0 : scene_full_state(*s);
+    const minkq_status st = minkq_scene_query_async(null_scene ? nullptr : s->handle, a.null_desc ? nullptr : &a.desc,
+                                                    o.data, o.capacity, null_count ? nullptr : &count, stream());
+    expect("minkq_scene_query_async", st, m);
+    if (null_scene) return;
+    check_async_output("minkq_scene_query_async", st == MINKQ_SUCCESS, o, null_count ? nullptr : &count, count, *s, a,
+                       needed, expected);
+    if (scene_full_state(*s) != before) failure("minkq_scene_query_async changed the scene");
+  }
+
+  void scene_query_vt_ee_async() {
+    bool null_scene;
+    SceneSlot* s = live_scene(&null_scene);
+    const QueryArgs vt = query_args(s, null_scene, MINKQ_QUERY_VT, true);
+    const QueryArgs ee = query_args(s, null_scene, MINKQ_QUERY_EE, true);
+    Misuse m = vt.misuse;
+    m.merge(ee.misuse);
+    m.add(!vt.null_desc && vt.kind != MINKQ_QUERY_VT, MINKQ_ERROR_INVALID_ARGUMENT, "vt_query not VT");
+    m.add(!ee.null_desc && ee.kind != MINKQ_QUERY_EE, MINKQ_ERROR_INVALID_ARGUMENT, "ee_query not EE");
+    const uint32_t unsupported = MINKQ_QUERY_DIGEST | MINKQ_QUERY_STATS;
+    uint64_t needed[2] = {0, 0};
+    std::vector<int32_t> expected[2];
+    if (m.none() && !(vt.flags & unsupported) && !(ee.flags & unsupported) &&
+        !(reference_count(s->handle, vt.desc, &needed[0], &expected[0]) &&
+          reference_count(s->handle, ee.desc, &needed[1], &expected[1])))
+      failure("a valid query failed through minkq_scene_query_result: " + std::string(minkq_last_error_message()));
+    AsyncOutput o[2] = {async_output(needed[0]), async_output(needed[1])};
+    m.merge(o[0].misuse);
+    m.merge(o[1].misuse);
+    async_desc_misuse(m, vt, s, null_scene, o[0].capacity, "vt_query");
+    async_desc_misuse(m, ee, s, null_scene, o[1].capacity, "ee_query");
+    uint64_t counts[2] = {kCountSentinel, kCountSentinel};
+    uint64_t* vt_count = &counts[0];
+    uint64_t* ee_count = &counts[1];
+    switch (gen_.choice(16)) {
+      case 0: vt_count = nullptr; m.add(true, MINKQ_ERROR_INVALID_ARGUMENT, "vt_count NULL"); break;
+      case 1: ee_count = nullptr; m.add(true, MINKQ_ERROR_INVALID_ARGUMENT, "ee_count NULL"); break;
+      case 2: ee_count = vt_count; m.add(true, MINKQ_ERROR_INVALID_ARGUMENT, "vt_count == ee_count"); break;
+      default: break;
+    }
+    const uint64_t before = null_scene ? 0 : scene_full_state(*s);
+    const minkq_status st = minkq_scene_query_vt_ee_async(
+        null_scene ? nullptr : s->handle, vt.null_desc ? nullptr : &vt.desc, ee.null_desc ? nullptr : &ee.desc,
+        o[0].data, o[0].capacity, vt_count, o[1].data, o[1].capacity, ee_count, stream());
+    expect("minkq_scene_query_vt_ee_async", st, m);
+    if (null_scene) return;
+    const bool ok = st == MINKQ_SUCCESS;
+    if (ok && ee_count == vt_count) failure("minkq_scene_query_vt_ee_async succeeded with vt_count == ee_count");
+    check_async_output("minkq_scene_query_vt_ee_async (VT)", ok, o[0], vt_count, counts[0], *s, vt, needed[0],
+                       expected[0]);
+    check_async_output("minkq_scene_query_vt_ee_async (EE)", ok, o[1], ee_count, ee_count ? *ee_count : kCountSentinel,
+                       *s, ee, needed[1], expected[1]);
+    if (scene_full_state(*s) != before) failure("minkq_scene_query_vt_ee_async changed the scene");
+  }
+
+  // minkq_scene_async_status: the pending error of the model, once, with a message naming the
+  // call and the vertex; then SUCCESS.
+  void scene_async_status() {
+    bool null_scene;
+    SceneSlot* s = live_scene(&null_scene);
+    async_status_on(s, null_scene);
+  }
+  void async_status_on(SceneSlot* s, bool null_scene) {
+    const int times = gen_.choice(3) == 0 ? 2 : 1;
+    for (int k = 0; k < times; ++k) {
+      Misuse m;
+      m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
+      const PendingModel pending = null_scene ? PendingModel{} : s->pending;
+      const uint64_t before = null_scene ? 0 : scene_full_state(*s);
+      const minkq_status st = minkq_scene_async_status(null_scene ? nullptr : s->handle, stream());
+      const std::string message = minkq_last_error_message();
+      expect("minkq_scene_async_status", st, m, pending.call ? MINKQ_ERROR_NON_FINITE : MINKQ_SUCCESS);
+      if (null_scene) return;
+      if (st == MINKQ_ERROR_NON_FINITE) {
+        ++g_async_pending;
+        const std::string want = std::string(pending.call == 2 ? "minkq_scene_rebuild_async" : "minkq_scene_refit_async") +
+                                 ": vertex " + std::to_string(pending.vertex) + " ";
+        if (message.compare(0, want.size(), want) != 0 || message.find("non-finite") == std::string::npos)
+          failure("minkq_scene_async_status: message \"" + message + "\" does not name the call and vertex (\"" + want +
+                  "...\")");
+      }
+      s->pending = {};
+      if (scene_full_state(*s) != before) failure("minkq_scene_async_status changed the scene");
+    }
+  }
+
   void misc() {
     switch (gen_.choice(6)) {
       case 0: {
@@ -876,8 +1368,12 @@ class Session {
 
 void at_exit() {
   std::fprintf(stderr, "minkq_fuzz_capi at exit: inputs %llu, calls checked %llu (of which misuses answered with an "
-                       "error %llu), failures 0\n",
-               (unsigned long long)g_inputs, (unsigned long long)g_calls, (unsigned long long)g_errors);
+                       "error %llu), failures 0; stream-ordered past the checks: %llu refits/rebuilds (+%llu non-finite, "
+                       "%llu pending errors reported), %llu queries fitting, %llu not\n",
+               (unsigned long long)g_inputs, (unsigned long long)g_calls, (unsigned long long)g_errors,
+               (unsigned long long)g_async_moves, (unsigned long long)g_async_non_finite,
+               (unsigned long long)g_async_pending, (unsigned long long)g_async_fit,
+               (unsigned long long)g_async_short);
 }
 
 std::unique_ptr<tbb::global_control> g_threads;
@@ -889,6 +1385,8 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   const int n = threads ? std::atoi(threads) : 1;
   if (n > 0) g_threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, n);
   g_verbose = std::getenv("MINKQ_FUZZ_VERBOSE") != nullptr;
+  const char* inject = std::getenv("MINKQ_FUZZ_INJECT");
+  g_inject = inject && std::strcmp(inject, "0") != 0;
   std::atexit(at_exit);
   return 0;
 }
