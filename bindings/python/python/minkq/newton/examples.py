@@ -6,8 +6,8 @@
 
 :func:`minkq.newton.install` first, then Newton's own entry point (``python -m newton.examples``:
 ``newton.examples.main``) with the same arguments, so the example itself runs unmodified, graph
-capture included, on the CPU device. On a CUDA device the examples' graph capture stops with
-minkq's RuntimeError (capture on CUDA is not supported yet): pass ``--device cpu``.
+capture included, on the CPU or a CUDA device (where the detector records only device work;
+not yet run on a GPU).
 """
 
 from __future__ import annotations
@@ -21,8 +21,7 @@ USAGE = """usage: python -m minkq.newton.examples <example_name> [options]
 Runs Newton's example <example_name> (as `python -m newton.examples <example_name>` does) with
 minkq.newton.install() applied: SolverVBD and CollisionPipeline build minkq's
 TriMeshCollisionDetector. `python -m minkq.newton.examples <example_name> --help` lists the
-example's options (e.g. --viewer null --num-frames 10 --device cpu). On CUDA the examples'
-graph capture is not supported yet (minkq raises RuntimeError): pass --device cpu."""
+example's options (e.g. --viewer null --num-frames 10 --device cpu)."""
 
 
 def self_contact_examples() -> List[str]:
