@@ -219,7 +219,7 @@ class CudaTree {
     scratch_.sort.temp.ensure(std::max(scan_bytes, scratch_.sort.temp.size()));
     area_temp_.ensure(std::max<size_t>(area_bytes, 1));
     if (nodes_.size() < size_t(inner)) {  // room for every node count, keeping the tree built now
-      DeviceBuffer<BvhNode> grown(size_t(inner));
+      DeviceBuffer<BvhNode> grown{static_cast<size_t>(inner)};
       copy(grown.data(), nodes_.data(), size_t(node_capacity_) * sizeof(BvhNode), cudaMemcpyDeviceToDevice);
       nodes_ = std::move(grown);
     }
