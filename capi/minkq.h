@@ -324,7 +324,7 @@ minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices
 /* minkq_scene_query, enqueued on `stream`: writes the exact number of pairs to *out_count (a
  * uint64_t in device memory on CUDA, host memory on the CPU), also when it exceeds capacity,
  * and min(count, capacity) of the pairs to out_pairs (device memory on CUDA, host on the CPU),
- * never past it: which ones, when they do not all fit, is unspecified (and not sorted). A
+ * never past it: which ones, and in what order, when they do not all fit, is unspecified. A
  * simulator grows its buffer between steps when the count says so. CANONICAL sorts the pairs
  * when they fit and needs capacity <= the reserved canonical capacity. Errors (at once): those
  * of minkq_scene_query for the description and buffers; INVALID_ARGUMENT for a NULL out_count,

@@ -618,7 +618,7 @@ class Scene(_SizedQueries):
         exact number of pairs to ``out_count[0]`` (a (1,) uint64 or int64 array), also when it
         exceeds the capacity of ``out_pairs`` ((capacity, 2) int32, C-contiguous), and
         min(count, capacity) of the pairs, never past it (which ones, when they do not all fit,
-        is unspecified, and unsorted). Never :class:`CapacityError`: read the count, and grow the array
+        is unspecified, as is their order). Never :class:`CapacityError`: read the count, and grow the array
         between steps when it says so. On a CUDA device both arrays are device memory on the
         scene's GPU, written when the stream runs the work (the count is never copied to the
         host); on the CPU they are host memory, written when this returns. ``stream`` as in

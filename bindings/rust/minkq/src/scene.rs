@@ -755,7 +755,7 @@ impl Scene {
     /// [`Scene::query_to`], enqueued on `stream` (`minkq_scene_query_async`): writes the exact
     /// number of pairs to `count`, also when it exceeds `out`'s capacity, and min(count,
     /// capacity) of the pairs to `out`, never past it (which ones, when they do not all fit, is
-    /// unspecified, and unsorted). Never [`Error::Capacity`]: a simulator reads the
+    /// unspecified, as is their order). Never [`Error::Capacity`]: a simulator reads the
     /// count and grows its buffer between steps. On a CUDA device `out` and `count` are device
     /// memory, written by the enqueued work after this returns (the promise of their
     /// `from_raw_parts` lasts until it has run); on the CPU they are host memory, written when
