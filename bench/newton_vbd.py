@@ -27,6 +27,7 @@ Needs warp-lang 1.19 and newton 1.8 (bindings/test.sh's venv) and minkq importab
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import time
 
@@ -113,6 +114,17 @@ def _intersecting_pairs(model, positions) -> int:
     detector = NewtonDetector(model, vertex_positions=positions)
     detector.triangle_triangle_intersection_detection()
     return int(detector.triangle_intersecting_triangles_count.numpy().sum()) // 2
+
+
+def _cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
 
 
 def _model(cells: int, side: float):
@@ -221,7 +233,8 @@ def main() -> None:
         minkq.newton.uninstall()
     base = rows[0]["ms_per_substep"]
     device = wp.get_device(args.device)
-    where = f"{device} ({platform.processor() or platform.machine()})" if device.is_cpu else f"{device} ({device.name})"
+    where = f"{device} ({_cpu_model()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f})" if device.is_cpu \
+        else f"{device} ({device.name})"
     lines = [
         f"Newton VBD, twisted {args.side} m sheet, {args.cells}x{args.cells} cells (edges {rows[0]['edge'] * 1e3:.2f} mm), "
         f"margin {rows[0]['margin'] * 1e3:.2f} mm, {args.frames} frames x 10 substeps, on {where}",
