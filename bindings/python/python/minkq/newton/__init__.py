@@ -289,8 +289,10 @@ _DISPATCH = ctypes.cast(_dispatch_pointer_keepalive, ctypes.c_void_p).value
 
 @wp.func_native(
     """
+    #if !defined(__CUDA_ARCH__)  // host code only: the module is compiled for CUDA devices too
     typedef void (*minkq_host_call)(unsigned long long);
     ((minkq_host_call)fn)(token);
+    #endif
     """
 )
 def _call_host(fn: wp.uint64, token: wp.uint64): ...
