@@ -5,33 +5,12 @@
 //! unsupported; missing reservations and memory of the wrong kind are refused at once; a
 //! non-finite vertex is reported by `async_status`, which clears it, and leaves the scene's
 //! positions as they were.
+mod common;
+use common::{grid_triangles, Rng};
+
 use minkq::{
     Buffer, CountOut, Device, Error, Memory, Mode, PairsOut, Query, QueryFlags, Reserve, Scene, SceneDesc, Stream,
 };
-
-/// splitmix64: the same numbers on every platform.
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        ((z ^ (z >> 31)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
-fn grid_triangles(n: i32) -> Vec<[i32; 3]> {
-    let mut triangles = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let v00 = j * n + i;
-            triangles.push([v00, v00 + 1, v00 + n + 1]);
-            triangles.push([v00, v00 + n + 1, v00 + n]);
-        }
-    }
-    triangles
-}
 
 /// An n x n sheet rolled up about 1.4 turns (layers ~0.035 apart), jittered; `phase` shifts
 /// the roll so that successive steps move every vertex.

@@ -2,6 +2,9 @@
 //! negatives and the containment chain of every mode, before and after refit and rebuild
 //! (whose pairs are the same); tree growth; buffers and capacity; digests against an
 //! independent xxHash64; errors; threads.
+mod common;
+use common::{grid_triangles, Rng};
+
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
 use std::thread;
@@ -110,31 +113,6 @@ impl Mesh {
         }
         out
     }
-}
-
-/// splitmix64: the same numbers on every platform.
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        ((z ^ (z >> 31)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
-/// The two triangles of every cell of an n x n vertex grid (vertex j * n + i).
-fn grid_triangles(n: i32) -> Vec<[i32; 3]> {
-    let mut triangles = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let v00 = j * n + i;
-            triangles.push([v00, v00 + 1, v00 + n + 1]);
-            triangles.push([v00, v00 + n + 1, v00 + n]);
-        }
-    }
-    triangles
 }
 
 /// A crumpled n x n sheet folded over itself, so that it comes close to itself in many places.
