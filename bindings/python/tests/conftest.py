@@ -13,3 +13,12 @@ import minkq  # noqa: E402
 @pytest.fixture(scope="session")
 def device():
     return minkq.Device("cpu")
+
+
+@pytest.fixture(scope="session")
+def wp():
+    """Warp, initialised quietly (the tests that take it skip where it is not installed)."""
+    warp = pytest.importorskip("warp")
+    warp.config.quiet = True
+    warp.init()
+    return warp

@@ -260,14 +260,6 @@ def test_device_arrays_on_the_cpu_backend_are_refused_and_never_read(device, mes
 # ---- Warp (host arrays here; device arrays and graph capture where a GPU is) ----------------------
 
 
-@pytest.fixture(scope="module")
-def wp():
-    warp = pytest.importorskip("warp")
-    warp.config.quiet = True
-    warp.init()
-    return warp
-
-
 def test_warp_cpu_arrays(wp, device, mesh):
     xyz, tris = mesh
     positions = wp.array(xyz, dtype=wp.vec3, device="cpu")

@@ -212,14 +212,6 @@ def test_unknown_libraries_get_numpy_results_on_the_host(device, mesh):
 # ---- Warp (host here; device where a GPU is) ------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def wp():
-    warp = pytest.importorskip("warp")
-    warp.config.quiet = True
-    warp.init()
-    return warp
-
-
 def test_warp_arrays_in_and_out(wp, device, mesh):
     xyz, tris = mesh
     positions = wp.array(xyz, dtype=wp.vec3, device="cpu")
