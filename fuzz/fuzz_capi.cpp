@@ -296,6 +296,19 @@ struct SceneSlot {
   bool reserved_refit = false, reserved_rebuild = false;
   size_t reserved_canonical = 0;
   PendingModel pending;
+
+  // A scene just created on device slot `device`: its counts as the library reports them, no
+  // reservation, no pending error.
+  static SceneSlot of(minkq_scene* handle, int device, uint32_t flags) {
+    SceneSlot slot;
+    slot.handle = handle;
+    slot.device = device;
+    slot.flags = flags;
+    slot.vertices = minkq_scene_vertex_count(handle);
+    slot.triangles = minkq_scene_triangle_count(handle);
+    slot.edges = minkq_scene_edge_count(handle);
+    return slot;
+  }
 };
 struct BvhSlot {
   minkq_bvh* handle = nullptr;
@@ -528,13 +541,7 @@ class Session {
       return;
     }
     SceneSlot& slot_ref = st_.scenes[slot];
-    slot_ref = SceneSlot{};  // no reservation, no pending error
-    slot_ref.handle = out;
-    slot_ref.device = d;
-    slot_ref.flags = flags;
-    slot_ref.vertices = minkq_scene_vertex_count(out);
-    slot_ref.triangles = minkq_scene_triangle_count(out);
-    slot_ref.edges = minkq_scene_edge_count(out);
+    slot_ref = SceneSlot::of(out, d, flags);
     if (slot_ref.vertices != v.count || slot_ref.triangles != t.count) failure("scene counts differ from the desc");
     if (e.count > 0 && slot_ref.edges != e.count) failure("scene edge count differs from the given edges");
     if (e.count == 0 && !(flags & MINKQ_SCENE_EE) && slot_ref.edges != 0) failure("edges derived for a VT-only scene");
@@ -592,12 +599,7 @@ class Session {
     desc.edges = shim_buffer(nullptr, 0, 0, MINKQ_MEMORY_HOST);
     minkq_scene* out = nullptr;
     expect("minkq_scene_create (a valid scene)", minkq_scene_create(st_.devices[d], &desc, &out), Misuse{});
-    slot.handle = out;
-    slot.device = d;
-    slot.flags = flags;
-    slot.vertices = minkq_scene_vertex_count(out);
-    slot.triangles = minkq_scene_triangle_count(out);
-    slot.edges = minkq_scene_edge_count(out);
+    slot = SceneSlot::of(out, d, flags);
     if (slot.vertices != size_t(nv) || slot.triangles != size_t(nt)) failure("scene counts differ from the desc");
     if (gen_.choice(4) != 0) reserve_on(&slot, false, reserve_flags(), reserve_capacity());
     return &slot;
