@@ -233,6 +233,15 @@ struct OutputNames {
   std::string pairs, capacity, info;
 };
 
+// A pair buffer's pointer against its capacity (in pairs of 2 int32), named in messages.
+void require_pair_capacity(const int32_t* pairs, size_t capacity, const std::string& pairs_name,
+                           const std::string& capacity_name) {
+  require(capacity == 0 || pairs != nullptr, Status::kInvalidArgument,
+          pairs_name + " is NULL but " + capacity_name + " is " + std::to_string(capacity));
+  require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
+          capacity_name + " " + std::to_string(capacity) + " pairs overflows the address space");
+}
+
 // A caller's output buffer, checked.
 minkq::PairOutput checked_output(const minkq_device* device, int32_t* out_pairs, size_t capacity,
                                  const minkq_memory& out_memory, uint32_t flags, const minkq_query_info* info,
@@ -243,10 +252,7 @@ minkq::PairOutput checked_output(const minkq_device* device, int32_t* out_pairs,
           "out_memory is not a minkq_memory value");
   require(out_memory == MINKQ_MEMORY_HOST || device->kind == MINKQ_BACKEND_CUDA, Status::kInvalidArgument,
           name.pairs + " is in device memory but the device is " + device->name);
-  require(capacity == 0 || out_pairs != nullptr, Status::kInvalidArgument,
-          name.pairs + " is NULL but " + name.capacity + " is " + std::to_string(capacity));
-  require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
-          name.capacity + " " + std::to_string(capacity) + " pairs overflows the address space");
+  require_pair_capacity(out_pairs, capacity, name.pairs, name.capacity);
   if (out_memory == MINKQ_MEMORY_DEVICE && capacity > 0) device->backend->check_device_pointer(out_pairs, name.pairs);
   return {out_pairs, capacity, static_cast<minkq::Memory>(out_memory),
           (flags & (MINKQ_QUERY_DIGEST | MINKQ_QUERY_CANONICAL)) != 0};
@@ -406,10 +412,7 @@ minkq::PairOutput checked_async_output(const minkq_scene* scene, const minkq_que
           name + "->flags asks for a digest or stats, which need a host read: asynchronous queries support "
                  "MINKQ_QUERY_LEAF_EXACT and MINKQ_QUERY_CANONICAL");
   require(out_count != nullptr, Status::kInvalidArgument, count + " is NULL");
-  require(capacity == 0 || out_pairs != nullptr, Status::kInvalidArgument,
-          pairs + " is NULL but " + cap + " is " + std::to_string(capacity));
-  require(capacity <= SIZE_MAX / (2 * sizeof(int32_t)), Status::kSizeOverflow,
-          cap + " " + std::to_string(capacity) + " pairs overflows the address space");
+  require_pair_capacity(out_pairs, capacity, pairs, cap);
   const bool canonical = (query->flags & MINKQ_QUERY_CANONICAL) != 0;
   const size_t reserved = scene->store->reservation().canonical_capacity;
   require(!canonical || capacity <= reserved, Status::kInvalidArgument,
