@@ -854,7 +854,7 @@ int main(int argc, char** argv) {
       for (const std::string& name : {std::string("twist_target"), std::string("cloth_twist"), std::string("cloth_hanging"),
                                       std::string("softbody_gift")})
         o << compare_scene(make_scene(name, scale, 2, data), repeats, ok);
-      for (const RealMesh& m : real_meshes())
+      for (const RealMesh& m : available_real_meshes(data))
         if (m.name == "unisex_shirt" || m.name == "multilayer_drape") o << compare_scene(load_real_scene(m, data), repeats, ok);
       for (const double hr : {0.01, 1.0}) o << compare_fine_nodes_spread(200000, hr, repeats, ok);
       o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
@@ -950,7 +950,7 @@ int main(int argc, char** argv) {
         << table_head;
       for (const std::string& name : procedural_scene_names()) o << compare_contacts(make_scene(name, scale, 2, data), repeats, ok);
       o << compare_contacts(make_scene("twist_target", scale, 2, data), repeats, ok);
-      for (const RealMesh& m : real_meshes())
+      for (const RealMesh& m : available_real_meshes(data))
         if (m.name == "unisex_shirt" || m.name == "multilayer_drape" || m.name == "rod-twist3036")
           o << compare_contacts(load_real_scene(m, data), repeats, ok);
       o << "\nLoad average at end " << fmt(load_average(), 3) << ".\n";
@@ -973,7 +973,7 @@ int main(int argc, char** argv) {
       for (const std::string& name : procedural_scene_names())
         o << compare_fused(make_scene(name, scale, 2, data), device.get(), 3 * repeats, ok);
       o << compare_fused(make_scene("twist_target", scale, 2, data), device.get(), 3 * repeats, ok);
-      for (const RealMesh& m : real_meshes())
+      for (const RealMesh& m : available_real_meshes(data))
         if (m.name == "unisex_shirt" || m.name == "multilayer_drape")
           o << compare_fused(load_real_scene(m, data), device.get(), 3 * repeats, ok);
       o << compare_fused(make_scene("twist_target", 1e6, 2, data), device.get(), 3 * repeats, ok);

@@ -40,12 +40,13 @@ Runs the benchmark suites and writes Markdown tables and CSV files to --out.
 suites (--suites, comma separated; default scenes,real,sweep,scale):
   scenes  the eight Newton scenes at reference size plus REFERENCES.md's twisted sheet
           (256^2), every frame: build, refit, VT/EE in every mode, Embree VT, narrow phase
-  real    the real meshes of ../shared/data at r = 0.25 x mean edge
+  real    the real meshes (data/meshes.tar.xz, the larger ones from --data) at r = 0.25 x mean edge
   sweep   radius sweep 0.1x-8x mean edge on the last frame of each scene (real meshes to 2x)
   scale   large instances (--scale-triangles) of --scale-scenes
 
 options:
-  --data DIR              ../shared/data (default: the one beside the source tree)
+  --data DIR              the benchmark-only meshes (default: ../shared/data beside the source tree;
+                          a mesh in neither it nor data/meshes.tar.xz is skipped, by name)
   --out DIR               result folder (default: bench/results in the source tree)
   --quick                 smoke run (seconds): reference scenes, 2 frames, 1 repeat, no
                           warm-up, suites scenes only, written to --out (give one!)
@@ -835,7 +836,7 @@ int run(int argc, char** argv) {
       std::printf("| %s | %zu | %zu | %zu | %g | %.4g | %.3g | %.4g |\n", name.c_str(), sc.mesh.vertex_count(), sc.mesh.triangle_count(),
                   sc.mesh.edge_count(), sc.reference_radius, sc.mean_edge, sc.radius_factor, sc.radius_factor * sc.mean_edge);
     }
-    for (const auto& m : real_meshes()) {
+    for (const auto& m : available_real_meshes(opt.data_dir)) {
       if (opt.list_at > 0) break;
       const SceneFrames sc = load_real_scene(m, opt.data_dir);
       std::printf("| %s | %zu | %zu | %zu | – | %.4g | 0.25 | %.4g |\n", m.name.c_str(), sc.mesh.vertex_count(), sc.mesh.triangle_count(),
@@ -865,7 +866,7 @@ int run(int argc, char** argv) {
     }
   }
   if (opt.suites.count("real")) {
-    for (const auto& m : real_meshes()) {
+    for (const auto& m : available_real_meshes(opt.data_dir)) {
       CaseConfig cfg;
       cfg.suite = "real", cfg.repeats = opt.repeats, cfg.warmup = opt.warmup;
       run_scene(load_real_scene(m, opt.data_dir), cfg, opt, rep);
@@ -884,7 +885,7 @@ int run(int argc, char** argv) {
       }
     }
     for (const std::string real : {"unisex_shirt", "multilayer_drape"})
-      for (const auto& m : real_meshes()) {
+      for (const auto& m : available_real_meshes(opt.data_dir)) {
         if (m.name != real) continue;
         const SceneFrames sc = load_real_scene(m, opt.data_dir);
         for (double f : {0.1, 0.25, 0.5, 1.0, 2.0}) {
@@ -914,7 +915,7 @@ int run(int argc, char** argv) {
     write_file(out + "/scenes.md", header("Reference scenes: every frame, backend and mode", machine, opt, load_start) +
                                        detail_tables(rep, "scenes"));
   if (opt.suites.count("real"))
-    write_file(out + "/real.md", header("Real meshes (../shared/data), r = 0.25 x mean edge", machine, opt, load_start) +
+    write_file(out + "/real.md", header("Real meshes (data/meshes.tar.xz and ../shared/data), r = 0.25 x mean edge", machine, opt, load_start) +
                                      detail_tables(rep, "real"));
   if (opt.suites.count("scale"))
     write_file(out + "/scale.md", header("Large instances", machine, opt, load_start) + detail_tables(rep, "scale"));

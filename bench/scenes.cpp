@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <stdexcept>
@@ -11,6 +13,20 @@
 namespace minkq::bench {
 
 namespace ref = minkq::reference;
+
+std::string find_mesh(const std::string& relative, const std::string& data_dir) {
+  for (const std::string dir : {std::string(MINKQ_BENCH_MESH_DIR), data_dir})
+    if (!dir.empty() && std::filesystem::is_regular_file(dir + "/" + relative)) return dir + "/" + relative;
+  return "";
+}
+
+std::string mesh_path(const std::string& relative, const std::string& data_dir) {
+  const std::string path = find_mesh(relative, data_dir);
+  if (path.empty())
+    throw std::runtime_error("bench: mesh " + relative + " is in neither " + MINKQ_BENCH_MESH_DIR + " (data/meshes.tar.xz) nor " +
+                             data_dir + " (--data DIR)");
+  return path;
+}
 
 namespace {
 
@@ -121,7 +137,7 @@ const std::map<std::string, Recipe>& recipes() {
         "Newton's curvedSurface (12 triangles; midpoint-subdivided to scale); the part at x > 0 hinges about the "
         "y axis by 150 deg x s x min(x, 1), folding one arm onto the other",
         [](ref::Mesh& m, double mult, const std::string& data) {
-          const ref::Mesh base = load_subdivided(data + "/newton/curvedSurface.obj", mult);
+          const ref::Mesh base = load_subdivided(mesh_path("newton/curvedSurface.obj", data), mult);
           m.xyz = base.xyz;
           m.tris = base.tris;
           const ref::Mesh rest = m;
@@ -307,7 +323,7 @@ const std::map<std::string, Recipe>& recipes() {
         "Newton's unisex_shirt (cm; midpoint-subdivided to scale) pressed flat front-to-back: "
         "z -> zc + (z - zc)(1 - s (1 - r / (2 x 27.5 cm))), so front and back close from 27.5 cm to r/2",
         [](ref::Mesh& m, double mult, const std::string& data) {
-          const ref::Mesh base = load_subdivided(data + "/newton/unisex_shirt.obj", mult);
+          const ref::Mesh base = load_subdivided(mesh_path("newton/unisex_shirt.obj", data), mult);
           m.xyz = base.xyz;
           m.tris = base.tris;
           const ref::Mesh rest = m;
@@ -416,11 +432,25 @@ const std::vector<RealMesh>& real_meshes() {
   return list;
 }
 
+std::vector<RealMesh> available_real_meshes(const std::string& data_dir) {
+  std::vector<RealMesh> found;
+  for (const RealMesh& m : real_meshes()) {
+    if (!find_mesh(m.path, data_dir).empty()) {
+      found.push_back(m);
+      continue;
+    }
+    std::fprintf(stderr, "bench: skipped real mesh %s: %s is in neither %s nor %s (benchmark-only meshes: "
+                 "../shared/data beside the repository, or --data DIR)\n",
+                 m.name.c_str(), m.path.c_str(), MINKQ_BENCH_MESH_DIR, data_dir.c_str());
+  }
+  return found;
+}
+
 SceneFrames load_real_scene(const RealMesh& m, const std::string& data_dir) {
   SceneFrames scene;
   scene.name = m.name;
   scene.recipe = "real mesh " + m.path + " (static, one frame)";
-  scene.mesh = ref::load_mesh(data_dir + "/" + m.path);
+  scene.mesh = ref::load_mesh(mesh_path(m.path, data_dir));
   scene.frames = {scene.mesh.xyz};
   scene.mean_edge = ref::mean_edge_length(scene.mesh);
   scene.radius_factor = 0.25;

@@ -34,16 +34,26 @@ const std::vector<std::string>& procedural_scene_names();
 // Builds a procedural scene (one of procedural_scene_names(), or "twist_target": the twisted
 // unit sheet of REFERENCES.md, 3 turns, radius 0.25 x mean edge). target_triangles <= 0 gives
 // the reference size; otherwise resolution (or midpoint subdivision, for the scenes made from
-// meshes) is raised to come close to it. data_dir is ../shared/data (curvedSurface and
-// unisex_shirt are loaded from it). frames >= 1.
+// meshes) is raised to come close to it. curvedSurface and unisex_shirt come from
+// mesh_path(…, data_dir). frames >= 1.
 SceneFrames make_scene(const std::string& name, double target_triangles, int frames, const std::string& data_dir);
 
 struct RealMesh {
   std::string name;  // short name for tables
-  std::string path;  // relative to data_dir
+  std::string path;  // for mesh_path
 };
-// The real meshes of ../shared/data (single static frames).
+// Where a mesh (a path such as "newton/bear.obj") lies: the repository's meshes
+// (data/meshes.tar.xz, unpacked by CMake into MINKQ_BENCH_MESH_DIR) first, then data_dir (the
+// benchmark-only meshes: ../shared/data beside the repository, or --data DIR). find_mesh gives
+// "" when it is in neither; mesh_path throws, naming the file and both folders.
+std::string find_mesh(const std::string& relative, const std::string& data_dir);
+std::string mesh_path(const std::string& relative, const std::string& data_dir);
+
+// The real meshes of the benchmarks (single static frames): those of data/meshes.tar.xz and the
+// larger ones of ../shared/data.
 const std::vector<RealMesh>& real_meshes();
+// The real meshes that find_mesh finds; each missing one is named on stderr, with the reason.
+std::vector<RealMesh> available_real_meshes(const std::string& data_dir);
 // Loads one real mesh as a one-frame scene with radius_factor 0.25 (the REFERENCES convention).
 SceneFrames load_real_scene(const RealMesh& m, const std::string& data_dir);
 

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <string>
@@ -21,21 +23,25 @@ using P = const double[3];
 double pt(P p, P a, P b, P c) { return double(ref::point_triangle_distance(p, a, b, c)); }
 double ss(P p0, P p1, P q0, P q1) { return double(ref::segment_segment_distance(p0, p1, q0, q1)); }
 
-// The shared data folder: MINKQ_SHARED_DATA_DIR (compile definition), $MINKQ_DATA_DIR, or
-// ../shared/data beside the repository holding this file. "" when absent.
-std::string data_dir() {
-  std::vector<std::string> tries;
-#ifdef MINKQ_SHARED_DATA_DIR
-  tries.push_back(MINKQ_SHARED_DATA_DIR);
-#endif
-  if (const char* env = std::getenv("MINKQ_DATA_DIR")) tries.push_back(env);
-  std::string here = __FILE__;  // <repo>/tests/test_reference.cpp
-  here = here.substr(0, here.find_last_of('/'));
-  tries.push_back(here + "/../../shared/data");
+// A mesh of the repository's data/meshes.tar.xz, unpacked at configure time into the build tree
+// (MINKQ_MESH_DIR). A missing file fails the test that needs it, naming the file.
+std::string mesh_file(const std::string& relative) {
+  const std::string path = std::string(MINKQ_MESH_DIR) + "/" + relative;
   struct stat st;
-  for (const std::string& d : tries)
-    if (stat(d.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return d;
-  return "";
+  if (stat(path.c_str(), &st) != 0)
+    ADD_FAILURE() << "mesh " << path << " not found: it comes from data/meshes.tar.xz, unpacked when CMake configures";
+  return path;
+}
+
+// Big-endian 32-bit words, as a binary_big_endian PLY stores them.
+void put_be(std::ofstream& f, uint32_t w) {
+  const char b[4] = {char(w >> 24), char(w >> 16), char(w >> 8), char(w)};
+  f.write(b, 4);
+}
+void put_be(std::ofstream& f, float x) {
+  uint32_t w;
+  std::memcpy(&w, &x, 4);
+  put_be(f, w);
 }
 
 }  // namespace
@@ -228,19 +234,35 @@ TEST(ReferenceContacts, DropIncidentAndClosedBound) {
 }
 
 TEST(ReferenceLoad, ObjAndPly) {
-  const std::string dir = data_dir();
-  if (dir.empty()) GTEST_SKIP() << "shared data folder (../shared/data) not found; set MINKQ_DATA_DIR";
-  const ref::Mesh bear = ref::load_mesh(dir + "/newton/bear.obj");
+  const ref::Mesh bear = ref::load_mesh(mesh_file("newton/bear.obj"));
   EXPECT_EQ(bear.vertex_count(), 1986u);
   EXPECT_EQ(bear.triangle_count(), 3968u);
   EXPECT_EQ(bear.edges, ref::derive_edges(bear.tris));
-  const ref::Mesh ball = ref::load_mesh(dir + "/scalable-ccd/cloth-ball_frames_cloth_ball92.ply");  // big-endian floats
-  EXPECT_EQ(ball.vertex_count(), 46598u);
-  EXPECT_EQ(ball.triangle_count(), 92230u);
-  const ref::Mesh arma = ref::load_mesh(dir + "/scalable-ccd/armadillo-rollers_frames_326.ply");  // little-endian doubles
+  const ref::Mesh arma = ref::load_mesh(mesh_file("scalable-ccd/armadillo-rollers_frames_326.ply"));  // little-endian doubles
   EXPECT_EQ(arma.vertex_count(), 12135u);
   EXPECT_EQ(arma.triangle_count(), 24242u);
   EXPECT_GT(ref::mean_edge_length(arma), 0.0);
+}
+
+TEST(ReferenceLoad, BigEndianPly) {
+  // As the Scalable-CCD frames store them: big-endian floats, a uchar-counted int list, and
+  // a quad (split into a fan).
+  const std::string path = testing::TempDir() + "minkq_reference_big_endian.ply";
+  const float xyz[12] = {0.5f, -1.25f, 3.0f, 1e7f, 2.0f, -0.0f, 1.5f, 1.5f, 1e-7f, -4.0f, 0.25f, 8.0f};
+  {
+    std::ofstream f(path, std::ios::binary);
+    f << "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+    for (float x : xyz) put_be(f, x);
+    f.put(char(3));
+    for (uint32_t i : {0u, 1u, 2u}) put_be(f, i);
+    f.put(char(4));
+    for (uint32_t i : {0u, 2u, 3u, 1u}) put_be(f, i);
+  }
+  const ref::Mesh m = ref::load_mesh(path);
+  std::remove(path.c_str());
+  EXPECT_EQ(m.xyz, std::vector<float>(xyz, xyz + 12));
+  EXPECT_EQ(m.tris, (std::vector<int32_t>{0, 1, 2, 0, 2, 3, 0, 3, 1}));
 }
 
 TEST(ReferenceLoad, AsciiPlyAndErrors) {

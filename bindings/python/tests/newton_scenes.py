@@ -7,8 +7,10 @@ formulas of oracle.py."""
 
 from __future__ import annotations
 
+import functools
 import math
 import os
+import tarfile
 from dataclasses import dataclass
 from typing import Callable, Dict, Optional, Tuple
 
@@ -18,27 +20,42 @@ import warp as wp
 import newton
 from oracle import point_triangle_sq, segment_segment_sq
 
-DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "..", "shared", "data")
-NEWTON_DATA = os.environ.get("MINKQ_NEWTON_DATA", os.path.join(DATA, "newton"))
+# The repository's meshes (data/README.md): read from the archive in place, member by member.
+MESHES = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "data", "meshes.tar.xz"))
 
 
 # ---- Meshes ----------------------------------------------------------------------------------
 
 
-def load_obj(path: str) -> Tuple[np.ndarray, np.ndarray]:
-    """Vertices and triangles (fans of polygons) of a Wavefront OBJ file."""
+@functools.lru_cache(maxsize=None)
+def mesh_text(name: str, archive: str = MESHES) -> str:
+    """The text of ``name`` (such as "newton/bear.obj") in the repository's mesh archive. A
+    missing archive or member raises FileNotFoundError naming it."""
+    if not os.path.isfile(archive):
+        raise FileNotFoundError(f"{archive} not found: the repository's test meshes (data/README.md)")
+    with tarfile.open(archive) as tar:
+        try:
+            member = tar.extractfile(name)
+        except KeyError:
+            member = None
+        if member is None:
+            raise FileNotFoundError(f"{name} is not in {archive} (data/README.md lists its files)")
+        return member.read().decode()
+
+
+def load_obj(name: str) -> Tuple[np.ndarray, np.ndarray]:
+    """Vertices and triangles (fans of polygons) of a Wavefront OBJ file of the mesh archive."""
     xyz, tris = [], []
-    with open(path) as f:
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            if parts[0] == "v":
-                xyz.append([float(x) for x in parts[1:4]])
-            elif parts[0] == "f":
-                ids = [int(p.split("/")[0]) for p in parts[1:]]
-                ids = [i - 1 if i > 0 else len(xyz) + i for i in ids]
-                tris += [[ids[0], ids[k], ids[k + 1]] for k in range(1, len(ids) - 1)]
+    for line in mesh_text(name).splitlines():
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] == "v":
+            xyz.append([float(x) for x in parts[1:4]])
+        elif parts[0] == "f":
+            ids = [int(p.split("/")[0]) for p in parts[1:]]
+            ids = [i - 1 if i > 0 else len(xyz) + i for i in ids]
+            tris += [[ids[0], ids[k], ids[k + 1]] for k in range(1, len(ids) - 1)]
     return np.array(xyz, np.float32), np.array(tris, np.int32)
 
 
@@ -154,11 +171,11 @@ def poker_cards(count: int = 52, seed: int = 42) -> list:
 
 
 def scenes() -> Dict[str, Callable[[], Scene]]:
-    """The Newton cloth scenes of ../shared/data (meshes and radii of its README), posed so that
-    they come close to themselves: name -> builder."""
+    """The Newton cloth scenes (meshes of data/meshes.tar.xz, radii of the Newton examples),
+    posed so that they come close to themselves: name -> builder."""
 
     def obj(name: str) -> Tuple[np.ndarray, np.ndarray]:
-        return load_obj(os.path.join(NEWTON_DATA, name))
+        return load_obj("newton/" + name)
 
     def cloth_twist() -> Scene:
         # The example's sheet (x 0.01, in the xz plane) wrung: rolled up with its layers closer

@@ -1,5 +1,5 @@
 """minkq.newton.TriMeshCollisionDetector against Newton's own detector (newton 1.8) and a
-double-precision oracle, on Newton's cloth scenes (../shared/data) and on a fine twisted sheet
+double-precision oracle, on Newton's cloth scenes (data/meshes.tar.xz) and on a fine twisted sheet
 whose short edges make Newton lose about half of its edge-edge contacts.
 
 "Where Newton is right" means: every pair on which the two detectors differ is either a true
