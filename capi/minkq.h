@@ -20,6 +20,9 @@
  * scenes and bvhs frees temporary device memory, which waits for all work on the GPU: such
  * calls are safe from several threads but do not overlap other threads' GPU work. Each call
  * selects its device for its duration and gives the calling thread's current device back.
+ * While a thread captures a CUDA graph in cudaStreamCaptureModeGlobal, a blocking minkq call
+ * on another thread (it may allocate, free and synchronise) invalidates that capture: capture
+ * in cudaStreamCaptureModeThreadLocal, or make no blocking calls until the capture ends.
  *
  * Memory: the library copies what it keeps (vertices, topology, boxes); a caller's arrays are
  * read during the call only. On CUDA, device arrays are read and written in place on the
@@ -277,7 +280,11 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
  *     buffers are checked as device buffers of blocking calls are;
  *   - the scene's scratch (see minkq_scene_reserve) is shared by its asynchronous calls:
  *     enqueue them on one stream, or order their streams; a blocking call runs on the calling
- *     thread's per-thread default stream and does not wait for work enqueued elsewhere.
+ *     thread's per-thread default stream and does not wait for work enqueued elsewhere;
+ *   - a captured graph keeps what the calls were given and the scene's device memory: the
+ *     radius, the capacities and every buffer's address. Blocking calls between replays
+ *     (refits, rebuilds, queries of any size) neither move nor outgrow the memory a graph
+ *     uses; but a larger pair buffer, another radius or other flags mean capturing again.
  * On the CPU the same calls run to completion before returning, on host memory
  * (vertices.memory MINKQ_MEMORY_HOST), and the stream is ignored. Both backends apply the same
  * rules, so a program tested on the CPU keeps them on CUDA.

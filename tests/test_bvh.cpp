@@ -11,6 +11,7 @@
 #include "cpu/tree.h"
 #include "minkq/queries.h"
 #include "test_util.h"
+#include "tree_counts.h"
 
 namespace minkq {
 namespace {
@@ -82,6 +83,35 @@ TEST(Bvh, invariants_hold_after_build_and_refit) {
     tree.refit(GivenBoxes{boxes.data()});
     check_tree(tree, boxes);
   }
+}
+
+// max_node_count(n) bounds the nodes of every build over n primitives, whatever their
+// positions: the CUDA tree sizes its nodes, arrival flags and refit by it once, at its first
+// build, so that a refit captured into a CUDA graph still covers every node, at the same
+// address, after a later rebuild keeps more of them (issue 30). The scenario is real: the same
+// triangles keep a different number of nodes flat and twisted, and the bound is reached.
+TEST(Bvh, max_node_count_bounds_every_build_over_the_same_primitives) {
+  using test::node_count;
+  auto triangle_boxes = [](const reference::Mesh& mesh) { return test::primitive_boxes(mesh, mesh.tris, 3); };
+  const std::vector<Box> flat = triangle_boxes(reference::twisted_sheet(48, 0.0));
+  const std::vector<Box> twisted = triangle_boxes(reference::twisted_sheet(48, 3.0));
+  ASSERT_EQ(flat.size(), twisted.size());
+  const int32_t n = int32_t(flat.size());
+  EXPECT_NE(node_count(flat, kLeafSize), node_count(twisted, kLeafSize))
+      << "the same triangles should keep a different number of nodes flat and twisted (so the first "
+         "build's count is too few for one of the two orders)";
+  for (int32_t leaf_size : {1, 2, 4, 8, kLeafSize}) {
+    EXPECT_LE(node_count(flat, leaf_size), max_node_count(n)) << "leaf size " << leaf_size;
+    EXPECT_LE(node_count(twisted, leaf_size), max_node_count(n)) << "leaf size " << leaf_size;
+  }
+  EXPECT_EQ(node_count(twisted, 1), max_node_count(n));  // a binary tree: every Karras node
+  test::Random rng(test::fresh_seed());
+  for (int32_t m : {0, 1, 2, 3, 17, 1000}) {
+    const std::vector<Box> boxes = random_boxes(rng, m, 1.0f);
+    for (int32_t leaf_size : {1, kLeafSize}) EXPECT_LE(node_count(boxes, leaf_size), max_node_count(m)) << m;
+  }
+  EXPECT_EQ(max_node_count(0), 0);
+  EXPECT_EQ(max_node_count(1), 1);
 }
 
 // The area cost is the sum of node_area over the nodes, over the root's half area: 1 as a

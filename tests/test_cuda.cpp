@@ -17,6 +17,7 @@
 #include "capi_util.h"
 #include "minkq/queries.h"
 #include "test_util.h"
+#include "tree_counts.h"
 
 #if defined(MINKQ_TEST_HAVE_CUDART)
 #include <cuda_runtime.h>
@@ -624,6 +625,37 @@ class DeviceAsyncMemory final : public test::AsyncMemory {
   std::vector<void*> blocks_;
 };
 
+// A CUDA graph recorded from what `record(check)` enqueues on `stream` (global capture mode)
+// and instantiated: `record` passes each minkq call's status to check(), which expects success
+// and keeps the message. ok() once recorded and instantiated without an error.
+class CapturedGraph {
+ public:
+  template <class Record>
+  CapturedGraph(cudaStream_t stream, Record record) : stream_(stream) {
+    EXPECT_EQ(cudaStreamBeginCapture(stream, cudaStreamCaptureModeGlobal), cudaSuccess);
+    bool called = true;
+    record([&](minkq_status status) {
+      EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
+      called = called && status == MINKQ_SUCCESS;
+    });
+    EXPECT_EQ(cudaStreamEndCapture(stream, &graph_), cudaSuccess);
+    if (called && graph_) EXPECT_EQ(cudaGraphInstantiate(&exec_, graph_, 0), cudaSuccess);
+  }
+  CapturedGraph(const CapturedGraph&) = delete;
+  CapturedGraph& operator=(const CapturedGraph&) = delete;
+  ~CapturedGraph() {
+    if (exec_) cudaGraphExecDestroy(exec_);
+    if (graph_) cudaGraphDestroy(graph_);
+  }
+  bool ok() const { return exec_ != nullptr; }
+  cudaError_t launch() const { return cudaGraphLaunch(exec_, stream_); }
+
+ private:
+  cudaStream_t stream_;
+  cudaGraph_t graph_ = nullptr;
+  cudaGraphExec_t exec_ = nullptr;
+};
+
 class CudaAsync : public Cuda {
  protected:
   void SetUp() override {
@@ -675,23 +707,19 @@ TEST_F(CudaAsync, captured_refit_and_queries_replay_over_moving_vertices) {
     const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL, r};
     const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL, r};
     cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
-    ASSERT_EQ(cudaStreamBeginCapture(stream, cudaStreamCaptureModeGlobal), cudaSuccess);
-    const minkq_status moved = rebuild ? minkq_scene_rebuild_async(s.scene.get(), vertices, stream)
-                                       : minkq_scene_refit_async(s.scene.get(), vertices, stream);
-    const minkq_status queried = minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts,
-                                                               ee_pairs, capacity, counts + 1, stream);
-    cudaGraph_t graph = nullptr;
-    ASSERT_EQ(cudaStreamEndCapture(stream, &graph), cudaSuccess);
-    ASSERT_EQ(moved, MINKQ_SUCCESS) << minkq_last_error_message();
-    ASSERT_EQ(queried, MINKQ_SUCCESS) << minkq_last_error_message();
-    cudaGraphExec_t exec = nullptr;
-    ASSERT_EQ(cudaGraphInstantiate(&exec, graph, 0), cudaSuccess);
+    const CapturedGraph graph(stream, [&](auto check) {
+      check(rebuild ? minkq_scene_rebuild_async(s.scene.get(), vertices, stream)
+                    : minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
+                                          counts + 1, stream));
+    });
+    ASSERT_TRUE(graph.ok());
     for (int step = 1; step <= 4; ++step) {
       Mesh next = mesh;
       reference::transform(next, 1.0 + 0.05 * step, 0.002 * step);
       for (size_t v = 0; v < next.vertex_count(); ++v) next.xyz[3 * v + 1] += 0.01f * float(std::cos(0.05 * double(v) * step));
       memory.write(positions, next.xyz.data(), next.xyz.size() * sizeof(float));
-      ASSERT_EQ(cudaGraphLaunch(exec, stream), cudaSuccess);
+      ASSERT_EQ(graph.launch(), cudaSuccess);
       const std::vector<uint64_t> count = memory.read_back(counts, 2);
       const minkq_buffer host = host_buffer(next.xyz.data(), next.vertex_count());
       ASSERT_EQ(rebuild ? minkq_scene_rebuild(s.blocking.get(), host) : minkq_scene_refit(s.blocking.get(), host),
@@ -704,8 +732,75 @@ TEST_F(CudaAsync, captured_refit_and_queries_replay_over_moving_vertices) {
       EXPECT_EQ(test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1]), ee_expected) << "replay " << step;
     }
     EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
-    cudaGraphExecDestroy(exec);
-    cudaGraphDestroy(graph);
+  }
+}
+
+// Issue 30: a captured graph keeps the addresses and launch sizes of the scene's device memory,
+// so the blocking calls between its replays must neither move nor outgrow them. A refit + VT +
+// EE graph is captured at positions whose trees keep fewer nodes; between replays a blocking
+// rebuild goes to positions whose trees keep more, and blocking canonical queries find more
+// pairs than the reserved canonical capacity (they grow the blocking queries' scratch). Every
+// replay must still give the CPU's pairs at its positions: with MINKQ_RESERVE_REBUILD, with
+// MINKQ_RESERVE_REFIT only, and with no reservation (a captured query alone, not canonical).
+TEST_F(CudaAsync, blocking_rebuilds_and_queries_between_replays_keep_a_captured_graph_valid) {
+  if (const char* blocking = std::getenv("CUDA_LAUNCH_BLOCKING"); blocking && std::string(blocking) == "1")
+    GTEST_SKIP() << "CUDA_LAUNCH_BLOCKING=1: stream capture is not tested with blocking launches";
+  Mesh few = reference::twisted_sheet(40, 0.0), more = reference::twisted_sheet(40, 3.0);
+  test::TreeCounts few_nodes = test::tree_counts(few), more_nodes = test::tree_counts(more);
+  if (few_nodes.triangles > more_nodes.triangles) {
+    std::swap(few, more);
+    std::swap(few_nodes, more_nodes);
+  }
+  ASSERT_LT(few_nodes.triangles, more_nodes.triangles) << "the rebuild must keep more triangle-tree nodes";
+  const float r = float(0.5 * reference::mean_edge_length(few));
+  const size_t capacity = 1 << 15;  // also the canonical reservation, which the blocking queries pass
+  DeviceAsyncMemory& memory = this->memory();
+  for (uint32_t flags : {uint32_t(MINKQ_RESERVE_REBUILD), uint32_t(MINKQ_RESERVE_REFIT), 0u}) {
+    SCOPED_TRACE("reserve flags " + std::to_string(flags));
+    test::AsyncScene s(memory, cuda->get(), cpu->get(), few);
+    const bool refits = flags != 0, canonical = flags != 0;
+    if (flags != 0)
+      ASSERT_EQ(minkq_scene_reserve(s.scene.get(), flags, capacity), MINKQ_SUCCESS) << minkq_last_error_message();
+    float* positions = memory.copy_of(few.xyz);
+    int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    int32_t* ee_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    uint64_t* counts = static_cast<uint64_t*>(memory.allocate(2 * sizeof(uint64_t)));
+    const minkq_buffer vertices{positions, 0, few.vertex_count(), MINKQ_MEMORY_DEVICE};
+    const uint32_t query_flags = MINKQ_QUERY_LEAF_EXACT | (canonical ? uint32_t(MINKQ_QUERY_CANONICAL) : 0u);
+    const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, query_flags, r};
+    const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, query_flags, r};
+    cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
+    const CapturedGraph graph(stream, [&](auto check) {
+      if (refits) check(minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
+                                          counts + 1, stream));
+    });
+    ASSERT_TRUE(graph.ok());
+    for (int step = 0; step < 3; ++step) {
+      SCOPED_TRACE("replay " + std::to_string(step));
+      // Blocking calls between replays: a rebuild at the positions with more nodes (then the
+      // replay's refit or query runs on that tree), and canonical queries past the reservation.
+      Mesh next = more;
+      reference::transform(next, 1.0 + 0.03 * step, 0.001 * step);
+      ASSERT_EQ(minkq_scene_rebuild(s.scene.get(), host_buffer(next.xyz.data(), next.vertex_count())), MINKQ_SUCCESS)
+          << minkq_last_error_message();
+      const test::Pairs wide = s.scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 4 * r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_GT(wide.size(), 2 * capacity);
+      s.scene.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, 4 * r, MINKQ_QUERY_LEAF_EXACT);
+      memory.write(positions, next.xyz.data(), next.xyz.size() * sizeof(float));
+      ASSERT_EQ(graph.launch(), cudaSuccess);
+      const std::vector<uint64_t> count = memory.read_back(counts, 2);
+      ASSERT_EQ(minkq_scene_rebuild(s.blocking.get(), host_buffer(next.xyz.data(), next.vertex_count())), MINKQ_SUCCESS);
+      const test::Pairs vt_expected = s.blocking.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      const test::Pairs ee_expected = s.blocking.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_EQ(count[0], vt_expected.size());
+      ASSERT_EQ(count[1], ee_expected.size());
+      const test::Pairs vt_got = test::pairs_of(memory.read_back(vt_pairs, 2 * count[0]), count[0]);
+      const test::Pairs ee_got = test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1]);
+      EXPECT_EQ(canonical ? vt_got : test::sorted(vt_got), vt_expected);  // canonical: sorted on the device
+      EXPECT_EQ(canonical ? ee_got : test::sorted(ee_got), ee_expected);
+    }
+    EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
   }
 }
 

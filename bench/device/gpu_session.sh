@@ -24,7 +24,8 @@
 #   build      configure from an empty build folder (sm_90 only, benchmarks and fuzz_campaign
 #              on) against the kit's packages, build everything
 #   memcheck   compute-sanitizer memcheck on test_cuda, every launch synchronised
-#              (CUDA_LAUNCH_BLOCKING=1, MINKQ_CUDA_SYNC=1): a fault is blamed on its kernel
+#              (CUDA_LAUNCH_BLOCKING=1, MINKQ_CUDA_SYNC=1): a fault is blamed on its kernel;
+#              then the CUDA graph capture tests (CudaAsync.*) under memcheck as launched
 #   gpu        the gpu-labelled tests (CPU == CUDA pairs, digests, work counts; device
 #              buffers; errors)
 #   racecheck  compute-sanitizer racecheck on test_cuda
@@ -125,7 +126,17 @@ sanitize() {
   grep -E "ERROR SUMMARY|RACECHECK SUMMARY|PASSED|FAILED|Skipped|^=========" "$logs/$1.log" | head -40
   return $status
 }
-stage_memcheck() { sanitize memcheck; }
+# memcheck, then the captured-graph tests under memcheck again without blocking launches (which
+# capture does not mix with): a replay that touches freed or outgrown scratch is reported there.
+stage_memcheck() {
+  sanitize memcheck || return $?
+  have_gpu || return 0
+  timeout "${MINKQ_SANITIZER_TIMEOUT:-240}" compute-sanitizer --tool memcheck --error-exitcode 99 \
+    "$build/tests/test_cuda" --gtest_filter='CudaAsync.*' > "$logs/memcheck-capture.log" 2>&1
+  local status=$?
+  grep -E "ERROR SUMMARY|PASSED|FAILED|Skipped|^=========" "$logs/memcheck-capture.log" | head -40
+  return $status
+}
 stage_racecheck() { sanitize racecheck; }
 
 stage_gpu() {

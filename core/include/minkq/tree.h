@@ -148,6 +148,13 @@ MINKQ_HD bool keeps_node(int32_t i, const KarrasNode& k, int32_t leaf_size) {
   return i == 0 || k.last - k.first + 1 > leaf_size;
 }
 
+// The most node records a build over n primitives can keep, at any leaf size: n - 1 for
+// n >= 2 (leaf size 1 keeps every Karras node, and larger ones may keep nearly as many: a
+// chain of nodes each one primitive larger than the one below), 1 for one primitive, none for
+// none. The CUDA tree sizes its nodes for this at its first build, so that no later build over
+// the same primitives moves them or outgrows a refit captured into a CUDA graph.
+MINKQ_HD constexpr int32_t max_node_count(int32_t n) { return n <= 1 ? n : n - 1; }
+
 // Writes kept Karras node i as node new_index[i]: children that are kept nodes by their new
 // index, every other child (a small subtree or one leaf) as a leaf range; links each kept
 // child to it.

@@ -73,7 +73,7 @@ class CudaExecutor {
                                                    const Pass&... passes) {
     if constexpr (std::is_same<Work, NoWork>::value)  // asynchronous calls count no work
       if ((passes.out.count || ...)) {                  // an asynchronous call's (all of its passes)
-        run_passes_async<Work>(ws_, passes...);
+        run_passes_async<Work>(async_ws_, passes...);
         return {};
       }
     return cuda::run_passes<Work>(ws_, works, passes...);
@@ -85,7 +85,7 @@ class CudaExecutor {
     pending_.ensure(2);
     zero(pending_, 2);
   }
-  void reserve_canonical(size_t capacity) { cuda::reserve_canonical(ws_, capacity); }
+  void reserve_canonical(size_t capacity) { cuda::reserve_canonical(async_ws_, capacity); }
   template <class Boxes>
   void reserve_build(CudaTree& tree, Boxes boxes, int32_t n) {
     tree.reserve_build(boxes, n);
@@ -119,7 +119,9 @@ class CudaExecutor {
  private:
   int ordinal_;
   DeviceSwitch device_;  // declared before the buffers: destroyed after them
-  QueryWorkspace ws_;
+  // The blocking queries' scratch, grown as they need, and the asynchronous ones', sized only by
+  // reserve_canonical: a blocking query never moves what a captured canonical sort writes to.
+  QueryWorkspace ws_, async_ws_;
   SortScratch sort_;  // the VT query order's Morton sort, kept once reserved
   bool sort_reserved_ = false;
   DeviceBuffer<unsigned long long> pending_;  // asynchronous refits' checks (commit_finite)

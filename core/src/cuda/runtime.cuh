@@ -6,6 +6,7 @@
 
 #include <cuda_runtime.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -188,6 +189,17 @@ void launch(const char* name, Kernel kernel, int64_t n, int threads, Args... arg
 }
 
 __device__ inline int64_t global_index() { return int64_t(blockIdx.x) * blockDim.x + threadIdx.x; }
+
+// The threads the current device holds at once (multiprocessors times threads per one): the
+// grid of a grid-stride loop that should cover its work in one wave.
+inline int64_t resident_threads() {
+  int device = 0, multiprocessors = 0, per_multiprocessor = 0;
+  check(cudaGetDevice(&device), "cudaGetDevice");
+  check(cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute");
+  check(cudaDeviceGetAttribute(&per_multiprocessor, cudaDevAttrMaxThreadsPerMultiProcessor, device),
+        "cudaDeviceGetAttribute");
+  return std::max<int64_t>(int64_t(multiprocessors) * per_multiprocessor, kThreads);
+}
 
 // ---- Strided input ------------------------------------------------------------------------
 

@@ -47,12 +47,19 @@ static __global__ void collapse_kernel(const KarrasNode* karras, const int32_t* 
     collapse_node(int32_t(i), karras, new_index, leaf_size, nodes);
 }
 
-// Thread per child slot of the nodes that exist (*num_nodes of them, counted on the device).
+// The refit's two passes over the nodes that exist (*num_nodes of them, counted on the device),
+// each a grid-stride loop: the launch does not depend on the node count, which a later build
+// may change under a captured refit. Zeroes the arrival flags; then every child slot, in any
+// order (refit_from_slot never waits for another thread).
+static __global__ void zero_arrivals_kernel(const int32_t* num_nodes, int32_t* arrivals) {
+  for (int64_t i = global_index(); i < *num_nodes; i += int64_t(gridDim.x) * blockDim.x) arrivals[i] = 0;
+}
 template <class Boxes>
 static __global__ void refit_kernel(Boxes boxes, const int32_t* num_nodes, const int32_t* sorted_prims,
                                     BoxGroup* leaf_groups, BvhNode* nodes, int32_t* arrivals) {
-  const int64_t slot = global_index();
-  if (slot < 2 * int64_t(*num_nodes)) refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes, arrivals);
+  const int64_t slots = 2 * int64_t(*num_nodes);
+  for (int64_t slot = global_index(); slot < slots; slot += int64_t(gridDim.x) * blockDim.x)
+    refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes, arrivals);
 }
 
 // The node count of a build: the kept Karras nodes (n >= 2), or the one-leaf root (n == 1).
@@ -149,10 +156,12 @@ static __global__ void area_cost_kernel(const BvhNode* nodes, const int32_t* num
   *cost = value;
 }
 
-// CpuTree::build step by step. The node count stays on the device: a build enqueues its work
-// without a host read once reserve_build() has sized its scratch (nodes for the largest count,
-// n - 1, kept); an unreserved build reads the count back, allocates exactly that many nodes and
-// frees its scratch after.
+// CpuTree::build step by step. The node count stays on the device and is never read back: the
+// first build sizes the nodes and their arrival flags for the most any build over n primitives
+// keeps (max_node_count), so no later build moves them, and the refit and area kernels cover
+// the nodes that exist whatever their count. A refit or query recorded into a CUDA graph thus
+// stays valid across blocking rebuilds. A build's scratch is kept once reserve_build() has
+// sized it (the build then enqueues its work without allocating), else made and freed.
 class CudaTree {
  public:
   template <class Boxes>
@@ -162,17 +171,14 @@ class CudaTree {
     leaf_groups_.ensure(size_t(box_group_count(n)));
     counts_.ensure(1);
     costs_.ensure(3);
+    size_for(n);
     zero(sorted_prims_, size_t(n));
     zero(counts_, 1);
-    node_capacity_ = 0;
     if (n == 0) {
       zero(costs_, 3);
       return;
     }
     if (n == 1) {
-      node_capacity_ = 1;
-      nodes_.ensure(1);
-      arrivals_.ensure(1);
       launch("one_leaf_kernel launch", one_leaf_kernel, 1, 1, nodes_.data(), counts_.data());
       refit(boxes);
       store_cost(costs_.data() + kCostAtBuild);
@@ -190,14 +196,6 @@ class CudaTree {
       return scan_kept(storage, bytes, s.kept.data(), s.new_index.data(), n - 1);
     });
     launch("count_nodes_kernel launch", count_nodes_kernel, 1, 1, s.new_index.data(), s.kept.data(), n, counts_.data());
-    if (reserved_) {
-      node_capacity_ = n - 1;  // sized by reserve_build
-    } else {
-      copy(&node_capacity_, counts_.data(), sizeof(int32_t), cudaMemcpyDeviceToHost);
-      nodes_.ensure(size_t(node_capacity_));
-      arrivals_.ensure(size_t(node_capacity_));
-    }
-    zero(nodes_, size_t(node_capacity_));
     launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, s.karras.data(), s.new_index.data(), n,
            config.leaf_size, nodes_.data());
     refit(boxes);
@@ -205,33 +203,29 @@ class CudaTree {
   }
 
   // Keeps the scratch of builds over n primitives from now on (boxes: their type sizes CUB's
-  // calls), so that builds enqueue their work without allocating or reading back.
+  // calls), so that builds enqueue their work without allocating.
   template <class Boxes>
   void reserve_build(Boxes boxes, int32_t n) {
     const int32_t inner = std::max(n - 1, 1);
+    size_for(n);
     reserve_sort(scratch_.sort, boxes, n);
     scratch_.karras.ensure(size_t(inner));
     scratch_.kept.ensure(size_t(inner));
     scratch_.new_index.ensure(size_t(inner));
-    size_t scan_bytes = 0, area_bytes = 0;
+    size_t scan_bytes = 0;
     check(scan_kept(nullptr, scan_bytes, nullptr, nullptr, inner), "cub::DeviceScan::ExclusiveSum");
-    check(sum_node_areas(nullptr, area_bytes, nullptr, nullptr, inner, nullptr), "cub::DeviceReduce::TransformReduce");
     scratch_.sort.temp.ensure(std::max(scan_bytes, scratch_.sort.temp.size()));
-    area_temp_.ensure(std::max<size_t>(area_bytes, 1));
-    if (nodes_.size() < size_t(inner)) {  // room for every node count, keeping the tree built now
-      DeviceBuffer<BvhNode> grown{static_cast<size_t>(inner)};
-      copy(grown.data(), nodes_.data(), size_t(node_capacity_) * sizeof(BvhNode), cudaMemcpyDeviceToDevice);
-      nodes_ = std::move(grown);
-    }
-    arrivals_.ensure(size_t(inner));  // zeroed by every refit
     reserved_ = true;
   }
 
+  // Enqueued; covers the nodes counted on the device (nodes past the count are never read).
   template <class Boxes>
   void refit(Boxes boxes) {
-    zero(arrivals_, size_t(node_capacity_));
-    launch("refit_kernel launch", refit_kernel<Boxes>, int64_t(node_capacity_) * 2, kThreads, boxes, counts_.data(),
-           sorted_prims_.data(), leaf_groups_.data(), nodes_.data(), arrivals_.data());
+    if (node_capacity_ == 0) return;
+    launch("zero_arrivals_kernel launch", zero_arrivals_kernel, std::min<int64_t>(node_capacity_, max_threads_),
+           kThreads, counts_.data(), arrivals_.data());
+    launch("refit_kernel launch", refit_kernel<Boxes>, std::min<int64_t>(2 * int64_t(node_capacity_), max_threads_),
+           kThreads, boxes, counts_.data(), sorted_prims_.data(), leaf_groups_.data(), nodes_.data(), arrivals_.data());
   }
 
   // CpuTree::area_cost, summed by a device reduction: equal up to rounding (a blocking call).
@@ -266,9 +260,26 @@ class CudaTree {
     return value;
   }
 
+  // Sizes, once for all builds over n primitives (the first build, or reserve_build if that
+  // comes first): node records and arrival flags for max_node_count(n), the area reduction's
+  // scratch, and the refit's grid (at most the threads the device holds at once).
+  void size_for(int32_t n) {
+    if (node_capacity_ == max_node_count(n) && sized_) return;
+    node_capacity_ = max_node_count(n);
+    nodes_.ensure(size_t(node_capacity_));
+    arrivals_.ensure(size_t(node_capacity_));
+    size_t area_bytes = 0;
+    check(sum_node_areas(nullptr, area_bytes, nullptr, nullptr, std::max(node_capacity_, 1), nullptr),
+          "cub::DeviceReduce::TransformReduce");
+    area_temp_.ensure(std::max<size_t>(area_bytes, 1));
+    max_threads_ = resident_threads();
+    sized_ = true;
+  }
+
   int32_t n_ = 0;
-  int32_t node_capacity_ = 0;  // node records the refit and area kernels cover (those that exist: counts_[0])
-  bool reserved_ = false;
+  int32_t node_capacity_ = 0;  // max_node_count(n_): node records kept, those that exist counted in counts_[0]
+  int64_t max_threads_ = 1;    // the refit's grid at most: the threads the device holds at once
+  bool sized_ = false, reserved_ = false;
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> counts_;  // [0]: the number of nodes
