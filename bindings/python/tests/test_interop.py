@@ -74,14 +74,23 @@ class FakeCudaDevice:
 
 
 class FakeDriver:
+    """libcuda's calls as _interop uses them: records host synchronisations and stream waits;
+    streams in ``capturing`` report a capture in progress."""
+
     def __init__(self, ordinal: int = 0) -> None:
-        self.ordinal, self.synchronised = ordinal, []
+        self.ordinal, self.synchronised, self.waits, self.capturing = ordinal, [], [], set()
 
     def pointer_device(self, address: int) -> int:
         return self.ordinal
 
     def stream_synchronize(self, stream: int) -> None:
         self.synchronised.append(stream)
+
+    def stream_is_capturing(self, stream: int) -> bool:
+        return stream in self.capturing
+
+    def stream_wait(self, consumer: int, producer: int) -> None:
+        self.waits.append((consumer, producer))
 
 
 @pytest.fixture
@@ -190,11 +199,12 @@ def test_cuda_array_interface_stream_and_device_checks(monkeypatch, mesh):
 
 
 def test_dlpack_cuda_producers_are_asked_for_minkqs_stream():
-    """DLPack: the consumer passes its stream; minkq works on the per-thread default stream
-    (DLPack's 2), so the producer orders its work before it."""
+    """DLPack: the consumer passes its stream; minkq works on the per-thread default stream,
+    which is ordered after the legacy default stream (DLPack's 1) that the producer is asked
+    for, so the producer orders its work before minkq's."""
     fake = FakeCudaDLPack(np.zeros((3, 3), np.float32), ordinal=0)
     _interop.view(fake, "vertices", FakeCudaDevice(0))
-    assert fake.streams == [_interop.MINKQ_STREAM] == [2]
+    assert fake.streams == [_interop.BLOCKING_STREAM] == [1]
     other = FakeCudaDLPack(np.zeros((3, 3), np.float32), ordinal=1)
     with pytest.raises(minkq.InvalidArgumentError, match="on cuda:1 but the minkq device"):
         _interop.view(other, "vertices", FakeCudaDevice(0))

@@ -243,6 +243,31 @@ def test_the_bodies_a_cuda_capture_records_give_the_eager_rows(update):
     assert detector.resize_flags.numpy()[mn.EDGE_OVERFLOW] == 1
 
 
+def test_pass_buffers_first_needed_inside_a_capture_are_allocated_with_it_paused(monkeypatch):
+    """A pass's buffer first needed inside a CUDA capture (no eager detection ran first), or
+    grown there, is allocated with the capture paused (issue 30): a graph allocation would
+    belong to the graph and fail minkq's device-pointer check. Kept buffers need nothing."""
+    import warp._src.context as context
+
+    events = []
+
+    class CapturingDevice:
+        is_capturing = True
+
+    monkeypatch.setattr(context, "capture_pause", lambda device=None: events.append("pause") or "graph")
+    monkeypatch.setattr(context, "capture_resume", lambda graph, device=None: events.append(("resume", graph)))
+    monkeypatch.setattr(mn.wp, "empty", lambda shape, dtype, device: events.append(("empty", shape)) or np.empty(shape))
+    scratch = mn._Scratch(CapturingDevice())
+    scratch.pinned = []
+    first = scratch.get("vt_pairs", wp.int32, 100, (2,))
+    assert events == ["pause", ("empty", (100, 2)), ("resume", "graph")]
+    events.clear()
+    assert scratch.get("vt_pairs", wp.int32, 60, (2,)) is first and events == []
+    grown = scratch.get("vt_pairs", wp.int32, 150, (2,))
+    assert events == ["pause", ("empty", (200, 2)), ("resume", "graph")]
+    assert [id(a) for a in scratch.pinned] == [id(first), id(first), id(grown)]  # the graph's arrays outlive growth
+
+
 @pytest.mark.gpu
 def test_cuda_captured_query_buffer_too_small_sets_the_resize_flag():
     """A CUDA graph whose query buffer is smaller than a replay's pairs: Newton's resize flag,

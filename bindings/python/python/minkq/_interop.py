@@ -6,9 +6,11 @@ Streams. minkq's C API has no stream argument: on a CUDA device it works on the 
 thread's per-thread default stream (``cudaStreamPerThread``) and synchronises that stream before
 each call returns. So
 
-- a DLPack producer is asked for its tensor with ``stream=2`` (DLPack's number for the
-  per-thread default stream): the producer orders its pending work on the array before that
-  stream, as the DLPack protocol requires of it;
+- a DLPack producer is asked for its tensor with ``stream=1`` (DLPack's number for the legacy
+  default stream): the producer orders its pending work on the array before that stream, as
+  the DLPack protocol requires of it, and work on the legacy default stream is ordered before
+  later work on every blocking stream, the per-thread default stream included (PyTorch refuses
+  ``stream=2``, the per-thread default stream, so minkq does not ask for it);
 - a CUDA array interface with a ``stream`` entry (version 3) is synchronised on the host
   (``cuStreamSynchronize``) before minkq reads it, as that protocol requires of a consumer;
   one without (versions 0-2, or ``None``) promises the data are ready;
@@ -19,7 +21,12 @@ of the caller's instead (:func:`stream_handle`: by default the current stream of
 library), and read the arrays through the same code with that stream: a DLPack producer is
 asked for its tensor on it, and a CUDA array interface stream other than it is ordered before
 it with an event (``cuStreamWaitEvent``), never synchronised on the host, so that the calls can
-be captured into a CUDA graph.
+be captured into a CUDA graph. While that stream is being captured (``wp.ScopedCapture``,
+``torch.cuda.graph``) no event is waited for: CUDA's capture rules forbid a captured stream to
+wait on an event recorded outside the capture, which would invalidate it. Inside a capture the
+caller orders the producer's work into it: the producer's stream must be part of the capture
+(the capture stream itself, or a stream forked from it and joined back before the call), or
+the data ready before capture began.
 
 A CUDA array given to a CPU device, or one on another GPU than the minkq device, raises
 :class:`~minkq.InvalidArgumentError` naming the argument; nothing is copied to make it fit.
@@ -37,8 +44,12 @@ from ._errors import DeviceError, InvalidArgumentError
 
 # DLPack device types (dlpack.h).
 DL_CPU, DL_CUDA, DL_CUDA_HOST, DL_CUDA_MANAGED = 1, 2, 3, 13
-# DLPack's stream number for the per-thread default stream: where minkq works.
-MINKQ_STREAM = 2
+# The stream a CUDA DLPack producer is asked for on the blocking path: DLPack's number for the
+# legacy default stream. minkq works on the per-thread default stream (DLPack's 2), which is
+# ordered after work on the legacy default stream, so the producer's work stays before minkq's.
+# PyTorch raises BufferError for 2 ("per-thread default stream is not supported") and takes 1 as
+# its default stream; Warp and CuPy take 1 as the legacy default stream too.
+BLOCKING_STREAM = 1
 # DLDataTypeCode -> numpy kind.
 _DL_KINDS = {0: "i", 1: "u", 2: "f"}
 
@@ -133,7 +144,7 @@ def view(value: Any, name: str, device: Any, stream: Optional[int] = None) -> Fo
         device_type, device_id = (int(x) for x in value.__dlpack_device__())
         if device_type in (DL_CUDA, DL_CUDA_MANAGED):
             _require_cuda(name, device, device_id, type(value), "DLPack")
-            capsule = value.__dlpack__(stream=MINKQ_STREAM if stream is None else _dlpack_stream(stream))
+            capsule = value.__dlpack__(stream=BLOCKING_STREAM if stream is None else _dlpack_stream(stream))
         elif device_type in (DL_CPU, DL_CUDA_HOST):
             capsule = value.__dlpack__()
         else:
@@ -213,7 +224,12 @@ def _from_cuda_array_interface(value: Any, name: str, device: Any, consumer: Opt
             cuda_driver().stream_synchronize(int(stream))
         elif _dlpack_stream(int(stream)) != _dlpack_stream(consumer):
             # The CUDA array interface's stream numbers are DLPack's (1 legacy, 2 per-thread).
-            cuda_driver().stream_wait(consumer, int(stream))
+            # A capturing stream must not wait on an event recorded outside its capture (that
+            # invalidates the capture): there the caller has ordered the producer's work into
+            # the capture, or finished it before capture began (the module's docstring).
+            driver = cuda_driver()
+            if not driver.stream_is_capturing(consumer):
+                driver.stream_wait(consumer, int(stream))
     return Foreign(value, address, shape, strides, dtype, ordinal, bool(readonly), "cuda_array_interface")
 
 
@@ -397,10 +413,11 @@ def head(pairs: Any, count: int, compact: bool) -> Any:
 class _Driver:
     """The few CUDA driver calls the CUDA array interface needs, through libcuda.so.1 (present
     wherever a GPU is usable): the device of a pointer, stream synchronisation, and the ordering
-    of one stream after another (stream-ordered calls)."""
+    of one stream after another (stream-ordered calls), and whether a stream is being captured."""
 
     CU_POINTER_ATTRIBUTE_DEVICE_ORDINAL = 9
     CU_EVENT_DISABLE_TIMING = 2
+    CU_STREAM_CAPTURE_STATUS_NONE = 0  # ACTIVE is 1, INVALIDATED 2
 
     def __init__(self) -> None:
         try:
@@ -423,6 +440,14 @@ class _Driver:
 
     def stream_synchronize(self, stream: int) -> None:
         self._check(self._lib.cuStreamSynchronize(ctypes.c_void_p(stream)), "cuStreamSynchronize")
+
+    def stream_is_capturing(self, stream: int) -> bool:
+        """Whether ``stream`` is in a CUDA graph capture: active, or already invalidated (a wait
+        from outside is no more legal there; the capture reports its failure when it ends)."""
+        status = ctypes.c_int(self.CU_STREAM_CAPTURE_STATUS_NONE)
+        call = self._lib.cuStreamIsCapturing(ctypes.c_void_p(stream), ctypes.byref(status))
+        self._check(call, "cuStreamIsCapturing")
+        return status.value != self.CU_STREAM_CAPTURE_STATUS_NONE
 
     def stream_wait(self, consumer: int, producer: int) -> None:
         """Orders ``consumer`` after the work enqueued on ``producer`` so far, on the device (an

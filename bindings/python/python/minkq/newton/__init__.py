@@ -500,7 +500,9 @@ def _capture_paused(device: Any):
 class _Scratch:
     """Device arrays of one pass kept between calls, grown geometrically. While ``pinned`` is a
     list (inside a CUDA graph capture) every array handed out is also kept there: a graph bakes
-    their addresses, so they must outlive any later growth."""
+    their addresses, so they must outlive any later growth. An array first needed inside a
+    capture is allocated with the capture paused: a graph allocation would be freed with its
+    graph, and is not memory minkq's device-pointer check accepts."""
 
     def __init__(self, device: Any) -> None:
         self.device = device
@@ -511,7 +513,8 @@ class _Scratch:
         array = self.arrays.get(name)
         if array is None or array.shape[0] < size:
             capacity = max(size, 2 * (array.shape[0] if array is not None else 0), 16)
-            array = wp.empty(shape=(capacity,) + shape_tail, dtype=dtype, device=self.device)
+            with _capture_paused(self.device):
+                array = wp.empty(shape=(capacity,) + shape_tail, dtype=dtype, device=self.device)
             self.arrays[name] = array
         if self.pinned is not None:
             self.pinned.append(array)
