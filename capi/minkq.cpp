@@ -169,13 +169,32 @@ std::vector<T> host_copy(minkq::Backend& backend, const minkq::Strided& values) 
 void require_finite(minkq::Backend& backend, const minkq::Strided& values, int floats, const char* element) {
   const int64_t bad = backend.first_non_finite(values, floats);
   if (bad < 0) return;
-  float f[6];
-  backend.copy_to_host(f, static_cast<const char*>(values.data) + size_t(bad) * values.stride,
-                       sizeof(float) * size_t(floats), values.memory);
+  const char* record = static_cast<const char*>(values.data) + size_t(bad) * values.stride;
   std::string coords;
+  if (values.scalar == minkq::Scalar::kFloat64) {
+    double d[3];
+    backend.copy_to_host(d, record, sizeof(double) * size_t(floats), values.memory);
+    for (int k = 0; k < floats; ++k) {
+      char text[40];
+      std::snprintf(text, sizeof text, "%.17g", d[k]);
+      coords += (k ? ", " : "") + std::string(text);
+    }
+    fail(Status::kNonFinite, std::string(element) + " " + std::to_string(bad) +
+                                 " has a coordinate that is not finite or beyond the float range (" + coords + ")");
+  }
+  float f[6];
+  backend.copy_to_host(f, record, sizeof(float) * size_t(floats), values.memory);
   for (int k = 0; k < floats; ++k) coords += (k ? ", " : "") + format_float(f[k]);
   fail(Status::kNonFinite, std::string(element) + " " + std::to_string(bad) + " has a non-finite coordinate (" +
                                coords + ")");
+}
+
+// A scene's vertex buffer, checked: 3 floats each, or 3 doubles for a MINKQ_SCENE_FLOAT64 scene.
+minkq::Strided checked_vertex_buffer(const minkq_device* device, const minkq_buffer& buffer, uint32_t scene_flags) {
+  const bool float64 = (scene_flags & MINKQ_SCENE_FLOAT64) != 0;
+  minkq::Strided values = checked_buffer(device, buffer, float64 ? 24 : 12, "vertices");
+  values.scalar = float64 ? minkq::Scalar::kFloat64 : minkq::Scalar::kFloat32;
+  return values;
 }
 
 template <int N, class T>
@@ -330,7 +349,7 @@ std::array<minkq::QueryRequest, 2> checked_vt_ee_requests(const minkq_scene* sce
 // New vertex positions for a scene, validated: `verb` names the call in messages.
 minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* verb) {
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-  const minkq::Strided values = checked_buffer(scene->device, vertices, 12, "vertices");
+  const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags);
   require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
           std::string(verb) + " with " + std::to_string(values.count) + " vertices but the scene has " +
               std::to_string(scene->vertex_count));
@@ -389,7 +408,7 @@ minkq::Strided checked_async_vertices(const minkq_scene* scene, minkq_buffer ver
   require(rebuild ? reserved.rebuild : reserved.refit, Status::kInvalidArgument,
           std::string(call) + " needs scratch reserved first: minkq_scene_reserve(scene, " +
               (rebuild ? "MINKQ_RESERVE_REBUILD" : "MINKQ_RESERVE_REFIT") + ", ...)");
-  const minkq::Strided values = checked_buffer(scene->device, vertices, 12, "vertices");
+  const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags);
   require(enum_value(vertices.memory) == async_memory(scene->device), Status::kInvalidArgument,
           "vertices are host memory but " + std::string(call) + " on " + scene->device->name +
               " reads device memory (MINKQ_MEMORY_DEVICE)");
@@ -495,12 +514,12 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
     *out_scene = nullptr;
     require(device != nullptr, Status::kInvalidArgument, "device is NULL");
     require(desc != nullptr, Status::kInvalidArgument, "desc is NULL");
-    const uint32_t known = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
+    const uint32_t known = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT | MINKQ_SCENE_FLOAT64;
     require((desc->flags & ~known) == 0, Status::kInvalidArgument, "desc->flags has unknown bits");
     require(desc->flags & (MINKQ_SCENE_VT | MINKQ_SCENE_EE), Status::kInvalidArgument,
             "desc->flags asks for no query: set MINKQ_SCENE_VT, MINKQ_SCENE_EE or both");
     minkq::Backend& backend = *device->backend;
-    const minkq::Strided vertices = checked_buffer(device, desc->vertices, 12, "vertices");
+    const minkq::Strided vertices = checked_vertex_buffer(device, desc->vertices, desc->flags);
     const minkq::Strided triangles = checked_buffer(device, desc->triangles, 12, "triangles");
     const minkq::Strided edges = checked_buffer(device, desc->edges, 8, "edges");
     require_finite(backend, vertices, 3, "vertex");

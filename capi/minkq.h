@@ -12,7 +12,8 @@
  *   true contacts <= capsule_exact <= capsule_ray <= box   (EE)
  *   true contacts <= sphere <= box                         (VT)
  * and MINKQ_QUERY_LEAF_EXACT keeps, of any mode's pairs, the true contacts (plus at most pairs
- * within the leaf test's slack, stated at minkq_scene_query).
+ * within the leaf test's slack, stated at minkq_scene_query). For a MINKQ_SCENE_FLOAT64 scene
+ * the guarantee is in double: every pair whose distance in the double input is within r.
  *
  * Thread safety: different objects may be used from different threads at once. One object
  * (device, scene, bvh, result) must not be used by two threads at the same time; a device
@@ -132,12 +133,21 @@ typedef struct minkq_scene minkq_scene;
 typedef enum minkq_scene_flags {
   MINKQ_SCENE_VT = 1,           /* build the triangle tree for vertex-triangle queries */
   MINKQ_SCENE_EE = 2,           /* build the edge tree for edge-edge queries */
-  MINKQ_SCENE_DROP_INCIDENT = 4 /* drop (v, t) with v a vertex of t, and edges sharing a vertex */
+  MINKQ_SCENE_DROP_INCIDENT = 4, /* drop (v, t) with v a vertex of t, and edges sharing a vertex */
+  /* Vertices are 3 doubles (x, y, z) each, stride >= 24, at creation and in every refit and
+   * rebuild (blocking and stream-ordered). The scene rounds them to nearest float, the
+   * precision of its trees and tests, and keeps rho, the farthest the rounding moved a vertex;
+   * its queries then run with radius r + 2 rho (rounded up), so that every pair within r in
+   * double is reported, in every mode. Extras (pairs beyond r) therefore lie within r + 2 rho
+   * plus the slack of float input; rho is at most sqrt(3)/2 ulp (float) of the largest
+   * coordinate, and 0 for vertices that are floats already. A double beyond the float range
+   * (about 3.4e38) is NON_FINITE, as a NaN or infinity is. */
+  MINKQ_SCENE_FLOAT64 = 8
 } minkq_scene_flags;
 
 typedef struct minkq_scene_desc {
   uint32_t flags;         /* minkq_scene_flags; at least one of VT and EE */
-  minkq_buffer vertices;  /* 3 floats (x, y, z) each; stride >= 12 */
+  minkq_buffer vertices;  /* 3 floats (x, y, z) each, stride >= 12; with MINKQ_SCENE_FLOAT64 3 doubles */
   minkq_buffer triangles; /* 3 int32 vertex indices each; stride >= 12 */
   /* 2 int32 vertex indices each, or count 0 to derive them from the triangles: every distinct
    * undirected triangle edge, numbered in lexicographic order of (min vertex, max vertex). */
@@ -246,7 +256,8 @@ typedef struct minkq_query_info {
  * more pairs exist than fit, returns CAPACITY with info->count the exact number needed and
  * writes nothing past the buffer: grow it and call again. Leaf-exact pairs lie within
  * r + 2^-19 * S, S the size of the two elements and the distance between them (see
- * core/include/minkq/predicates.h). Errors: INVALID_ARGUMENT (NULL scene, query or info;
+ * core/include/minkq/predicates.h); on a MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho
+ * (minkq_scene_flags). Errors: INVALID_ARGUMENT (NULL scene, query or info;
  * unknown kind, mode or flag bits; a kind the scene was created without; sphere mode for EE;
  * a negative radius; a NULL out_pairs with a non-zero capacity; device memory on a CPU
  * device), NON_FINITE (radius), SIZE_OVERFLOW (capacity), CAPACITY, OUT_OF_MEMORY, DEVICE. */

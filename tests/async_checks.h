@@ -71,6 +71,17 @@ inline Pairs sorted(Pairs pairs) {
   return pairs;
 }
 
+// Float coordinates moved 1e3 away in double, each nudged by a third of its float spacing so
+// that rounding to nearest moves every vertex (a float64 scene's input).
+inline std::vector<double> far_doubles(const std::vector<float>& xyz) {
+  std::vector<double> out(xyz.size());
+  for (size_t i = 0; i < xyz.size(); ++i) {
+    const float x = xyz[i] + 1e3f;
+    out[i] = double(x) + (double(std::nextafter(x, INFINITY)) - double(x)) * (i % 3 == 0 ? 0.3 : -0.3);
+  }
+  return out;
+}
+
 // A scene on `device` driven by the asynchronous calls, beside a CPU scene driven by the
 // blocking ones over the same positions: its reference.
 struct AsyncScene {
@@ -78,20 +89,26 @@ struct AsyncScene {
   reference::Mesh mesh;
   Scene scene;
   Scene blocking;
-  AsyncScene(AsyncMemory& memory, minkq_device* device, minkq_device* cpu, const reference::Mesh& mesh)
-      : memory(memory), mesh(mesh), scene(device, mesh, kAsyncBoth | MINKQ_SCENE_DROP_INCIDENT),
-        blocking(cpu, mesh, kAsyncBoth | MINKQ_SCENE_DROP_INCIDENT) {}
+  // extra_flags: MINKQ_SCENE_FLOAT64 for scenes of the mesh's double input (mesh.xyz64).
+  AsyncScene(AsyncMemory& memory, minkq_device* device, minkq_device* cpu, const reference::Mesh& mesh,
+             uint32_t extra_flags = 0)
+      : memory(memory), mesh(mesh), scene(device, mesh, kAsyncBoth | MINKQ_SCENE_DROP_INCIDENT | extra_flags),
+        blocking(cpu, mesh, kAsyncBoth | MINKQ_SCENE_DROP_INCIDENT | extra_flags) {}
 
-  minkq_buffer vertices_in_memory(const std::vector<float>& xyz) {
-    const float* data = memory.copy_of(xyz);
+  template <class T>
+  minkq_buffer vertices_in_memory(const std::vector<T>& xyz) {
+    const T* data = memory.copy_of(xyz);
     return minkq_buffer{data, 0, xyz.size() / 3, memory.kind()};
   }
-  minkq_status refit_async(const std::vector<float>& xyz, bool rebuild = false) {
+  template <class T>
+  minkq_status refit_async(const std::vector<T>& xyz, bool rebuild = false) {
     const minkq_buffer vertices = vertices_in_memory(xyz);
     return rebuild ? minkq_scene_rebuild_async(scene.get(), vertices, memory.stream())
                    : minkq_scene_refit_async(scene.get(), vertices, memory.stream());
   }
-  void move_to(const std::vector<float>& xyz, bool rebuild = false) {
+  // Floats, or doubles for a float64 scene.
+  template <class T>
+  void move_to(const std::vector<T>& xyz, bool rebuild = false) {
     ASSERT_EQ(refit_async(xyz, rebuild), MINKQ_SUCCESS) << minkq_last_error_message();
     const minkq_buffer host = host_buffer(xyz.data(), xyz.size() / 3);
     ASSERT_EQ(rebuild ? minkq_scene_rebuild(blocking.get(), host) : minkq_scene_refit(blocking.get(), host),
@@ -121,10 +138,15 @@ struct AsyncScene {
 
 // Every asynchronous query equals its blocking counterpart, over refits and rebuilds to moved
 // vertices: same count, same pairs (in canonical order where asked), never past the buffer.
-inline void check_async_matches_blocking(AsyncMemory& memory, minkq_device* device, minkq_device* cpu) {
-  const reference::Mesh mesh = reference::twisted_sheet(32, 2.0);
+// With MINKQ_SCENE_FLOAT64 in extra_flags, the same for the sheet's double input far from the
+// origin, where rounding to float moves every vertex.
+inline void check_async_matches_blocking(AsyncMemory& memory, minkq_device* device, minkq_device* cpu,
+                                         uint32_t extra_flags = 0) {
+  const bool float64 = extra_flags & MINKQ_SCENE_FLOAT64;
+  reference::Mesh mesh = reference::twisted_sheet(32, 2.0);
+  if (float64) reference::set_float64(mesh, far_doubles(mesh.xyz));
   const float r = float(0.5 * reference::mean_edge_length(mesh));
-  AsyncScene s(memory, device, cpu, mesh);
+  AsyncScene s(memory, device, cpu, mesh, extra_flags);
   ASSERT_EQ(minkq_scene_reserve(s.scene.get(), MINKQ_RESERVE_REBUILD, 1 << 16), MINKQ_SUCCESS)
       << minkq_last_error_message();
   struct Case {
@@ -144,7 +166,8 @@ inline void check_async_matches_blocking(AsyncMemory& memory, minkq_device* devi
       reference::Mesh moved = mesh;
       reference::transform(moved, 1.0 + 0.1 * step, 0.01 * step);
       for (size_t v = 0; v < moved.vertex_count(); ++v) moved.xyz[3 * v + 2] += 0.02f * float(std::sin(0.1 * double(v) * step));
-      s.move_to(moved.xyz, /*rebuild=*/step == 3);
+      if (float64) s.move_to(far_doubles(moved.xyz), /*rebuild=*/step == 3);
+      else s.move_to(moved.xyz, /*rebuild=*/step == 3);
       if (::testing::Test::HasFatalFailure()) return;
     }
     for (const Case& c : cases) {

@@ -36,11 +36,20 @@ inline cxx::Scene new_scene(minkq_device* device, const minkq_scene_desc& desc) 
   return created<cxx::Scene>([&](minkq_scene** out) { return minkq_scene_create(device, &desc, out); });
 }
 
+// The mesh's vertices as a scene with `flags` reads them: its double input (xyz64) for a
+// MINKQ_SCENE_FLOAT64 scene, else its floats.
+inline minkq_buffer vertices_of(const reference::Mesh& mesh, uint32_t flags) {
+  if (flags & MINKQ_SCENE_FLOAT64) return host_buffer(mesh.xyz64.data(), mesh.xyz64.size() / 3);
+  return host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3);
+}
+
+// Explicit edges are passed when the mesh has them and no triangles (an EE-only scene).
 inline cxx::Scene new_scene(minkq_device* device, const reference::Mesh& mesh, uint32_t flags) {
   minkq_scene_desc desc{};
   desc.flags = flags;
-  desc.vertices = host_buffer(mesh.xyz.data(), mesh.xyz.size() / 3);
+  desc.vertices = vertices_of(mesh, flags);
   desc.triangles = host_buffer(mesh.tris.data(), mesh.tris.size() / 3);
+  if (mesh.tris.empty()) desc.edges = host_buffer(mesh.edges.data(), mesh.edges.size() / 2);
   return new_scene(device, desc);
 }
 
@@ -63,13 +72,19 @@ struct Scene : cxx::Scene {
 
   // Runs a query (canonical order) and returns its pairs; fails the test on any error.
   Pairs query(minkq_query_kind kind, minkq_mode mode, float r, uint32_t flags = 0, uint64_t* digest = nullptr) {
+    return query_pairs(get(), kind, mode, r, flags, digest);
+  }
+
+  // The same for any scene.
+  static Pairs query_pairs(minkq_scene* scene, minkq_query_kind kind, minkq_mode mode, float r, uint32_t flags = 0,
+                           uint64_t* digest = nullptr) {
     minkq_query_desc desc{kind, mode, flags | MINKQ_QUERY_CANONICAL | (digest ? uint32_t(MINKQ_QUERY_DIGEST) : 0u), r};
     minkq_query_info info{};
-    minkq_status status = minkq_scene_query(get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info);
+    minkq_status status = minkq_scene_query(scene, &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info);
     std::vector<int32_t> raw;
     if (status == MINKQ_ERROR_CAPACITY) {
       raw.resize(2 * info.count);
-      status = minkq_scene_query(get(), &desc, raw.data(), info.count, MINKQ_MEMORY_HOST, &info);
+      status = minkq_scene_query(scene, &desc, raw.data(), info.count, MINKQ_MEMORY_HOST, &info);
     }
     EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
     if (digest) *digest = info.digest;

@@ -360,12 +360,13 @@ struct DeviceMemory {
   T* as() const { return static_cast<T*>(ptr); }
 };
 
-// Vertices copied to device memory as records of `stride` bytes (any stride >= 12; strides
-// that are not a multiple of 4 make the backend read bytes).
-DeviceMemory device_vertices(const std::vector<float>& xyz, size_t stride) {
+// Vertices copied to device memory as records of `stride` bytes (any stride >= 3 coordinates;
+// strides that are not a multiple of the coordinate's size make the backend read bytes).
+template <class T>
+DeviceMemory device_vertices(const std::vector<T>& xyz, size_t stride) {
   const size_t n = xyz.size() / 3;
   std::vector<unsigned char> records(n * stride, 0xAB);
-  for (size_t v = 0; v < n; ++v) std::memcpy(&records[v * stride], &xyz[3 * v], 3 * sizeof(float));
+  for (size_t v = 0; v < n; ++v) std::memcpy(&records[v * stride], &xyz[3 * v], 3 * sizeof(T));
   DeviceMemory memory(records.size());
   EXPECT_EQ(cudaMemcpy(memory.ptr, records.data(), records.size(), cudaMemcpyHostToDevice), cudaSuccess);
   return memory;
@@ -395,6 +396,40 @@ TEST_F(Cuda, device_memory_vertices_with_any_stride_match_host_input) {
         << minkq_last_error_message();
     compare_all_modes(moved_cpu.get(), scene.get(), 1.5f * r, "device refit stride " + std::to_string(stride));
   }
+}
+
+// Float64 input (MINKQ_SCENE_FLOAT64): rounded and widened by rho on the device exactly as on
+// the CPU, from host memory and from device memory at any stride, at creation and in refits.
+TEST_F(Cuda, float64_vertices_from_host_and_device_memory_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  Mesh mesh = reference::twisted_sheet(40, 3.0);
+  reference::set_float64(mesh, test::far_doubles(mesh.xyz));
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  const uint32_t flags = kBoth | MINKQ_SCENE_FLOAT64;
+  cxx::Scene reference_scene = make_scene(cpu.get(), mesh, flags, test::vertices_of(mesh, flags));
+  cxx::Scene from_host = make_scene(cuda.get(), mesh, flags, test::vertices_of(mesh, flags));
+  compare_all_modes(reference_scene.get(), from_host.get(), r, "float64 host vertices");
+  Mesh moved = mesh;
+  reference::transform(moved, 1.5, 0.25);
+  cxx::Scene moved_cpu = make_scene(cpu.get(), moved, flags, test::vertices_of(moved, flags));
+  for (size_t stride : {size_t(24), size_t(32), size_t(28), size_t(26)}) {
+    DeviceMemory vertices = device_vertices(mesh.xyz64, stride);
+    cxx::Scene scene = make_scene(cuda.get(), mesh, flags, device_buffer(vertices.ptr, mesh.vertex_count(), stride));
+    ASSERT_TRUE(scene);
+    compare_all_modes(reference_scene.get(), scene.get(), r, "float64 device vertices stride " + std::to_string(stride));
+    DeviceMemory moved_vertices = device_vertices(moved.xyz64, stride);
+    ASSERT_EQ(minkq_scene_refit(scene.get(), device_buffer(moved_vertices.ptr, mesh.vertex_count(), stride)),
+              MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    compare_all_modes(moved_cpu.get(), scene.get(), 1.5f * r, "float64 device refit stride " + std::to_string(stride));
+  }
+  // A double beyond the float range is refused on the device too, naming the vertex.
+  std::vector<double> bad = mesh.xyz64;
+  bad[3 * 17 + 2] = -1e300;
+  DeviceMemory bad_vertices = device_vertices(bad, 24);
+  EXPECT_EQ(minkq_scene_refit(from_host.get(), device_buffer(bad_vertices.ptr, mesh.vertex_count(), 24)),
+            MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(std::string(minkq_last_error_message()).find("vertex 17"), std::string::npos) << minkq_last_error_message();
 }
 
 TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
@@ -672,6 +707,10 @@ class CudaAsync : public Cuda {
 
 TEST_F(CudaAsync, queries_match_the_blocking_calls_over_refits_and_rebuilds) {
   test::check_async_matches_blocking(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaAsync, float64_queries_match_the_blocking_calls_over_refits_and_rebuilds) {
+  test::check_async_matches_blocking(memory(), cuda->get(), cpu->get(), MINKQ_SCENE_FLOAT64);
 }
 
 TEST_F(CudaAsync, non_finite_vertices_keep_the_positions_and_are_reported_once) {

@@ -3,6 +3,7 @@
 // Both backends serve it with the same two stores (store.h) over their own executor.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -38,6 +39,9 @@ struct Failure : std::runtime_error {
 [[noreturn]] inline void fail(Status status, const std::string& message) { throw Failure(status, message); }
 
 enum class Memory : int { kHost = 0, kDevice = 1 };
+// The scalar type of a record's coordinates: float, or (vertices only) double, rounded to
+// nearest float on the way in (minkq/float64.h).
+enum class Scalar : int { kFloat32 = 0, kFloat64 = 1 };
 
 // `count` records, each starting `stride` bytes after the previous one.
 struct Strided {
@@ -45,6 +49,7 @@ struct Strided {
   size_t stride;
   int64_t count;
   Memory memory;
+  Scalar scalar = Scalar::kFloat32;
 };
 
 enum class QueryKind : int { kVertexTriangle, kEdgeEdge, kUserSpheres, kUserCapsules, kUserBoxes };
@@ -142,7 +147,8 @@ class Backend {
   virtual ~Backend() = default;
   virtual std::string name() const = 0;
   virtual bool is_cuda() const = 0;
-  // First record (of `floats` floats each) holding a NaN or infinity, or -1.
+  // First record (of `floats` coordinates each) holding a NaN or infinity, or -1; for float64
+  // records also a coordinate beyond the float range (it would round to an infinity).
   virtual int64_t first_non_finite(const Strided& values, int floats) = 0;
   // Copies `bytes` from host or device memory to the host.
   virtual void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) = 0;
@@ -171,16 +177,40 @@ std::vector<T> gather_host(const Strided& values) {
   return out;
 }
 
-// The first record of host `values` (of `floats` floats each) holding a NaN or infinity, or -1.
+// The first record of host `values` (of `floats` coordinates each) holding a NaN or infinity,
+// or (float64 records) a coordinate that rounds to one, or -1.
 inline int64_t first_non_finite_host(const Strided& values, int floats) {
   const char* base = static_cast<const char*>(values.data);
   for (int64_t i = 0; i < values.count; ++i) {
-    float f[6];
-    std::memcpy(f, base + size_t(i) * values.stride, sizeof(float) * size_t(floats));
-    for (int k = 0; k < floats; ++k)
-      if (!std::isfinite(f[k])) return i;
+    const char* record = base + size_t(i) * values.stride;
+    for (int k = 0; k < floats; ++k) {
+      float f;
+      if (values.scalar == Scalar::kFloat64) {
+        double d;
+        std::memcpy(&d, record + sizeof(double) * size_t(k), sizeof d);
+        f = float(d);
+      } else {
+        std::memcpy(&f, record + sizeof(float) * size_t(k), sizeof f);
+      }
+      if (!std::isfinite(f)) return i;
+    }
   }
   return -1;
+}
+
+// Host float64 vertices rounded to nearest float into `out`; returns rho, the farthest the
+// rounding moved one (minkq/float64.h).
+inline float gather_float64_host(const Strided& values, std::vector<Vec3>& out) {
+  out.resize(size_t(values.count));
+  const char* base = static_cast<const char*>(values.data);
+  float rho = 0.0f;
+  for (int64_t i = 0; i < values.count; ++i) {
+    double p[3];
+    std::memcpy(p, base + size_t(i) * values.stride, sizeof p);
+    out[size_t(i)] = round_to_float(p);
+    rho = std::max(rho, rounding_distance(p, out[size_t(i)]));
+  }
+  return rho;
 }
 
 }  // namespace minkq

@@ -13,6 +13,9 @@
 //   finish()                       completes the call's work and reports its errors.
 //   gather(values, Array<T>&)      packs strided Vec3 or Box records (host or, on CUDA, device
 //                                  memory) into an array.
+//   gather_float64(values, Array<Vec3>&, Array<float>& rho)
+//                                  the same from float64 vertices, rounded to nearest, with
+//                                  rho[0] the farthest the rounding moved one (float64.h).
 //   upload(Array<T>&, vector<T>)   takes host topology over.
 //   download(T* host, Array<T>, n) copies n records to the host.
 //   sort_by_morton(boxes, n, Array<int32_t>& ids)
@@ -32,9 +35,10 @@
 //   reserve_staging(Array<Vec3>&, n), reserve_pending(), reserve_canonical(pairs),
 //   reserve_build(Tree&, boxes, n), reserve_sort(boxes, n)
 //                                  the scratch the asynchronous calls use, kept from then on.
-//   commit_finite(values, staging, dst, call)
+//   commit_finite(values, staging, dst, rho, call)
 //                                  dst = values (executor memory) unless a coordinate is not
 //                                  finite; then dst is kept and the pending error recorded.
+//                                  Float64 values also set *rho (rho: nullptr for float).
 //   take_pending()                 the pending error (after wait()), cleared.
 //
 // cpu/backend.cpp and cuda/backend.cu define the two executors; a query's pairs, counts and
@@ -123,9 +127,10 @@ class MeshStoreOn final : public MeshStore {
   MeshStoreOn(typename X::Device device, const Strided& vertices, std::vector<Triangle> triangles,
               std::vector<Edge> edges, bool triangle_tree, bool edge_tree)
       : x_(device), num_vertices_(int32_t(vertices.count)), num_triangles_(int32_t(triangles.size())),
-        num_edges_(int32_t(edges.size())), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree) {
+        num_edges_(int32_t(edges.size())), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree),
+        float64_(vertices.scalar == Scalar::kFloat64) {
     x_.hold();
-    x_.gather(vertices, vertices_);
+    gather_vertices(vertices);
     if (has_triangle_tree_) x_.upload(triangles_, std::move(triangles));
     x_.upload(edges_, std::move(edges));
     build_trees();
@@ -141,7 +146,7 @@ class MeshStoreOn final : public MeshStore {
 
   void refit(const Strided& vertices) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    x_.gather(vertices, vertices_);
+    gather_vertices(vertices);
     if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
     if (has_edge_tree_) edge_tree_.refit(edge_boxes());
     x_.finish();
@@ -149,7 +154,7 @@ class MeshStoreOn final : public MeshStore {
 
   void rebuild(const Strided& vertices) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    x_.gather(vertices, vertices_);
+    gather_vertices(vertices);
     build_trees();
     x_.finish();
   }
@@ -206,14 +211,14 @@ class MeshStoreOn final : public MeshStore {
 
   void refit_async(const Strided& vertices, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    x_.commit_finite(vertices, staging_, vertices_, PendingError::kRefit);
+    x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRefit);
     if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
     if (has_edge_tree_) edge_tree_.refit(edge_boxes());
   }
 
   void rebuild_async(const Strided& vertices, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    x_.commit_finite(vertices, staging_, vertices_, PendingError::kRebuild);
+    x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRebuild);
     build_trees();
   }
 
@@ -242,15 +247,23 @@ class MeshStoreOn final : public MeshStore {
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
-                                        request.filters};
+                                        request.filters, rho()};
     with_pass<true>(request, triangle_tree_.view(), queries, num_vertices_, out, fn);
   }
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const BvhView edge_tree = edge_tree_.view();
-    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree.sorted_prims, request.r, request.filters};
+    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree.sorted_prims, request.r, request.filters,
+                                  rho()};
     with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
   }
+
+  // The scene's vertices from the caller's (float64 ones rounded, with rho).
+  void gather_vertices(const Strided& vertices) {
+    if (float64_) x_.gather_float64(vertices, vertices_, rho_); else x_.gather(vertices, vertices_);
+  }
+  // Where the queries read rho (executor memory): nullptr for float input, whose radius stays r.
+  float* rho() { return float64_ ? rho_.data() : nullptr; }
 
   // The trees the flags ask for, and the VT query order, from the current vertices.
   void build_trees() {
@@ -269,8 +282,10 @@ class MeshStoreOn final : public MeshStore {
   Array<Edge> edges_;
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
+  Array<float> rho_;     // float64 input: rho[0], how far rounding moved the vertices at most
   int32_t num_vertices_, num_triangles_, num_edges_;
   bool has_triangle_tree_, has_edge_tree_;
+  bool float64_;  // vertices come as float64 (every call: the scene's scalar type)
   Reservation reserved_;
   typename X::Tree triangle_tree_, edge_tree_;
 };

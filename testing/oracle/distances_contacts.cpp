@@ -106,7 +106,8 @@ long double segment_segment_distance(const double p0[3], const double p1[3], con
 // ---- Contacts ------------------------------------------------------------------------------
 namespace {
 
-// The mesh checked and widened to double once (float -> double is exact), with its edges.
+// The mesh checked and widened to double once (float -> double is exact; double input as
+// given), with its edges.
 struct Geometry {
   std::vector<double> xyz;
   const std::vector<int32_t>& tris;
@@ -116,10 +117,11 @@ struct Geometry {
   const double* v(int32_t i) const { return &xyz[3 * size_t(i)]; }
 
   Geometry(const Mesh& m, double radius, bool need_edges)
-      : xyz(m.xyz.begin(), m.xyz.end()), tris(m.tris), r(radius), r2(LD(radius) * radius) {
+      : xyz(m.xyz64.empty() ? std::vector<double>(m.xyz.begin(), m.xyz.end()) : m.xyz64), tris(m.tris), r(radius),
+        r2(LD(radius) * radius) {
     if (need_edges) edges = m.edges.empty() ? derive_edges(m.tris) : m.edges;
     if (!(r >= 0) || !std::isfinite(r)) throw std::invalid_argument("reference: radius must be finite and >= 0");
-    if (m.xyz.size() % 3 || m.tris.size() % 3 || edges.size() % 2)
+    if (xyz.size() % 3 || m.tris.size() % 3 || edges.size() % 2)
       throw std::invalid_argument("reference: xyz, tris or edges size is not a multiple of 3, 3, 2");
     for (double x : xyz)
       if (!std::isfinite(x)) throw std::invalid_argument("reference: non-finite vertex coordinate");

@@ -92,7 +92,18 @@ double mean_edge_length(const Mesh& m) {
   return sum / double(edges.size() / 2);
 }
 
+void set_float64(Mesh& m, std::vector<double> xyz64) {
+  if (xyz64.size() % 3) throw std::invalid_argument("reference: xyz64 size is not a multiple of 3");
+  m.xyz.assign(xyz64.begin(), xyz64.end());  // to nearest
+  m.xyz64 = std::move(xyz64);
+}
+
 void transform(Mesh& m, double scale, double offset) {
+  if (!m.xyz64.empty()) {
+    for (double& x : m.xyz64) x = x * scale + offset;
+    m.xyz.assign(m.xyz64.begin(), m.xyz64.end());
+    return;
+  }
   for (float& x : m.xyz) x = float(double(x) * scale + offset);
 }
 

@@ -2,7 +2,8 @@
 //
 // It shares no code with the core on purpose: a bug in the core's predicates or traversal must
 // not be able to hide itself by also living in the oracle. Distances are evaluated in long
-// double on float meshes (whose coordinates are exact in double), and a pair is a contact when
+// double on float meshes (whose coordinates are exact in double) or on a mesh's double input
+// (Mesh::xyz64, exact in long double), and a pair is a contact when
 // its distance is <= r (compared as squared distance <= r^2, both in long double). Everything here favours being obviously right over being fast; the
 // grid-accelerated queries exist only so that ~300k-triangle scenes can be checked in seconds.
 #pragma once
@@ -22,6 +23,9 @@ struct Mesh {
   std::vector<float> xyz;      // 3 per vertex
   std::vector<int32_t> tris;   // 3 vertex indices per triangle
   std::vector<int32_t> edges;  // 2 vertex indices per edge
+  // Double-precision input, when not empty: 3 per vertex, the positions the contact queries
+  // use; xyz then holds them rounded to nearest float (set_float64 keeps the two in step).
+  std::vector<double> xyz64;
   size_t vertex_count() const { return xyz.size() / 3; }
   size_t triangle_count() const { return tris.size() / 3; }
   size_t edge_count() const { return edges.size() / 2; }
@@ -69,8 +73,11 @@ Mesh random_soup(int triangles, uint64_t seed, double size);
 
 // Mean length of the edges (mesh.edges, or derive_edges(tris) when empty); 0 for no edges.
 double mean_edge_length(const Mesh& mesh);
-// x -> x * scale + offset on every coordinate, in double, then rounded to float.
+// x -> x * scale + offset on every coordinate, in double, then rounded to float (double input:
+// xyz64 transformed, xyz its rounding).
 void transform(Mesh& mesh, double scale, double offset);
+// Makes `xyz64` the mesh's positions (3 per vertex) and xyz their rounding to nearest float.
+void set_float64(Mesh& mesh, std::vector<double> xyz64);
 
 // Loads an OBJ (tinyobjloader: polygons triangulated, all shapes merged into one mesh) or a PLY
 // (ascii, binary_little_endian or binary_big_endian; vertex x, y, z of any scalar type, faces

@@ -3,6 +3,7 @@
 // and to the one traversal; backends call it per query and supply only emit(first, second).
 #pragma once
 
+#include "minkq/float64.h"
 #include "minkq/traversal.h"
 #include "minkq/shapes.h"
 
@@ -75,8 +76,10 @@ struct VertexTriangleQueries {
   const int32_t* order;  // or nullptr: vertex i is query i
   float r;
   uint32_t filters;
+  const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
+  MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
-  MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], r}; }
+  MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], radius()}; }
   // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t, const Box& /*t_box*/) const {
@@ -87,7 +90,7 @@ struct VertexTriangleQueries {
     const Triangle tri = triangles[t];
     if ((filters & kDropIncident) && has_vertex(tri, v)) return false;
     if (filters & kLeafExact)
-      return point_triangle_within(vertices[v], vertices[tri.v[0]], vertices[tri.v[1]], vertices[tri.v[2]], r);
+      return point_triangle_within(vertices[v], vertices[tri.v[0]], vertices[tri.v[1]], vertices[tri.v[2]], radius());
     return true;
   }
   MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
@@ -104,9 +107,11 @@ struct EdgeEdgeQueries {
   const int32_t* sorted_edges;  // the edge tree's leaf order
   float r;
   uint32_t filters;
+  const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
+  MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
-    return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], r};
+    return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], radius()};
   }
   // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box.
   template <class Shape>
@@ -123,7 +128,7 @@ struct EdgeEdgeQueries {
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
-    return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], r);
+    return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
   }
   MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
 };

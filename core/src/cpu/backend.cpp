@@ -35,6 +35,9 @@ class CpuExecutor {
   void gather(const Strided& values, std::vector<T>& dst) {
     dst = gather_host<T>(values);
   }
+  void gather_float64(const Strided& values, std::vector<Vec3>& dst, std::vector<float>& rho) {
+    rho.assign(1, gather_float64_host(values, dst));
+  }
   template <class T>
   void upload(std::vector<T>& dst, std::vector<T>&& host) {
     dst = std::move(host);
@@ -70,12 +73,13 @@ class CpuExecutor {
   void reserve_build(CpuTree&, Boxes, int32_t) {}
   template <class Boxes>
   void reserve_sort(Boxes, int32_t) {}
-  void commit_finite(const Strided& values, std::vector<Vec3>&, std::vector<Vec3>& dst, PendingError::Call call) {
+  void commit_finite(const Strided& values, std::vector<Vec3>&, std::vector<Vec3>& dst, float* rho,
+                     PendingError::Call call) {
     if (const int64_t bad = first_non_finite_host(values, 3); bad >= 0) {
       if (pending_.call == PendingError::kNone) pending_ = {call, bad};
       return;
     }
-    gather(values, dst);
+    if (values.scalar == Scalar::kFloat64) *rho = gather_float64_host(values, dst); else gather(values, dst);
   }
   PendingError take_pending() { return std::exchange(pending_, PendingError{}); }
 

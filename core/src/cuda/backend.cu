@@ -55,6 +55,9 @@ class CudaExecutor {
   void gather(const Strided& values, DeviceBuffer<T>& dst) {
     gather_to_device(values, dst);
   }
+  void gather_float64(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho) {
+    gather_float64_to_device(values, dst, rho);
+  }
   template <class T>
   void upload(DeviceBuffer<T>& dst, std::vector<T>&& host) {
     cuda::upload(dst, host.data(), host.size());
@@ -82,8 +85,8 @@ class CudaExecutor {
   // Asynchronous calls.
   void reserve_staging(DeviceBuffer<Vec3>& staging, int32_t n) { staging.ensure(size_t(n)); }
   void reserve_pending() {
-    pending_.ensure(2);
-    zero(pending_, 2);
+    pending_.ensure(3);
+    zero(pending_, 3);
   }
   void reserve_canonical(size_t capacity) { cuda::reserve_canonical(async_ws_, capacity); }
   template <class Boxes>
@@ -96,16 +99,19 @@ class CudaExecutor {
     sort_reserved_ = true;
   }
   // Gathers and checks into staging, then takes the vertices only if all are finite (runtime.cuh's
-  // two kernels): pending_[0] is this call's first bad vertex, pending_[1] the recorded error.
-  void commit_finite(const Strided& values, DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst,
+  // two kernels): pending_[0] is this call's first bad vertex, pending_[1] the recorded error,
+  // pending_[2] float64 input's rho until it is taken.
+  void commit_finite(const Strided& values, DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst, float* rho,
                      PendingError::Call call) {
     if (values.count == 0) return;
+    const bool float64 = values.scalar == Scalar::kFloat64;
     check(cudaMemsetAsync(pending_.data(), 0xFF, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
+    if (float64) check(cudaMemsetAsync(pending_.data() + 2, 0, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
     launch("gather_checked_kernel launch", gather_checked_kernel, values.count, kThreads,
-           static_cast<const char*>(values.data), values.stride, values.count, is_aligned4(values), staging.data(),
-           pending_.data());
+           static_cast<const char*>(values.data), values.stride, values.count, float64, is_aligned(values),
+           staging.data(), pending_.data());
     launch("commit_checked_kernel launch", commit_checked_kernel, values.count, kThreads, staging.data(), values.count,
-           static_cast<unsigned long long>(call), dst.data(), pending_.data());
+           static_cast<unsigned long long>(call), dst.data(), float64 ? rho : nullptr, pending_.data());
   }
   PendingError take_pending() {
     unsigned long long recorded = 0;
@@ -144,8 +150,8 @@ class CudaBackend final : public Backend {
     const unsigned long long none = std::numeric_limits<unsigned long long>::max();
     copy(first.data(), &none, sizeof(none), cudaMemcpyHostToDevice);
     launch("first_non_finite_kernel launch", first_non_finite_kernel, values.count, kThreads,
-           static_cast<const char*>(values.data), values.stride, values.count, floats, is_aligned4(values),
-           first.data());
+           static_cast<const char*>(values.data), values.stride, values.count, floats,
+           values.scalar == Scalar::kFloat64, is_aligned(values), first.data());
     unsigned long long result = none;
     copy(&result, first.data(), sizeof(result), cudaMemcpyDeviceToHost);
     return result == none ? -1 : int64_t(result);

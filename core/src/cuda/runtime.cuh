@@ -218,6 +218,44 @@ inline bool is_aligned4(const Strided& values) {
   return (reinterpret_cast<uintptr_t>(values.data) % 4 == 0) && values.stride % 4 == 0;
 }
 
+// Double k of a float64 record: read whole where the records are 8-aligned, else byte by byte.
+__device__ inline double load_double(const char* record, int k, bool aligned) {
+  if (aligned) return reinterpret_cast<const double*>(record)[k];
+  unsigned char bytes[8];
+  for (int b = 0; b < 8; ++b) bytes[b] = static_cast<unsigned char>(record[8 * k + b]);
+  double d;
+  memcpy(&d, bytes, 8);
+  return d;
+}
+inline bool is_aligned8(const Strided& values) {
+  return (reinterpret_cast<uintptr_t>(values.data) % 8 == 0) && values.stride % 8 == 0;
+}
+// Whether records of `values` can be read whole (4-aligned floats, 8-aligned doubles).
+inline bool is_aligned(const Strided& values) {
+  return values.scalar == Scalar::kFloat64 ? is_aligned8(values) : is_aligned4(values);
+}
+// Coordinate k of a record as the float minkq keeps: float64 ones rounded to nearest.
+__device__ inline float load_coordinate(const char* record, int k, bool float64, bool aligned) {
+  return float64 ? float(load_double(record, k, aligned)) : load_float(record, k, aligned);
+}
+
+// A float64 vertex of a record, and rho: the largest rounding_distance (non-negative floats
+// order as their bits), atomically kept in *rho_bits.
+__device__ inline Vec3 load_float64_vertex(const char* record, bool aligned, unsigned int* rho_bits) {
+  const double p[3] = {load_double(record, 0, aligned), load_double(record, 1, aligned), load_double(record, 2, aligned)};
+  const Vec3 v = round_to_float(p);
+  const float moved = rounding_distance(p, v);
+  unsigned int bits;
+  memcpy(&bits, &moved, 4);
+  if (moved == moved) atomicMax(rho_bits, bits);  // a NaN input is reported, not kept
+  return v;
+}
+static __global__ void gather_float64_kernel(const char* base, size_t stride, int64_t n, bool aligned, Vec3* out,
+                                             unsigned int* rho_bits) {
+  const int64_t i = global_index();
+  if (i < n) out[i] = load_float64_vertex(base + size_t(i) * stride, aligned, rho_bits);
+}
+
 static __global__ void gather_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
                                      float* out) {
   const int64_t i = global_index();
@@ -226,13 +264,13 @@ static __global__ void gather_kernel(const char* base, size_t stride, int64_t n,
   for (int k = 0; k < floats; ++k) out[i * floats + k] = load_float(record, k, aligned);
 }
 
-static __global__ void first_non_finite_kernel(const char* base, size_t stride, int64_t n, int floats, bool aligned,
-                                               unsigned long long* first) {
+static __global__ void first_non_finite_kernel(const char* base, size_t stride, int64_t n, int floats, bool float64,
+                                               bool aligned, unsigned long long* first) {
   const int64_t i = global_index();
   if (i >= n) return;
   const char* record = base + size_t(i) * stride;
   for (int k = 0; k < floats; ++k)
-    if (!isfinite(load_float(record, k, aligned))) {
+    if (!isfinite(load_coordinate(record, k, float64, aligned))) {
       atomicMin(first, static_cast<unsigned long long>(i));
       return;
     }
@@ -240,30 +278,51 @@ static __global__ void first_non_finite_kernel(const char* base, size_t stride, 
 
 // Asynchronous refits: the caller's strided vertices gathered into `staging`, with the
 // smallest index of a vertex holding a NaN or infinity atomically kept in words[0] (set to
-// kNoVertex first).
+// kNoVertex first); float64 ones rounded, their rho kept in the low half of words[2] (zeroed
+// first).
 constexpr unsigned long long kNoVertex = ~0ull;
-static __global__ void gather_checked_kernel(const char* base, size_t stride, int64_t n, bool aligned, Vec3* staging,
-                                             unsigned long long* words) {
+static __global__ void gather_checked_kernel(const char* base, size_t stride, int64_t n, bool float64, bool aligned,
+                                             Vec3* staging, unsigned long long* words) {
   const int64_t i = global_index();
   if (i >= n) return;
   const char* record = base + size_t(i) * stride;
-  const Vec3 v{load_float(record, 0, aligned), load_float(record, 1, aligned), load_float(record, 2, aligned)};
+  const Vec3 v = float64 ? load_float64_vertex(record, aligned, reinterpret_cast<unsigned int*>(&words[2]))
+                         : Vec3{load_float(record, 0, aligned), load_float(record, 1, aligned), load_float(record, 2, aligned)};
   staging[i] = v;
   if (!isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z)) atomicMin(&words[0], static_cast<unsigned long long>(i));
 }
 
-// Then the staged vertices become the scene's if all were finite; otherwise thread 0 records
-// (call, vertex) in words[1] unless an earlier call's error is pending there (0: none).
+// Then the staged vertices become the scene's if all were finite (and thread 0 sets *rho, for
+// float64 input); otherwise thread 0 records (call, vertex) in words[1] unless an earlier
+// call's error is pending there (0: none).
 static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, unsigned long long call, Vec3* vertices,
-                                             unsigned long long* words) {
+                                             float* rho, unsigned long long* words) {
   const int64_t i = global_index();
   if (i >= n) return;
   const unsigned long long bad = words[0];
   if (bad == kNoVertex) {
     vertices[i] = staging[i];
+    if (rho && i == 0) memcpy(rho, &words[2], sizeof(float));  // the low half: little-endian
   } else if (i == 0 && words[1] == 0) {
     words[1] = (call << 32) | bad;  // vertex indices are below 2^31
   }
+}
+
+// Float64 vertices (host or device memory) rounded into a device array, rho[0] set.
+inline void gather_float64_to_device(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho) {
+  const size_t count = size_t(values.count);
+  dst.ensure(count);
+  rho.ensure(1);
+  if (values.memory == Memory::kHost) {
+    std::vector<Vec3> packed;
+    const float moved = gather_float64_host(values, packed);
+    upload(dst, packed.data(), count);
+    return upload(rho, &moved, 1);
+  }
+  zero(rho, 1);
+  launch("gather_float64_kernel launch", gather_float64_kernel, values.count, kThreads,
+         static_cast<const char*>(values.data), values.stride, values.count, is_aligned8(values), dst.data(),
+         reinterpret_cast<unsigned int*>(rho.data()));
 }
 
 // Packs strided Vec3 or Box records (host or device memory) into a device array.

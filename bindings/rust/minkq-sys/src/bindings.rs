@@ -126,6 +126,7 @@ pub struct minkq_scene {
 pub const MINKQ_SCENE_VT: minkq_scene_flags = 1;
 pub const MINKQ_SCENE_EE: minkq_scene_flags = 2;
 pub const MINKQ_SCENE_DROP_INCIDENT: minkq_scene_flags = 4;
+pub const MINKQ_SCENE_FLOAT64: minkq_scene_flags = 8;
 pub type minkq_scene_flags = ::std::os::raw::c_uint;
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
