@@ -203,33 +203,28 @@ inline int64_t resident_threads() {
 
 // ---- Strided input ------------------------------------------------------------------------
 
-// Float k of a record. Caller-supplied strides need only be 4-aligned; anything less aligned
-// is read byte by byte.
-__device__ inline float load_float(const char* record, int k, bool aligned) {
-  if (aligned) return reinterpret_cast<const float*>(record)[k];
-  unsigned char bytes[4];
-  for (int b = 0; b < 4; ++b) bytes[b] = static_cast<unsigned char>(record[4 * k + b]);
-  float f;
-  memcpy(&f, bytes, 4);
-  return f;
+// Coordinate k (a float or a double) of a record: read whole where the records are aligned to
+// it (caller-supplied strides need not be), else byte by byte.
+template <class T>
+__device__ inline T load_scalar(const char* record, int k, bool aligned) {
+  if (aligned) return reinterpret_cast<const T*>(record)[k];
+  unsigned char bytes[sizeof(T)];
+  for (int b = 0; b < int(sizeof(T)); ++b) bytes[b] = static_cast<unsigned char>(record[sizeof(T) * k + b]);
+  T value;
+  memcpy(&value, bytes, sizeof(T));
+  return value;
 }
-
-inline bool is_aligned4(const Strided& values) {
-  return (reinterpret_cast<uintptr_t>(values.data) % 4 == 0) && values.stride % 4 == 0;
-}
-
-// Double k of a float64 record: read whole where the records are 8-aligned, else byte by byte.
+__device__ inline float load_float(const char* record, int k, bool aligned) { return load_scalar<float>(record, k, aligned); }
 __device__ inline double load_double(const char* record, int k, bool aligned) {
-  if (aligned) return reinterpret_cast<const double*>(record)[k];
-  unsigned char bytes[8];
-  for (int b = 0; b < 8; ++b) bytes[b] = static_cast<unsigned char>(record[8 * k + b]);
-  double d;
-  memcpy(&d, bytes, 8);
-  return d;
+  return load_scalar<double>(record, k, aligned);
 }
-inline bool is_aligned8(const Strided& values) {
-  return (reinterpret_cast<uintptr_t>(values.data) % 8 == 0) && values.stride % 8 == 0;
+
+template <size_t kBytes>
+bool is_aligned_to(const Strided& values) {
+  return (reinterpret_cast<uintptr_t>(values.data) % kBytes == 0) && values.stride % kBytes == 0;
 }
+inline bool is_aligned4(const Strided& values) { return is_aligned_to<4>(values); }
+inline bool is_aligned8(const Strided& values) { return is_aligned_to<8>(values); }
 // Whether records of `values` can be read whole (4-aligned floats, 8-aligned doubles).
 inline bool is_aligned(const Strided& values) {
   return values.scalar == Scalar::kFloat64 ? is_aligned8(values) : is_aligned4(values);
