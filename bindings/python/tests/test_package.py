@@ -16,7 +16,9 @@ from oracle import rolled_sheet
 
 def test_package_ships_type_information():
     root = os.path.dirname(minkq.__file__)
-    for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_interop.py", "newton/__init__.py", "newton/examples.py", "demo.py"):
+    for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_interop.py",
+                 "newton/__init__.py", "newton/_kernels.py", "newton/_capture.py", "newton/_detector.py",
+                 "newton/_install.py", "newton/examples.py", "demo.py"):
         assert os.path.exists(os.path.join(root, name)), name
     assert minkq.abi_version() == minkq.ABI_VERSION
     # The library the package loaded is the release the package says it is.
