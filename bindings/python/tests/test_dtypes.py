@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import minkq
-from minkq import _api
+from minkq import _args
 from oracle import rolled_sheet
 
 R = 0.05
@@ -69,19 +69,19 @@ def test_float64_refit_rebuild_edges_and_bvh_queries(device, mesh):
 def test_conversion_copies_and_exact_dtypes_are_read_in_place(mesh):
     xyz, tris = mesh
     # Exact dtypes, C-contiguous: the caller's arrays themselves go to the extension.
-    assert _api._rows(xyz, "vertices", np.float32, (3,)) is xyz
-    assert _api._rows(tris, "triangles", np.int32, (3,)) is tris
+    assert _args._rows(xyz, "vertices", np.float32, (3,)) is xyz
+    assert _args._rows(tris, "triangles", np.int32, (3,)) is tris
     # Other dtypes: one copy in minkq's dtype; the caller's array is left as it was.
     xyz64, tris64 = xyz.astype(np.float64), tris.astype(np.int64)
     before = tris64.copy()
-    v = _api._rows(xyz64, "vertices", np.float32, (3,))
-    t = _api._rows(tris64, "triangles", np.int32, (3,))
+    v = _args._rows(xyz64, "vertices", np.float32, (3,))
+    t = _args._rows(tris64, "triangles", np.int32, (3,))
     assert v.dtype == np.float32 and v.flags.c_contiguous and not np.shares_memory(v, xyz64)
     assert t.dtype == np.int32 and t.flags.c_contiguous and not np.shares_memory(t, tris64)
     assert np.array_equal(v, xyz) and np.array_equal(t, tris) and np.array_equal(tris64, before)
     # A strided int64 array is converted once (astype gives a contiguous array), not twice.
     strided = np.zeros((8, 6), np.int64)[:, ::2]
-    assert _api._rows(strided, "triangles", np.int32, (3,)).flags.c_contiguous
+    assert _args._rows(strided, "triangles", np.int32, (3,)).flags.c_contiguous
 
 
 @pytest.mark.parametrize("value, where", [(2**31, "[4, 1]"), (2**40, "[4, 1]"), (-(2**31) - 1, "[4, 1]")])

@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 
 import minkq
-from minkq import _api
+from minkq import _args, _bvh, _device, _scene
 from oracle import rolled_sheet
 
 
 def test_package_ships_type_information():
     root = os.path.dirname(minkq.__file__)
-    for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_interop.py",
+    for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_args.py",
+                 "_results.py", "_device.py", "_scene.py", "_bvh.py", "_interop.py",
                  "newton/__init__.py", "newton/_kernels.py", "newton/_capture.py", "newton/_detector.py",
                  "newton/_install.py", "newton/examples.py", "demo.py"):
         assert os.path.exists(os.path.join(root, name)), name
@@ -38,18 +39,19 @@ def test_public_items_have_docstrings():
 
 
 def test_docstring_examples_run():
-    failures, tried = doctest.testmod(_api, optionflags=doctest.NORMALIZE_WHITESPACE)
-    assert tried >= 5 and failures == 0
+    for module in (_device, _scene, _bvh):
+        failures, tried = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+        assert tried >= 1 and failures == 0, module.__name__
 
 
 def test_c_contiguous_inputs_are_not_copied():
     xyz, tris = rolled_sheet(5, 0)
-    assert _api._rows(xyz, "vertices", np.float32, (3,)) is xyz
-    assert _api._rows(tris, "triangles", np.int32, (3,)) is tris
+    assert _args._rows(xyz, "vertices", np.float32, (3,)) is xyz
+    assert _args._rows(tris, "triangles", np.int32, (3,)) is tris
     boxes = np.zeros((4, 6), np.float32)
-    assert np.shares_memory(_api._boxes(boxes, "boxes"), boxes)
+    assert np.shares_memory(_args._boxes(boxes, "boxes"), boxes)
     strided = np.zeros((5, 6), np.float32)[:, ::2]
-    assert not np.shares_memory(_api._rows(strided, "vertices", np.float32, (3,)), strided)
+    assert not np.shares_memory(_args._rows(strided, "vertices", np.float32, (3,)), strided)
 
 
 def test_repr_and_properties(device):

@@ -1,0 +1,199 @@
+"""Arguments on their way to minkq._native: host arrays converted once to minkq's dtypes (or used
+in place when they have them), arrays of other libraries checked and described in place
+(minkq._interop), output and count arrays checked, and the names, modes and radii of queries
+checked, each with a message naming the argument."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Optional, Tuple
+
+import numpy as np
+
+from ._errors import IndexOutOfRangeError
+from ._interop import Like, checked, checked_count, has_protocol, like, view
+
+if TYPE_CHECKING:
+    from typing import Literal
+
+    import numpy.typing as npt
+
+    from ._device import Device
+
+    Kind = Literal["vt", "ee"]
+    Mode = Literal["box", "sphere", "capsule_ray", "capsule_exact"]
+    Shape = Literal["sphere", "capsule", "box"]
+    Pairs = npt.NDArray[np.int32]
+
+KINDS = ("vt", "ee")
+MODES = ("box", "sphere", "capsule_ray", "capsule_exact")
+
+
+def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.ndarray:
+    """``value`` as a C-contiguous array of shape (n, *trailing) and dtype ``dtype``.
+
+    A C-contiguous numpy array of exactly ``dtype`` (float32 coordinates, int32 indices, native
+    byte order) is used in place, without a copy. Other host arrays are converted once, into a
+    copy that lives for the call:
+    float64 vertices and int64 / uint32 indices, as trimesh and most mesh loaders give, strided
+    or byte-swapped arrays, lists and tuples. Coordinates may come from any float or integer
+    dtype; indices from integer dtypes only (no rounding of floats), and an index that does not
+    fit in int32 raises :class:`~minkq.IndexOutOfRangeError` naming the element instead of
+    wrapping around. Arrays of other libraries (DLPack, the CUDA array interface) are never
+    converted: see :func:`minkq._interop.checked`.
+    """
+    dtype = np.dtype(dtype)
+    if isinstance(value, np.ndarray):
+        array = value
+    else:
+        try:
+            array = np.asarray(value)
+        except (TypeError, ValueError) as e:
+            raise TypeError(f"{name}: expected an array of {dtype.name}, got {type(value).__name__}: {e}") from None
+        if array.size == 0:
+            array = array.astype(dtype)
+        if array.size == 0 and array.ndim == 1:
+            array = array.reshape((0,) + trailing)
+    if array.dtype != dtype:
+        array = _converted(array, name, dtype)
+    if array.ndim != 1 + len(trailing) or array.shape[1:] != trailing:
+        wanted = ", ".join(["n"] + [str(d) for d in trailing])
+        raise ValueError(f"{name}: expected shape ({wanted}), got {array.shape}")
+    if not (array.flags.c_contiguous and array.flags.aligned):
+        array = np.require(array, requirements=("C", "A"))  # strided input: a contiguous copy
+    return array
+
+
+def _converted(array: np.ndarray, name: str, dtype: np.dtype) -> np.ndarray:
+    """A copy of ``array`` in ``dtype`` (float32 from any real dtype, int32 from integers whose
+    values fit), or TypeError / IndexOutOfRangeError naming the argument."""
+    kind = array.dtype.kind
+    if dtype.kind == "f" and kind in "fiu":
+        return array.astype(dtype)
+    if dtype.kind == "i" and kind in "iu":
+        info = np.iinfo(dtype)
+        if array.size:
+            for bad in (array < info.min, array > info.max):
+                if bad.any():
+                    at = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), array.shape))
+                    raise IndexOutOfRangeError(
+                        f"{name}[{', '.join(map(str, at))}] = {array[at]} does not fit in int32: minkq indices "
+                        f"are int32 (0 to {info.max})"
+                    )
+        return array.astype(dtype)
+    hint = " (floats are not rounded to indices)" if kind == "f" else ""
+    raise TypeError(f"{name}: expected {dtype.name} values, got {array.dtype}{hint}")
+
+
+def _boxes(value: Any, name: str) -> np.ndarray:
+    """Boxes as (n, 2, 3) float32 (lo, hi); (n, 6) is accepted as (lo x, y, z, hi x, y, z)."""
+    if getattr(value, "ndim", None) == 2 or (isinstance(value, (list, tuple)) and value and len(value[0]) == 6):
+        flat = _rows(value, name, np.float32, (6,))
+        return flat.reshape(-1, 2, 3)
+    return _rows(value, name, np.float32, (2, 3))
+
+
+def _like(array: Any) -> Optional[Like]:
+    """What results need of ``array`` (a view or None) to be made like it; the array itself is
+    not kept alive."""
+    return None if array is None else like(array)
+
+
+class _Args:
+    """Array arguments on their way to minkq._native: numpy arrays as they are (the buffer
+    protocol), arrays of other libraries as raw descriptors of their memory (DLPack, the CUDA
+    array interface), whose views this object keeps alive until the call has returned."""
+
+    def __init__(self, device: "Device", stream: Optional[int] = None) -> None:
+        self.device = device
+        self.stream = stream
+        """None for the blocking calls; the cudaStream_t of a stream-ordered call."""
+        self.views: list = []
+
+    def rows(self, value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> Any:
+        if not has_protocol(value):
+            return _rows(value, name, dtype, trailing)
+        array = checked(view(value, name, self.device, self.stream), name, dtype, trailing)
+        self.views.append(array)
+        return array.descriptor()
+
+    def boxes(self, value: Any, name: str) -> Any:
+        if not has_protocol(value):
+            return _boxes(value, name)
+        array = view(value, name, self.device)
+        array = checked(array, name, np.float32, (6,) if len(array.shape) == 2 else (2, 3))
+        self.views.append(array)
+        return array.descriptor()
+
+    def out(self, value: Any, name: str = "out") -> Any:
+        if isinstance(value, np.ndarray) or not has_protocol(value):
+            return _out(value, name)
+        array = view(value, name, self.device, self.stream)
+        array = checked(array, name, np.int32, (2,), writable=True, packed=True)
+        self.views.append(array)
+        return array.descriptor()
+
+    def count(self, value: Any, name: str) -> Any:
+        """A stream-ordered query's count: a writable (1,) uint64 or int64 array, passed as
+        uint64 (a view of the same memory for a numpy int64 array: nothing is copied)."""
+        if isinstance(value, np.ndarray) or not has_protocol(value):
+            return _count(value, name)
+        array = checked_count(view(value, name, self.device, self.stream), name)
+        self.views.append(array)
+        return array.descriptor()
+
+    def like(self, value: Any, name: str = "like") -> Optional[Like]:
+        """The library and device results take (None: numpy)."""
+        if value is None or isinstance(value, np.ndarray) or not has_protocol(value):
+            return None
+        return like(view(value, name, self.device))
+
+    @property
+    def last(self) -> Any:
+        """The last array viewed (a minkq._interop.Foreign), or None."""
+        return self.views[-1] if self.views else None
+
+
+def _radius(radius: Any) -> float:
+    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)):
+        raise TypeError(f"radius: expected a number, got {type(radius).__name__}")
+    return float(radius)
+
+
+def _choice(value: Any, name: str, choices: Tuple[str, ...]) -> str:
+    if value not in choices:
+        raise ValueError(f"{name}: expected one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+    return str(value)
+
+
+def _out(out: Any, name: str = "out") -> np.ndarray:
+    if not isinstance(out, np.ndarray):
+        raise TypeError(
+            f"{name}: expected a numpy array or an array with __dlpack__ or __cuda_array_interface__, got {type(out).__name__}"
+        )
+    if out.dtype != np.int32:
+        raise TypeError(f"{name}: expected an int32 array, got {out.dtype}")
+    if out.ndim != 2 or out.shape[1] != 2:
+        raise ValueError(f"{name}: expected shape (capacity, 2), got {out.shape}")
+    if not (out.flags.c_contiguous and out.flags.aligned):
+        raise ValueError(f"{name}: expected a C-contiguous array")
+    if not out.flags.writeable:
+        raise ValueError(f"{name}: the array is read-only")
+    return out
+
+
+def _count(count: Any, name: str) -> np.ndarray:
+    """A numpy (1,) uint64 / int64 count as a uint64 view of the same memory."""
+    if not isinstance(count, np.ndarray):
+        raise TypeError(
+            f"{name}: expected a (1,) uint64 numpy array or an array with __dlpack__ or __cuda_array_interface__, got "
+            f"{type(count).__name__}"
+        )
+    if count.dtype not in (np.dtype(np.uint64), np.dtype(np.int64)) or not count.dtype.isnative:
+        raise TypeError(f"{name}: expected a uint64 or int64 array, got {count.dtype}")
+    if count.shape != (1,):
+        raise ValueError(f"{name}: expected shape (1,), got {count.shape}")
+    if not count.flags.aligned:
+        raise ValueError(f"{name}: the data address is not 8-byte aligned")
+    if not count.flags.writeable:
+        raise ValueError(f"{name}: the array is read-only")
+    return count.view(np.uint64)

@@ -1,0 +1,142 @@
+"""BVHs over user boxes: sphere, capsule and box queries."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Optional, Tuple
+
+import numpy as np
+
+from . import _native
+from ._args import MODES, _Args, _choice, _like, _radius
+from ._device import Device
+from ._results import QueryInfo, _SizedQueries
+
+if TYPE_CHECKING:
+    from ._args import Mode, Pairs, Shape
+
+_DEFAULT_BVH_MODE = {"sphere": "sphere", "capsule": "capsule_exact", "box": "box"}
+
+
+class BVH(_SizedQueries):
+    """A BVH over user boxes: (n, 2, 3) float32 (lo, hi), or (n, 6) as lo x, y, z, hi x, y, z,
+    with lo <= hi. Answers sphere, capsule and box queries; pairs are (query, box). Arrays of
+    other libraries are read in place as by :class:`Scene`; results take the library and device
+    of the query array (or of ``like``).
+
+    >>> import numpy as np, minkq
+    >>> boxes = np.array([[[0, 0, 0], [1, 1, 1]], [[2, 2, 2], [3, 3, 3]]], np.float32)
+    >>> bvh = minkq.BVH(minkq.Device("cpu"), boxes)
+    >>> centres = np.array([[1.5, 1.5, 1.5], [0.5, 0.5, 0.5]], np.float32)
+    >>> bvh.query("sphere", centres, 0.5).tolist()
+    [[1, 0]]
+    """
+
+    def __init__(self, device: Device, boxes: Any) -> None:
+        super().__init__()
+        if not isinstance(device, Device):
+            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
+        self.device = device
+        args = _Args(device)
+        self._native = _native.Bvh(device._native, args.boxes(boxes, "boxes"))
+
+    def __len__(self) -> int:
+        return self._native.box_count
+
+    def refit(self, boxes: Any) -> None:
+        """New boxes (same count); refits in place. The tree keeps the grouping of its last
+        build (:meth:`tree_growth` measures how much that costs, :meth:`rebuild` resets it)."""
+        args = _Args(self.device)
+        self._native.refit(args.boxes(boxes, "boxes"))
+
+    def rebuild(self, boxes: Any) -> None:
+        """New boxes (same count); builds the tree afresh, as the constructor would. The pairs
+        are those of a refit; only the speed of later queries differs. Same errors as
+        :meth:`refit`; on error the BVH keeps its boxes and tree."""
+        args = _Args(self.device)
+        self._native.rebuild(args.boxes(boxes, "boxes"))
+
+    def tree_growth(self) -> float:
+        """The tree's area cost now over its value right after the last build, as
+        :meth:`Scene.tree_growth`: 1.0 after a build.
+
+        >>> import numpy as np, minkq
+        >>> lo = np.repeat(np.arange(16, dtype=np.float32)[:, None], 3, axis=1)
+        >>> boxes = np.stack([lo, lo + 1], axis=1)  # unit boxes along a diagonal
+        >>> bvh = minkq.BVH(minkq.Device("cpu"), boxes)
+        >>> mixed = boxes.copy()
+        >>> mixed[1::2] = boxes[::-1][1::2]  # every other box moved to the mirror position
+        >>> bvh.refit(mixed)
+        >>> bvh.tree_growth() > 1.5
+        True
+        >>> bvh.rebuild(mixed)
+        >>> bvh.tree_growth()
+        1.0
+        """
+        return self._native.tree_growth()
+
+    def query(
+        self,
+        shape: "Shape",
+        queries: Any,
+        radius: float = 0.0,
+        *,
+        mode: Optional["Mode"] = None,
+        canonical: bool = False,
+        like: Any = None,
+    ) -> "Pairs":
+        """(query, box) pairs for every query shape overlapping a box, as a (k, 2) int32 array.
+
+        ``shape="sphere"``: ``queries`` are centres (n, 3) float32; modes ``"box"``, ``"sphere"``
+        (default). ``"capsule"``: segments (n, 2, 3) float32; modes ``"box"``, ``"capsule_ray"``,
+        ``"capsule_exact"`` (default). ``"box"``: boxes (n, 2, 3) or (n, 6); mode ``"box"``,
+        radius 0.
+        """
+        return self._query(shape, queries, radius, mode, canonical, False, like)[0]
+
+    def query_digest(
+        self, shape: "Shape", queries: Any, radius: float = 0.0, *, mode: Optional["Mode"] = None, like: Any = None
+    ) -> Tuple["Pairs", int]:
+        """Like :meth:`query`, canonical, with the xxHash64 of the pairs."""
+        pairs, digest = self._query(shape, queries, radius, mode, True, True, like)
+        assert digest is not None
+        return pairs, digest
+
+    def query_into(
+        self,
+        out: Any,
+        shape: "Shape",
+        queries: Any,
+        radius: float = 0.0,
+        *,
+        mode: Optional["Mode"] = None,
+        canonical: bool = False,
+        digest: bool = False,
+    ) -> QueryInfo:
+        """Runs queries into ``out`` ((capacity, 2) int32, numpy or read in place as by
+        :meth:`Scene.query_into`); :class:`CapacityError` when too small."""
+        args = _Args(self.device)
+        native_args = self._args(args, shape, queries, radius, mode)
+        count, dig = self._native.query_into(args.out(out), *native_args, bool(canonical), bool(digest))
+        return QueryInfo(count, dig)
+
+    def _args(self, args: _Args, shape: Any, queries: Any, radius: Any, mode: Any) -> Tuple[str, Any, str, float]:
+        shape = _choice(shape, "shape", ("sphere", "capsule", "box"))
+        mode = _DEFAULT_BVH_MODE[shape] if mode is None else _choice(mode, "mode", MODES)
+        if shape == "sphere":
+            array = args.rows(queries, "centres", np.float32, (3,))
+        elif shape == "capsule":
+            array = args.rows(queries, "segments", np.float32, (2, 3))
+        else:
+            array = args.boxes(queries, "boxes")
+        return shape, array, mode, _radius(radius)
+
+    def _query(self, shape: Any, queries: Any, radius: Any, mode: Any, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
+        args = _Args(self.device)
+        native_args = self._args(args, shape, queries, radius, mode)
+        target = _like(args.last) if like is None else args.like(like)
+        count = native_args[1][2] if isinstance(native_args[1], tuple) else len(native_args[1])
+        key = (native_args[0], native_args[2], count, bool(canonical), bool(digest))
+        return self._run(key, lambda out: self._native.query_into(out, *native_args, bool(canonical), bool(digest)), target)
+
+    def __repr__(self) -> str:
+        return f"minkq.BVH({len(self)} boxes)"

@@ -1,0 +1,414 @@
+"""Mesh scenes: VT and EE queries over a triangle mesh, blocking and stream-ordered."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Callable, Optional, Tuple
+
+import numpy as np
+
+from . import _native
+from ._args import KINDS, MODES, _Args, _choice, _like, _radius
+from ._device import Device
+from ._interop import stream_handle
+from ._results import QueryInfo, WorkStats, _SizedQueries
+
+if TYPE_CHECKING:
+    from ._args import Kind, Mode, Pairs
+
+
+class Scene(_SizedQueries):
+    """A triangle mesh on a device with the BVHs for VT and/or EE queries.
+
+    ``vertices``: (n, 3) float32; ``triangles``: (m, 3) int32; ``edges``: (e, 2) int32, or None
+    (or an empty array) to derive them from the triangles (every distinct undirected edge as
+    (min, max), sorted).
+    C-contiguous numpy arrays of exactly these dtypes are used without a copy; other host
+    arrays (float64 vertices, int64 indices, ...) are converted once: a copy is made (an index
+    that does not fit in int32 raises IndexOutOfRangeError naming it). Arrays of other
+    libraries must have exactly these dtypes.
+    ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
+    a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
+
+    Arrays of other libraries (Warp arrays, PyTorch and CuPy tensors: anything with
+    ``__dlpack__`` or ``__cuda_array_interface__``) are read in place, in host memory or, on a
+    CUDA device, in device memory on their GPU, with their stream respected (see
+    minkq._interop). They must have these dtypes and shapes, each row contiguous (rows may lie
+    at any stride, e.g. the last two columns of an (e, 4) edge table); they are never copied or
+    converted, and a CUDA array on a CPU device or another GPU raises
+    :class:`InvalidArgumentError`. Queries then return arrays of the vertices' library and
+    device (or of ``like``): Warp, PyTorch and CuPy arrays, numpy for other host arrays; for
+    device arrays of other libraries (e.g. Numba) pass your own array to :meth:`query_into`.
+
+    The GIL is released while the scene is built, refitted, rebuilt and queried. One scene may
+    be used from several threads: calls on it wait for each other (as do builds on one device).
+    Do not change an input array from another thread while a call that reads it runs.
+
+    >>> import numpy as np, minkq
+    >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
+    >>> t = np.array([[0, 1, 2], [3, 4, 5]], np.int32)
+    >>> scene = minkq.Scene(minkq.Device("cpu"), v, t)
+    >>> scene.query("vt", "sphere", 0.2, leaf_exact=True, canonical=True).tolist()
+    [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
+
+    Raises :class:`NonFiniteError`, :class:`IndexOutOfRangeError`, :class:`SizeOverflowError` or
+    :class:`InvalidArgumentError` (with the library's message) for bad input, and
+    TypeError / ValueError naming the argument for a wrong dtype or shape.
+    """
+
+    def __init__(
+        self,
+        device: Device,
+        vertices: Any,
+        triangles: Any,
+        edges: Any = None,
+        *,
+        vt: bool = True,
+        ee: bool = True,
+        drop_incident: bool = True,
+    ) -> None:
+        super().__init__()
+        if not isinstance(device, Device):
+            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
+        self.device = device
+        args = _Args(device)
+        vertices = args.rows(vertices, "vertices", np.float32, (3,))
+        self._like = _like(args.last)
+        triangles = args.rows(triangles, "triangles", np.int32, (3,))
+        if edges is not None:
+            edges = args.rows(edges, "edges", np.int32, (2,))
+        self._native = _native.Scene(device._native, vertices, triangles, edges, bool(vt), bool(ee), bool(drop_incident))
+        self._stream = 0  # the stream of the last stream-ordered call, for async_status
+
+    @property
+    def vertex_count(self) -> int:
+        """The number of vertices."""
+        return self._native.vertex_count
+
+    @property
+    def triangle_count(self) -> int:
+        """The number of triangles."""
+        return self._native.triangle_count
+
+    @property
+    def edge_count(self) -> int:
+        """The number of edges (given, or derived for an EE scene)."""
+        return self._native.edge_count
+
+    def edges(self) -> "Pairs":
+        """The scene's edges as an (edge_count, 2) int32 numpy array, numbered as EE pairs number
+        them."""
+        out = np.empty((self.edge_count, 2), dtype=np.int32)
+        self._native.edges_into(out)
+        return out
+
+    def refit(self, vertices: Any) -> None:
+        """Moves the vertices ((n, 3) float32, same n; numpy or read in place as in the
+        constructor) and refits the trees in place: the per-step call of a simulation. On error
+        the scene keeps its previous positions. A refit keeps the grouping of the last build:
+        after large deformations the boxes overlap more and queries visit more nodes
+        (:meth:`tree_growth` measures it, :meth:`rebuild` resets it); the pairs found never
+        change."""
+        args = _Args(self.device)
+        native = args.rows(vertices, "vertices", np.float32, (3,))
+        self._native.refit(native)
+        self._like = _like(args.last)
+
+    def rebuild(self, vertices: Any) -> None:
+        """Moves the vertices like :meth:`refit` and builds the trees afresh for the new
+        positions: the trees the constructor would build there, with the same triangles, edges
+        and edge numbering. The pairs are those of a refit; only the speed of later queries
+        differs. Worth it once large motions have raised :meth:`tree_growth` (above about 1.5),
+        and every so many steps when the mesh changes shape a lot. Same errors as
+        :meth:`refit`; on error the scene keeps its positions and trees.
+
+        >>> import numpy as np, minkq
+        >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> v[3:, 2] = 1.0  # lift the upper triangle away
+        >>> scene.rebuild(v)
+        >>> scene.query("vt", "sphere", 0.2).tolist(), scene.tree_growth()
+        ([], 1.0)
+        """
+        args = _Args(self.device)
+        native = args.rows(vertices, "vertices", np.float32, (3,))
+        self._native.rebuild(native)
+        self._like = _like(args.last)
+
+    def tree_growth(self) -> float:
+        """How far the refits since the last build (the constructor or :meth:`rebuild`) have
+        stretched the trees: their area cost (scale-free; it grows with the nodes a query
+        visits) now over its value right after that build, the larger of the scene's two trees.
+        1.0 after a build. It sees boxes that stretch, not a mesh folding or flattening into new
+        neighbours (where a rebuild can still help). Rebuild when it passes about 1.5, and every
+        so many steps when the mesh changes shape a lot (the C header; what rebuilds bought on
+        the benchmark scenes is in ``bench/README.md``). A tree whose elements all lie on one
+        line parallel to an axis (or at one point) has no area: 1.0 while it stays so, ``inf``
+        once it has any.
+
+        >>> import numpy as np, minkq
+        >>> u, v = np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9))
+        >>> flat = np.stack([u.ravel(), v.ravel(), np.zeros(81)], 1).astype(np.float32)
+        >>> i, j = np.meshgrid(np.arange(8), np.arange(8))
+        >>> v00 = (j * 9 + i).ravel()
+        >>> tris = np.concatenate([np.stack([v00, v00 + 1, v00 + 10], 1), np.stack([v00, v00 + 10, v00 + 9], 1)])
+        >>> scene = minkq.Scene(minkq.Device("cpu"), flat, tris.astype(np.int32))
+        >>> scene.tree_growth()
+        1.0
+        >>> a = 2 * np.pi * flat[:, 0]  # rolled up into a tube
+        >>> tube = np.stack([np.cos(a), flat[:, 1], np.sin(a)], 1).astype(np.float32)
+        >>> scene.refit(tube)
+        >>> scene.tree_growth() > 1.5
+        True
+        >>> scene.rebuild(tube)
+        >>> scene.tree_growth()
+        1.0
+        """
+        return self._native.tree_growth()
+
+    def query(
+        self,
+        kind: "Kind",
+        mode: "Mode",
+        radius: float,
+        *,
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        like: Any = None,
+    ) -> "Pairs":
+        """Pairs within ``radius`` as a (k, 2) int32 array: (vertex, triangle) for ``kind="vt"``,
+        (e, f) with e < f for ``"ee"``.
+
+        ``mode`` is the node test, from fast to tight: ``"box"``, ``"sphere"`` (VT only),
+        ``"capsule_ray"``, ``"capsule_exact"``. ``leaf_exact=True`` tests the primitives at the
+        leaves, so that the pairs are the true contacts (plus, at most, pairs within
+        r + 2**-19 S). ``canonical=True`` sorts the pairs.
+
+        The result is a numpy array, or an array of the library and device of the vertices last
+        given (a Warp array on ``cuda:0`` gives a Warp array on ``cuda:0``, written there in
+        place), or of ``like`` when given.
+        """
+        return self._query(kind, mode, radius, leaf_exact, canonical, False, like)[0]
+
+    def query_digest(
+        self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False, like: Any = None
+    ) -> Tuple["Pairs", int]:
+        """Like :meth:`query`, canonical, with the xxHash64 (seed 0) of the little-endian pairs:
+        equal across backends, runs and language bindings."""
+        pairs, digest = self._query(kind, mode, radius, leaf_exact, True, True, like)
+        assert digest is not None
+        return pairs, digest
+
+    def query_into(
+        self,
+        out: Any,
+        kind: "Kind",
+        mode: "Mode",
+        radius: float,
+        *,
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        digest: bool = False,
+    ) -> QueryInfo:
+        """Runs a query into ``out``, a writable C-contiguous (capacity, 2) int32 array (numpy,
+        or another library's host or, on a CUDA device, device array written in place); pairs
+        go to ``out[:count]``. Raises :class:`CapacityError` (``needed``: the exact count) when
+        ``out`` is too small, writing nothing past it."""
+        args = _Args(self.device)
+        checked_args = (args.out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
+        count, dig = self._native.query_into(*checked_args, bool(leaf_exact), bool(canonical), bool(digest))
+        return QueryInfo(count, dig)
+
+    def query_vt_ee(
+        self,
+        radius: float,
+        *,
+        vt_mode: "Mode" = "box",
+        ee_mode: "Mode" = "box",
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        like: Any = None,
+    ) -> Tuple["Pairs", "Pairs"]:
+        """The VT and the EE pairs within ``radius`` from one pass (one parallel loop on the CPU,
+        one kernel launch and one count readback on CUDA): exactly what ``query("vt", vt_mode,
+        ...)`` and ``query("ee", ee_mode, ...)`` return. ``leaf_exact=True`` gives the contacts
+        (meant for the default box modes: bench/README.md). Results as :meth:`query`.
+
+        >>> import numpy as np, minkq
+        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> vt, ee = scene.query_vt_ee(0.2, leaf_exact=True, canonical=True)
+        >>> vt.tolist()
+        [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
+        >>> len(ee)
+        9
+        """
+        vt_mode = _choice(vt_mode, "vt_mode", MODES)
+        ee_mode = _choice(ee_mode, "ee_mode", MODES)
+        r = _radius(radius)
+        flags = (bool(leaf_exact), bool(canonical), False)
+        target = self._like if like is None else _Args(self.device).like(like)
+        key = (vt_mode, ee_mode) + flags
+        (vt, _), (ee, _) = self._run_outputs(
+            [("vt",) + key, ("ee",) + key],
+            lambda vt_out, ee_out: self._native.query_vt_ee_into(vt_out, ee_out, vt_mode, ee_mode, r, *flags),
+            target,
+            lambda e: 0 if e.message.startswith("VT:") else 1,  # the first short buffer, VT before EE
+        )
+        return vt, ee
+
+    # ---- Stream-ordered calls ----------------------------------------------------------------
+
+    def reserve(self, refit: bool = True, rebuild: bool = False, canonical_capacity: int = 0) -> None:
+        """Reserves, on the scene's device, the scratch the stream-ordered calls use, so that
+        they never allocate: ``refit`` for :meth:`refit_async`, ``rebuild`` for
+        :meth:`rebuild_async` (and refits), and ``canonical_capacity`` pairs for the sort of
+        ``canonical=True`` :meth:`query_async` calls (whose capacity may not exceed it; other
+        queries need no reservation). Reservations only grow and last as long as the scene. A
+        blocking call (it may allocate and synchronise): call it before capturing a graph.
+
+        >>> import numpy as np, minkq
+        >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> scene.reserve(refit=True, canonical_capacity=64)
+        >>> pairs, count = np.zeros((64, 2), np.int32), np.zeros(1, np.uint64)
+        >>> v[3:, 2] = 0.15
+        >>> scene.refit_async(v)
+        >>> scene.query_async(pairs, count, "vt", "sphere", 0.2, canonical=True)
+        >>> scene.async_status()  # waits for the stream; raises if a refit met a NaN
+        >>> int(count[0]), pairs[: count[0]].tolist()
+        (6, [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]])
+        """
+        if isinstance(canonical_capacity, bool) or not isinstance(canonical_capacity, (int, np.integer)):
+            raise TypeError(f"canonical_capacity: expected an int, got {type(canonical_capacity).__name__}")
+        if canonical_capacity < 0:
+            raise ValueError(f"canonical_capacity: expected a count >= 0, got {canonical_capacity}")
+        self._native.reserve(bool(refit), bool(rebuild), int(canonical_capacity))
+
+    def refit_async(self, vertices: Any, stream: Any = None) -> None:
+        """:meth:`refit`, enqueued on ``stream`` without waiting, allocating or synchronising
+        (``minkq_scene_refit_async``), so that it can be captured into a CUDA graph (e.g. in
+        ``wp.ScopedCapture``). On a CUDA device ``vertices`` are device memory (a Warp, PyTorch
+        or CuPy array on the scene's GPU), read when the stream runs the work: keep them alive
+        (for a captured graph, as long as it is replayed). On the CPU they are host memory
+        (numpy, or a Warp CPU array) and the refit has run when this returns.
+
+        ``stream``: None for the current stream of the array's library (Warp:
+        ``wp.get_stream(device)``, the capture stream inside ``wp.ScopedCapture``; PyTorch:
+        ``torch.cuda.current_stream(device)``; CuPy: ``cupy.cuda.get_current_stream()``), or an
+        int (a ``cudaStream_t``) or a stream with ``.cuda_stream`` / ``.ptr``; ignored on the
+        CPU. Needs :meth:`reserve` (``refit=True``): :class:`InvalidArgumentError` without it.
+        A NaN or infinity is no error here: the scene keeps its positions and
+        :meth:`async_status` raises :class:`NonFiniteError`, naming the call and the vertex."""
+        self._move_async(vertices, stream, self._native.refit_async)
+
+    def rebuild_async(self, vertices: Any, stream: Any = None) -> None:
+        """:meth:`rebuild`, enqueued on ``stream`` as :meth:`refit_async` is
+        (``minkq_scene_rebuild_async``). Needs :meth:`reserve` with ``rebuild=True``."""
+        self._move_async(vertices, stream, self._native.rebuild_async)
+
+    def query_async(
+        self,
+        out_pairs: Any,
+        out_count: Any,
+        kind: "Kind",
+        mode: "Mode",
+        radius: float,
+        *,
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        stream: Any = None,
+    ) -> None:
+        """:meth:`query_into`, enqueued on ``stream`` (``minkq_scene_query_async``): writes the
+        exact number of pairs to ``out_count[0]`` (a (1,) uint64 or int64 array), also when it
+        exceeds the capacity of ``out_pairs`` ((capacity, 2) int32, C-contiguous), and
+        min(count, capacity) of the pairs, never past it (which ones, when they do not all fit,
+        is unspecified, as is their order). Never :class:`CapacityError`: read the count, and grow the array
+        between steps when it says so. On a CUDA device both arrays are device memory on the
+        scene's GPU, written when the stream runs the work (the count is never copied to the
+        host); on the CPU they are host memory, written when this returns. ``stream`` as in
+        :meth:`refit_async` (None: the current stream of ``out_pairs``'s library).
+        ``canonical=True`` sorts the pairs when they fit and needs the capacity reserved
+        (:meth:`reserve`)."""
+        kind = _choice(kind, "kind", KINDS)
+        mode = _choice(mode, "mode", MODES)
+        r = _radius(radius)
+        handle = stream_handle(stream, self.device, (out_pairs, out_count))
+        args = _Args(self.device, handle)
+        native = (args.out(out_pairs, "out_pairs"), args.count(out_count, "out_count"))
+        self._native.query_async(*native, kind, mode, r, bool(leaf_exact), bool(canonical), handle)
+        self._stream = handle
+
+    def query_vt_ee_async(
+        self,
+        vt_pairs: Any,
+        vt_count: Any,
+        ee_pairs: Any,
+        ee_count: Any,
+        radius: float,
+        *,
+        vt_mode: "Mode" = "box",
+        ee_mode: "Mode" = "box",
+        leaf_exact: bool = False,
+        canonical: bool = False,
+        stream: Any = None,
+    ) -> None:
+        """:meth:`query_vt_ee`, enqueued on ``stream`` (``minkq_scene_query_vt_ee_async``: one
+        kernel launch on CUDA): each query's pairs and count as :meth:`query_async` writes them
+        alone. ``vt_count`` and ``ee_count`` must be different arrays."""
+        vt_mode = _choice(vt_mode, "vt_mode", MODES)
+        ee_mode = _choice(ee_mode, "ee_mode", MODES)
+        r = _radius(radius)
+        handle = stream_handle(stream, self.device, (vt_pairs, vt_count, ee_pairs, ee_count))
+        args = _Args(self.device, handle)
+        native = (
+            args.out(vt_pairs, "vt_pairs"),
+            args.count(vt_count, "vt_count"),
+            args.out(ee_pairs, "ee_pairs"),
+            args.count(ee_count, "ee_count"),
+        )
+        self._native.query_vt_ee_async(*native, vt_mode, ee_mode, r, bool(leaf_exact), bool(canonical), handle)
+        self._stream = handle
+
+    def async_status(self, stream: Any = None) -> None:
+        """Waits for the work enqueued on ``stream`` (CUDA; None: the stream of this scene's
+        last stream-ordered call), then raises the scene's pending error and clears it:
+        :class:`NonFiniteError` when a :meth:`refit_async` or :meth:`rebuild_async` since the
+        last call met a NaN or infinity (the first such call, named in the message with the
+        vertex; the scene kept its positions). Afterwards the counts and pairs of the queries
+        enqueued on the stream are ready. A blocking call: not for inside a graph capture."""
+        handle = self._stream if stream is None else stream_handle(stream, self.device)
+        self._native.async_status(handle)
+
+    def _move_async(self, vertices: Any, stream: Any, call: Callable[[Any, int], None]) -> None:
+        handle = stream_handle(stream, self.device, (vertices,))
+        args = _Args(self.device, handle)
+        native = args.rows(vertices, "vertices", np.float32, (3,))
+        call(native, handle)
+        self._like = _like(args.last)
+        self._stream = handle
+
+    def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
+        """Runs the query once with the library's work counters on and returns them (the pairs
+        are not kept). The counts depend only on the tree and the queries: the same on every
+        backend.
+
+        >>> import numpy as np, minkq
+        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2]], np.int32))
+        >>> w = scene.work("vt", "sphere", 0.2)
+        >>> (w.candidates, w.primitive_tests >= w.candidates)
+        (1, True)
+        """
+        checked = (_choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
+        return WorkStats(*self._native.work(*checked, bool(leaf_exact)))
+
+    def _query(self, kind: Any, mode: Any, radius: Any, leaf_exact: bool, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
+        kind = _choice(kind, "kind", KINDS)
+        mode = _choice(mode, "mode", MODES)
+        r = _radius(radius)
+        flags = (bool(leaf_exact), bool(canonical), bool(digest))
+        target = self._like if like is None else _Args(self.device).like(like)
+        return self._run((kind, mode) + flags, lambda out: self._native.query_into(out, kind, mode, r, *flags), target)
+
+    def __repr__(self) -> str:
+        return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges)"
