@@ -233,6 +233,9 @@ def test_warp_arrays_in_and_out(wp, device, mesh):
     assert isinstance(pairs, wp.array) and pairs.device == positions.device and pairs.dtype == wp.int32
     assert np.array_equal(pairs.numpy(), reference.query("ee", "capsule_exact", 0.04, leaf_exact=True, canonical=True))
     assert isinstance(reference.query("vt", "box", 0.04, like=positions), wp.array)
+    # A first query that finds nothing (its array was allocated empty) gives an empty array.
+    nothing = scene.query("vt", "box", 0.0, leaf_exact=True)
+    assert isinstance(nothing, wp.array) and nothing.shape == (0, 2)
     out = wp.full((4096, 2), -7, dtype=wp.int32, device="cpu")
     info = scene.query_into(out, "vt", "sphere", 0.04, canonical=True, digest=True)
     assert info.digest == reference.query_digest("vt", "sphere", 0.04)[1]

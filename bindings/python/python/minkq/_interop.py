@@ -392,8 +392,10 @@ def allocate_pairs(like: Optional[Like], count: int) -> Any:
 
 def head(pairs: Any, count: int, compact: bool) -> Any:
     """The first ``count`` rows of an array from :func:`allocate_pairs`; a copy when
-    ``compact`` (so that a much larger array is not kept alive behind a small result)."""
-    rows = pairs[:count]
+    ``compact`` (so that a much larger array is not kept alive behind a small result). All the
+    rows are the array itself: Warp cannot slice an empty array (a first query that finds
+    nothing allocated none)."""
+    rows = pairs if count == len(pairs) else pairs[:count]
     if not compact:
         return rows
     if isinstance(rows, np.ndarray):
