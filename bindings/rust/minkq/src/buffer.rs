@@ -48,36 +48,89 @@ impl Memory {
     }
 }
 
-mod sealed {
-    pub trait Sealed {}
+pub(crate) mod sealed {
+    /// The floating-point type of a buffer's coordinates, where the buffer knows it (a slice's
+    /// records of floats or doubles): how a float64 scene tells `[f64; 3]` vertices from
+    /// `[f32; 3]` ones, which the C API cannot.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Precision {
+        F32,
+        F64,
+    }
+
+    impl Precision {
+        /// The vertex record of this precision, for messages: `"[f32; 3]"` or `"[f64; 3]"`.
+        pub fn vertex(self) -> &'static str {
+            match self {
+                Precision::F32 => "[f32; 3]",
+                Precision::F64 => "[f64; 3]",
+            }
+        }
+    }
+
+    pub trait Sealed {
+        /// The precision of the record's coordinates; `None` for integer records.
+        const PRECISION: Option<Precision>;
+    }
 }
 
-/// The plain records a host slice may hold when it becomes a [`Buffer`]: arrays of `f32` or
-/// `i32` without padding, and [`Aabb`]. Sealed: the C API reads these bytes as floats and ints.
+use sealed::Precision;
+
+/// The plain records a host slice may hold when it becomes a [`Buffer`]: arrays of `f32`,
+/// `f64` or `i32` without padding, and [`Aabb`]. Sealed: the C API reads these bytes as floats,
+/// doubles and ints.
 ///
 /// ```
 /// fn record_size<T: minkq::Record>() -> usize { std::mem::size_of::<T>() }
 /// assert_eq!(record_size::<[f32; 3]>(), 12);
+/// assert_eq!(record_size::<[f64; 3]>(), 24); // vertices of a SceneFlags::FLOAT64 scene
 /// assert_eq!(record_size::<minkq::Aabb>(), 24);
 /// ```
 pub trait Record: sealed::Sealed + Copy {}
 
+/// The vertex records of a [`SceneDesc`](crate::SceneDesc): `[f32; 3]` (a float scene) or
+/// `[f64; 3]` (a [`SceneFlags::FLOAT64`](crate::SceneFlags::FLOAT64) scene). Sealed.
+///
+/// ```
+/// fn bytes_per_vertex<V: minkq::Vertex>() -> usize { std::mem::size_of::<V>() }
+/// assert_eq!((bytes_per_vertex::<[f32; 3]>(), bytes_per_vertex::<[f64; 3]>()), (12, 24));
+/// ```
+pub trait Vertex: Record {}
+
 macro_rules! records {
-    ($($t:ty),*) => {$(
-        impl sealed::Sealed for $t {}
+    ($($t:ty => $precision:expr),*) => {$(
+        impl sealed::Sealed for $t {
+            const PRECISION: Option<Precision> = $precision;
+        }
         impl Record for $t {}
     )*};
 }
-records!([f32; 3], [i32; 3], [i32; 2], [[f32; 3]; 2], Aabb);
+records!(
+    [f32; 3] => Some(Precision::F32),
+    [f64; 3] => Some(Precision::F64),
+    [i32; 3] => None,
+    [i32; 2] => None,
+    [[f32; 3]; 2] => Some(Precision::F32),
+    Aabb => Some(Precision::F32)
+);
+impl Vertex for [f32; 3] {}
+impl Vertex for [f64; 3] {}
 
 /// A read-only view of caller memory for the duration of a borrow: `count` records, record i
 /// at `data + i * byte_stride`, in host or device memory (`minkq_buffer`). What a record is
-/// depends on the argument it is passed as (vertices: 3 floats; triangles: 3 int32; edges:
+/// depends on the argument it is passed as (vertices: 3 floats, or 3 doubles for a
+/// [`SceneFlags::FLOAT64`](crate::SceneFlags::FLOAT64) scene; triangles: 3 int32; edges:
 /// 2 int32; boxes: 6 floats); the library checks the stride against it.
 ///
 /// Host slices convert safely with [`Buffer::from_slice`]; any other memory, in particular
 /// CUDA device memory, through the `unsafe` [`Buffer::from_raw_parts`]. Functions taking a
 /// `Buffer` are safe: the promise was made when it was built.
+///
+/// A buffer made from a slice remembers whether its records hold `f32` or `f64` coordinates,
+/// so that a scene refuses vertices of the other precision, and a [`Bvh`](crate::Bvh) `f64`
+/// ones, with [`Error::InvalidArgument`](crate::Error::InvalidArgument): the C API cannot tell
+/// the two apart and would misread the memory. A raw buffer carries no such knowledge: the
+/// scene's flag decides how its records are read.
 ///
 /// ```
 /// use minkq::{Buffer, Memory};
@@ -88,6 +141,8 @@ records!([f32; 3], [i32; 3], [i32; 2], [[f32; 3]; 2], Aabb);
 #[derive(Clone, Copy)]
 pub struct Buffer<'a> {
     raw: sys::minkq_buffer,
+    /// The coordinates' type, known for slices of float and double records.
+    precision: Option<Precision>,
     _borrow: PhantomData<&'a [u8]>,
 }
 
@@ -97,13 +152,15 @@ unsafe impl Send for Buffer<'_> {}
 unsafe impl Sync for Buffer<'_> {}
 
 impl<'a> Buffer<'a> {
-    /// A packed host buffer over a slice.
+    /// A packed host buffer over a slice. A slice of `[f64; 3]` holds the vertices of a
+    /// [`SceneFlags::FLOAT64`](crate::SceneFlags::FLOAT64) scene (24-byte records).
     ///
     /// ```
     /// let triangles = [[0, 1, 2], [2, 1, 3]];
     /// let buffer = minkq::Buffer::from_slice(&triangles);
     /// assert_eq!(buffer.len(), 2);
     /// assert_eq!(buffer.data(), triangles.as_ptr().cast());
+    /// assert_eq!(minkq::Buffer::from_slice(&[[0.0f64; 3]; 2]).byte_stride(), 24);
     /// ```
     pub fn from_slice<T: Record>(values: &'a [T]) -> Buffer<'a> {
         Buffer {
@@ -113,6 +170,7 @@ impl<'a> Buffer<'a> {
                 count: values.len(),
                 memory: sys::MINKQ_MEMORY_HOST,
             },
+            precision: T::PRECISION,
             _borrow: PhantomData,
         }
     }
@@ -126,6 +184,7 @@ impl<'a> Buffer<'a> {
     pub fn empty() -> Buffer<'static> {
         Buffer {
             raw: sys::minkq_buffer { data: ptr::null(), byte_stride: 0, count: 0, memory: sys::MINKQ_MEMORY_HOST },
+            precision: None,
             _borrow: PhantomData,
         }
     }
@@ -138,6 +197,10 @@ impl<'a> Buffer<'a> {
     /// CUDA stream (the per-thread default stream of the calling thread) and synchronises it
     /// before returning: work that produces the data on another stream must be complete, or
     /// ordered before that stream, when the call is made.
+    ///
+    /// Such a buffer does not know whether its vertices are floats or doubles: a scene reads
+    /// them as its [`SceneFlags::FLOAT64`](crate::SceneFlags::FLOAT64) flag says (3 doubles per
+    /// record with it, 3 floats without), and the promise below covers that record size.
     ///
     /// # Safety
     /// For the lifetime `'a`: when `count > 0`, the `(count - 1) * byte_stride + record size`
@@ -164,7 +227,11 @@ impl<'a> Buffer<'a> {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub unsafe fn from_raw_parts(data: *const c_void, byte_stride: usize, count: usize, memory: Memory) -> Buffer<'a> {
-        Buffer { raw: sys::minkq_buffer { data, byte_stride, count, memory: memory.raw() }, _borrow: PhantomData }
+        Buffer {
+            raw: sys::minkq_buffer { data, byte_stride, count, memory: memory.raw() },
+            precision: None,
+            _borrow: PhantomData,
+        }
     }
 
     /// The address of record 0 (NULL for an empty slice).
@@ -236,11 +303,20 @@ impl<'a> Buffer<'a> {
         } else {
             self.raw.data.cast::<u8>().wrapping_add(byte_offset).cast()
         };
-        Buffer { raw: sys::minkq_buffer { data, ..self.raw }, _borrow: PhantomData }
+        Buffer { raw: sys::minkq_buffer { data, ..self.raw }, ..*self }
     }
 
     pub(crate) fn raw(&self) -> sys::minkq_buffer {
         self.raw
+    }
+
+    /// The C buffer for a reader of `wanted` precision, or `Err` with the buffer's precision
+    /// when it is a slice of records of the other one (raw buffers pass: the reader decides).
+    pub(crate) fn raw_at(&self, wanted: Precision) -> std::result::Result<sys::minkq_buffer, Precision> {
+        match self.precision {
+            Some(precision) if precision != wanted => Err(precision),
+            _ => Ok(self.raw),
+        }
     }
 }
 

@@ -2,6 +2,7 @@ use std::fmt;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
 
+use crate::buffer::sealed::Precision;
 use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
@@ -265,15 +266,15 @@ impl<'a> BvhBufferQuery<'a> {
         self
     }
 
-    fn raw(&self) -> sys::minkq_bvh_query_desc {
-        sys::minkq_bvh_query_desc {
+    fn raw(&self) -> Result<sys::minkq_bvh_query_desc> {
+        Ok(sys::minkq_bvh_query_desc {
             shape: self.shape.raw(),
             mode: self.mode.raw(),
             flags: self.flags.bits(),
             radius: self.radius,
-            first: self.first.raw(),
-            second: self.second.raw(),
-        }
+            first: float_buffer("query: first", &self.first)?,
+            second: float_buffer("query: second", &self.second)?,
+        })
     }
 }
 
@@ -326,7 +327,9 @@ impl Bvh {
     }
 
     /// [`Bvh::new`] over a [`Buffer`] of boxes (6 floats per record: lo x, y, z, hi x, y, z),
-    /// host or (on a CUDA device) device memory, read in place.
+    /// host or (on a CUDA device) device memory, read in place. A BVH reads floats: a buffer
+    /// made from a slice of `[f64; 3]` is [`Error::InvalidArgument`] here, in its refits and
+    /// rebuilds and as query points.
     ///
     /// ```
     /// use minkq::{Aabb, Buffer, Bvh, Device};
@@ -336,9 +339,10 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn from_buffer(device: &Device, boxes: Buffer<'_>) -> Result<Bvh> {
+        let raw_boxes = float_buffer("create: boxes", &boxes)?;
         let mut raw = ptr::null_mut();
         // SAFETY: a live device; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_bvh_create(device.handle.as_ptr(), boxes.raw(), &mut raw) })?;
+        check(unsafe { sys::minkq_bvh_create(device.handle.as_ptr(), raw_boxes, &mut raw) })?;
         let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_bvh_create returned NULL".into()))?;
         Ok(Bvh { raw, len: boxes.len(), _device: Arc::clone(&device.handle) })
     }
@@ -369,11 +373,15 @@ impl Bvh {
     /// bvh.refit_buffer(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
     /// let err = bvh.refit_buffer(Buffer::from_slice::<Aabb>(&[])).unwrap_err();
     /// assert!(matches!(err, Error::InvalidArgument(_)));
+    /// // Doubles are refused: a Bvh reads floats.
+    /// let err = bvh.refit_buffer(Buffer::from_slice(&[[0.0f64; 3], [1.0; 3]])).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("refit: boxes: [f64; 3] records, but a Bvh reads floats".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn refit_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
+        let boxes = float_buffer("refit: boxes", &boxes)?;
         // SAFETY: a live BVH; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), boxes.raw()) })
+        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), boxes) })
     }
 
     /// New boxes (same count); builds the tree afresh, as [`Bvh::new`] would. The pairs are the
@@ -410,8 +418,9 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn rebuild_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
+        let boxes = float_buffer("rebuild: boxes", &boxes)?;
         // SAFETY: a live BVH; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_bvh_rebuild(self.raw.as_ptr(), boxes.raw()) })
+        check(unsafe { sys::minkq_bvh_rebuild(self.raw.as_ptr(), boxes) })
     }
 
     /// How much the refits since the last build (creation or [`Bvh::rebuild`]) have degraded
@@ -522,7 +531,7 @@ impl Bvh {
         capacity: usize,
         memory: Memory,
     ) -> Result<QueryInfo> {
-        let desc = query.raw();
+        let desc = query.raw()?;
         let mut info = QueryInfo::raw();
         // SAFETY: the description's buffers are readable (their constructors' promise);
         // `pairs` holds 2 * capacity writable int32 in `memory`.
@@ -534,6 +543,14 @@ impl Bvh {
             Err(e) => Err(e),
         }
     }
+}
+
+/// The C buffer of `what` for a BVH, which reads floats: [`Error::InvalidArgument`] for a
+/// slice of `[f64; 3]` records (the vertices of a float64 scene), which it would misread.
+fn float_buffer(what: &str, buffer: &Buffer<'_>) -> Result<sys::minkq_buffer> {
+    buffer
+        .raw_at(Precision::F32)
+        .map_err(|got| Error::InvalidArgument(format!("{what}: {} records, but a Bvh reads floats", got.vertex())))
 }
 
 impl Drop for Bvh {

@@ -49,6 +49,15 @@
 //! trees afresh. Both give the same pairs; [`Bvh`] has the same three
 //! calls.
 //!
+//! # Float64 vertices
+//! A scene built from `[f64; 3]` vertices ([`SceneDesc::new_f64`]; [`SceneFlags::FLOAT64`] on
+//! [`SceneBuffers`]) rounds them to float, the precision of its trees and tests, and widens
+//! every query radius by twice the farthest the rounding moved a vertex, so that every pair
+//! within r in double is reported, in every mode. Its refits and rebuilds take `[f64; 3]`
+//! ([`Scene::refit_f64`], [`Scene::rebuild_f64`], or buffers of doubles); vertices of the other
+//! precision are refused with [`Error::InvalidArgument`], and a double beyond the float range
+//! is [`Error::NonFinite`].
+//!
 //! # Threads
 //! The C API allows different objects to be used from different threads at once, but one
 //! object only from one thread at a time, and lets scenes on different threads share a device.
@@ -124,7 +133,7 @@ mod stream;
 /// ```
 pub use minkq_sys as sys;
 
-pub use buffer::{Buffer, Memory, PairsOut, Record};
+pub use buffer::{Buffer, Memory, PairsOut, Record, Vertex};
 pub use bvh::{Aabb, Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};

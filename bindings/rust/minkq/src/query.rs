@@ -210,6 +210,17 @@ flags! {
         EE = sys::MINKQ_SCENE_EE;
         /// Drop (v, t) with v a vertex of t, and pairs of edges sharing a vertex.
         DROP_INCIDENT = sys::MINKQ_SCENE_DROP_INCIDENT;
+        /// Vertices are 3 doubles (`[f64; 3]`, byte stride >= 24) at creation and in every
+        /// refit and rebuild, blocking and stream-ordered. The scene rounds them to nearest
+        /// float (the precision of its trees and tests) and widens every query radius by
+        /// 2 rho, rho the farthest the rounding moved a vertex, so that every pair within r in
+        /// double is reported, in every mode; extras lie within r + 2 rho (plus the float
+        /// slack). A double beyond the float range (about 3.4e38) is
+        /// [`Error::NonFinite`](crate::Error::NonFinite), as a NaN is.
+        /// A [`SceneDesc`](crate::SceneDesc) of `[f64; 3]` vertices
+        /// ([`SceneDesc::new_f64`](crate::SceneDesc::new_f64)) implies it;
+        /// [`SceneBuffers`](crate::SceneBuffers) take it in their flags.
+        FLOAT64 = sys::MINKQ_SCENE_FLOAT64;
     }
 }
 

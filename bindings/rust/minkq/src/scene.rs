@@ -4,9 +4,11 @@ use std::fmt;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
 
-use crate::buffer::Buffer;
+use crate::buffer::sealed::Precision;
+use crate::buffer::{Buffer, Vertex};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
+use crate::query::SceneFlags;
 use crate::sys;
 
 mod desc;
@@ -22,6 +24,11 @@ pub use desc::{SceneBuffers, SceneDesc};
 /// the same time, so a `&Scene` may not cross threads (its queries would then run
 /// concurrently); moving the scene to another thread is allowed. Wrap it in a `Mutex` to share
 /// it.
+///
+/// Precision: a scene's vertices are `[f32; 3]` ([`SceneDesc::new`], [`Scene::refit`],
+/// [`Scene::rebuild`]) or, for a [`SceneFlags::FLOAT64`] scene, `[f64; 3]`
+/// ([`SceneDesc::new_f64`], [`Scene::refit_f64`], [`Scene::rebuild_f64`]); the scene remembers
+/// which ([`Scene::is_float64`]) and refuses vertices of the other precision.
 ///
 /// ```
 /// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
@@ -43,6 +50,8 @@ pub use desc::{SceneBuffers, SceneDesc};
 /// ```
 pub struct Scene {
     raw: NonNull<sys::minkq_scene>,
+    /// Created with [`SceneFlags::FLOAT64`]: every vertex buffer holds 3 doubles per record.
+    float64: bool,
     _device: Arc<DeviceHandle>,
 }
 
@@ -52,11 +61,14 @@ pub struct Scene {
 unsafe impl Send for Scene {}
 
 impl Scene {
-    /// Copies the mesh to the device and builds the trees `desc.flags` asks for.
+    /// Copies the mesh to the device and builds the trees `desc.flags` asks for: a float
+    /// scene for `[f32; 3]` vertices ([`SceneDesc::new`]), a [`SceneFlags::FLOAT64`] scene for
+    /// `[f64; 3]` ones ([`SceneDesc::new_f64`], which has an example).
     ///
-    /// Errors: [`Error::NonFinite`] (`"vertex 12 has a non-finite coordinate (...)"`),
-    /// [`Error::IndexOutOfRange`], [`Error::SizeOverflow`], [`Error::InvalidArgument`] (no
-    /// query kind in the flags).
+    /// Errors: [`Error::NonFinite`] (`"vertex 12 has a non-finite coordinate (...)"`; also a
+    /// double beyond the float range), [`Error::IndexOutOfRange`], [`Error::SizeOverflow`],
+    /// [`Error::InvalidArgument`] (no query kind in the flags, [`SceneFlags::FLOAT64`] with
+    /// `[f32; 3]` vertices).
     ///
     /// ```
     /// use minkq::{Device, Error, Scene, SceneDesc};
@@ -68,13 +80,15 @@ impl Scene {
     /// assert!(matches!(err, Error::IndexOutOfRange(_)));
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn new(device: &Device, desc: &SceneDesc<'_>) -> Result<Scene> {
+    pub fn new<V: Vertex>(device: &Device, desc: &SceneDesc<'_, V>) -> Result<Scene> {
         Scene::from_buffers(device, &SceneBuffers::from(desc))
     }
 
     /// [`Scene::new`] over [`Buffer`]s: strided records in host or (on a CUDA device) device
     /// memory, read in place. The scene keeps its own copy; the buffers may change or go
-    /// away once this returns. Device memory on a CPU device is [`Error::InvalidArgument`].
+    /// away once this returns. Device memory on a CPU device is [`Error::InvalidArgument`],
+    /// as is a vertex slice whose precision the flags contradict: `[f64; 3]` without
+    /// [`SceneFlags::FLOAT64`], `[f32; 3]` with it (example at [`SceneBuffers::flags`]).
     ///
     /// ```
     /// use minkq::{Buffer, Device, Scene, SceneBuffers, SceneFlags};
@@ -86,9 +100,10 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn from_buffers(device: &Device, desc: &SceneBuffers<'_>) -> Result<Scene> {
+        let float64 = desc.flags.contains(SceneFlags::FLOAT64);
         let raw_desc = sys::minkq_scene_desc {
             flags: desc.flags.bits(),
-            vertices: desc.vertices.raw(),
+            vertices: vertex_buffer("create", &desc.vertices, float64)?,
             triangles: desc.triangles.raw(),
             edges: desc.edges.raw(),
         };
@@ -97,14 +112,15 @@ impl Scene {
         // which outlives this call; the library copies them before returning.
         check(unsafe { sys::minkq_scene_create(device.handle.as_ptr(), &raw_desc, &mut raw) })?;
         let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_scene_create returned NULL".into()))?;
-        Ok(Scene { raw, _device: Arc::clone(&device.handle) })
+        Ok(Scene { raw, float64, _device: Arc::clone(&device.handle) })
     }
 
     /// Moves the vertices (same count) and refits the trees in place: the per-step call of a
     /// simulation. On error the scene keeps its previous positions. A refit keeps the grouping
     /// of the last build: after large deformations the boxes overlap more and queries visit
     /// more nodes ([`Scene::tree_growth`] measures it, [`Scene::rebuild`] resets it); the pairs
-    /// found never change.
+    /// found never change. A [`SceneFlags::FLOAT64`] scene takes [`Scene::refit_f64`] and
+    /// refuses these `[f32; 3]` vertices with [`Error::InvalidArgument`].
     ///
     /// ```
     /// # use minkq::*;
@@ -128,8 +144,42 @@ impl Scene {
         self.refit_buffer(Buffer::from_slice(vertices))
     }
 
+    /// [`Scene::refit`] with `[f64; 3]` vertices, for a [`SceneFlags::FLOAT64`] scene
+    /// ([`SceneDesc::new_f64`]): rounded to float, the query radii widened by twice the
+    /// farthest the rounding moved a vertex, so that every pair within r in double is
+    /// reported. A float scene refuses them with [`Error::InvalidArgument`]; a double beyond
+    /// the float range is [`Error::NonFinite`], as a NaN is.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// // A triangle in the plane x = 20000.0009 and a vertex 1 + 0.95e-3 in front of it, where
+    /// // floats lie 2^-9 apart: rounding would pull the pair apart once the vertex comes near.
+    /// let (plane, point) = (20000.0009, 20000.00185);
+    /// let mut vertices = vec![[plane, -1.0, -1.0], [plane, 2.0, -1.0], [plane, -1.0, 2.0], [point + 1.0, 0.0, 0.0]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&vertices, &[[0, 1, 2]]))?;
+    /// let query = Query::vt(Mode::Sphere, 1e-3).with_flags(QueryFlags::LEAF_EXACT);
+    /// let mut pairs = PairBuffer::new()?;
+    /// assert!(scene.query(&query, &mut pairs)?.is_empty());
+    /// vertices[3][0] = point; // 0.95e-3 from the triangle in double, 2^-9 in float
+    /// assert!(point as f32 - plane as f32 > 1e-3);
+    /// scene.refit_f64(&vertices)?;
+    /// assert_eq!(scene.query(&query, &mut pairs)?, &[[3, 0]]);
+    ///
+    /// // Floats are refused: the scene reads 3 doubles per vertex.
+    /// let floats: Vec<[f32; 3]> = vertices.iter().map(|v| v.map(|x| x as f32)).collect();
+    /// let err = scene.refit(&floats).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("refit: [f32; 3] vertices, but a scene with SceneFlags::FLOAT64 reads [f64; 3]".into()));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn refit_f64(&mut self, vertices: &[[f64; 3]]) -> Result<()> {
+        self.refit_buffer(Buffer::from_slice(vertices))
+    }
+
     /// [`Scene::refit`] from a [`Buffer`]: strided records, host or (on a CUDA device) device
     /// memory, read in place on the device. On error the scene keeps its previous positions.
+    /// The records are 3 floats, or 3 doubles on a [`SceneFlags::FLOAT64`] scene
+    /// ([`Scene::refit_f64`]); a buffer made from a slice of the other precision is
+    /// [`Error::InvalidArgument`], a raw buffer is read as the scene's flag says.
     ///
     /// ```
     /// # use minkq::*;
@@ -142,8 +192,10 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn refit_buffer(&mut self, vertices: Buffer<'_>) -> Result<()> {
-        // SAFETY: a live scene; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), vertices.raw()) })
+        let vertices = self.vertex_buffer("refit", &vertices)?;
+        // SAFETY: a live scene; the buffer's constructor promised readable records, of the
+        // scene's precision where the buffer knows it (checked above).
+        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), vertices) })
     }
 
     /// Moves the vertices (same count) like [`Scene::refit`] and builds the trees afresh for
@@ -151,7 +203,8 @@ impl Scene {
     /// and edge numbering. The pairs are the same as after a refit; only the speed of later
     /// queries differs. Worth it once large motions have raised [`Scene::tree_growth`] (above
     /// about 1.5), and every so many steps when the mesh changes shape a lot. Same errors as
-    /// [`Scene::refit`]; on error the scene keeps its positions and trees.
+    /// [`Scene::refit`]; on error the scene keeps its positions and trees. A
+    /// [`SceneFlags::FLOAT64`] scene takes [`Scene::rebuild_f64`].
     ///
     /// ```
     /// # use minkq::*;
@@ -176,9 +229,34 @@ impl Scene {
         self.rebuild_buffer(Buffer::from_slice(vertices))
     }
 
+    /// [`Scene::rebuild`] with `[f64; 3]` vertices, for a [`SceneFlags::FLOAT64`] scene: the
+    /// trees [`Scene::new`] would build for them. Same errors as [`Scene::refit_f64`]; on
+    /// error the scene keeps its positions and trees.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let mut vertices = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+    ///                         [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&vertices, &triangles))?;
+    /// for v in &mut vertices[3..] {
+    ///     v[2] = 1.0; // lift the upper triangle away
+    /// }
+    /// scene.rebuild_f64(&vertices)?;
+    /// assert!(scene.query(&Query::vt(Mode::Sphere, 0.2), &mut PairBuffer::new()?)?.is_empty());
+    /// assert_eq!(scene.tree_growth()?, 1.0);
+    /// // A double beyond the float range cannot be rounded to a float: non-finite.
+    /// vertices[4][0] = 1e39;
+    /// assert!(matches!(scene.rebuild_f64(&vertices), Err(Error::NonFinite(m)) if m.contains("vertex 4")));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn rebuild_f64(&mut self, vertices: &[[f64; 3]]) -> Result<()> {
+        self.rebuild_buffer(Buffer::from_slice(vertices))
+    }
+
     /// [`Scene::rebuild`] from a [`Buffer`]: strided records, host or (on a CUDA device)
     /// device memory, read in place on the device. On error the scene keeps its positions and
-    /// trees.
+    /// trees. Records and precision as for [`Scene::refit_buffer`].
     ///
     /// ```
     /// # use minkq::*;
@@ -192,8 +270,30 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn rebuild_buffer(&mut self, vertices: Buffer<'_>) -> Result<()> {
-        // SAFETY: a live scene; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_scene_rebuild(self.raw.as_ptr(), vertices.raw()) })
+        let vertices = self.vertex_buffer("rebuild", &vertices)?;
+        // SAFETY: as in refit_buffer.
+        check(unsafe { sys::minkq_scene_rebuild(self.raw.as_ptr(), vertices) })
+    }
+
+    /// Whether the scene was created with [`SceneFlags::FLOAT64`]: its vertices are
+    /// `[f64; 3]` ([`Scene::refit_f64`], [`Scene::rebuild_f64`]) rather than `[f32; 3]`.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let floats = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let doubles = [[0.0f64, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let device = Device::cpu()?;
+    /// assert!(!Scene::new(&device, &SceneDesc::new(&floats, &[[0, 1, 2]]))?.is_float64());
+    /// assert!(Scene::new(&device, &SceneDesc::new_f64(&doubles, &[[0, 1, 2]]))?.is_float64());
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn is_float64(&self) -> bool {
+        self.float64
+    }
+
+    /// The C buffer of `call`'s vertices on this scene: see [`vertex_buffer`].
+    fn vertex_buffer(&self, call: &str, vertices: &Buffer<'_>) -> Result<sys::minkq_buffer> {
+        vertex_buffer(call, vertices, self.float64)
     }
 
     /// How far the refits since the last build (creation or [`Scene::rebuild`]) have stretched
@@ -297,6 +397,22 @@ impl Scene {
     }
 }
 
+/// The C buffer of `call`'s vertices for a scene of double (`float64`) or float vertices:
+/// [`Error::InvalidArgument`], naming both record types, for a slice of the other precision,
+/// which the C API cannot detect (it would misread the memory). Raw buffers pass: the scene's
+/// flag decides how they are read.
+fn vertex_buffer(call: &str, vertices: &Buffer<'_>, float64: bool) -> Result<sys::minkq_buffer> {
+    let wanted = if float64 { Precision::F64 } else { Precision::F32 };
+    vertices.raw_at(wanted).map_err(|got| {
+        Error::InvalidArgument(format!(
+            "{call}: {} vertices, but a scene {} SceneFlags::FLOAT64 reads {}",
+            got.vertex(),
+            if float64 { "with" } else { "without" },
+            wanted.vertex()
+        ))
+    })
+}
+
 impl Drop for Scene {
     fn drop(&mut self) {
         // SAFETY: created by minkq_scene_create and released once, before its device (whose
@@ -311,6 +427,7 @@ impl fmt::Debug for Scene {
             .field("vertices", &self.vertex_count())
             .field("triangles", &self.triangle_count())
             .field("edges", &self.edge_count())
+            .field("float64", &self.float64)
             .finish()
     }
 }

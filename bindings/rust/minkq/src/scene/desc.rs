@@ -1,9 +1,13 @@
 //! What a [`Scene`](crate::Scene) is built from: [`SceneDesc`] (slices) and [`SceneBuffers`]
 //! (strided host or device memory).
-use crate::buffer::Buffer;
+use crate::buffer::sealed::Precision;
+use crate::buffer::{Buffer, Vertex};
 use crate::query::SceneFlags;
 
 /// The mesh and options a [`Scene`](crate::Scene) is built from (`minkq_scene_desc`).
+///
+/// The vertices are `[f32; 3]` ([`SceneDesc::new`], the default type) or `[f64; 3]`
+/// ([`SceneDesc::new_f64`]: a [`SceneFlags::FLOAT64`] scene, implied by the vertex type).
 ///
 /// ```
 /// use minkq::{SceneDesc, SceneFlags};
@@ -12,17 +16,21 @@ use crate::query::SceneFlags;
 /// let desc = SceneDesc::new(&vertices, &triangles).flags(SceneFlags::VT);
 /// assert_eq!(desc.flags, SceneFlags::VT);
 /// assert!(desc.edges.is_empty()); // derived from the triangles
+/// let _: &[[f32; 3]] = desc.vertices; // unsuffixed literals: an f32 scene
 /// ```
 #[derive(Clone, Copy, Debug)]
-pub struct SceneDesc<'a> {
-    /// Vertex positions.
-    pub vertices: &'a [[f32; 3]],
+pub struct SceneDesc<'a, V = [f32; 3]> {
+    /// Vertex positions: `[f32; 3]`, or `[f64; 3]` for a [`SceneFlags::FLOAT64`] scene.
+    pub vertices: &'a [V],
     /// Vertex indices of each triangle.
     pub triangles: &'a [[i32; 3]],
     /// Vertex indices of each edge, or empty to derive them from the triangles: every distinct
     /// undirected triangle edge as (min, max), in lexicographic order.
     pub edges: &'a [[i32; 2]],
     /// Which trees to build (at least one of VT and EE) and whether to drop incident pairs.
+    /// [`SceneFlags::FLOAT64`] follows from the vertex type: `[f64; 3]` vertices add it, and
+    /// setting it with `[f32; 3]` vertices is
+    /// [`Error::InvalidArgument`](crate::Error::InvalidArgument).
     pub flags: SceneFlags,
 }
 
@@ -43,7 +51,54 @@ impl<'a> SceneDesc<'a> {
             flags: SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT,
         }
     }
+}
 
+impl<'a> SceneDesc<'a, [f64; 3]> {
+    /// [`SceneDesc::new`] with `[f64; 3]` vertices: a [`SceneFlags::FLOAT64`] scene, which
+    /// rounds them to float and widens its query radii by twice the farthest that rounding
+    /// moved a vertex, so that every pair within r in double is reported (see
+    /// [`SceneFlags::FLOAT64`]). Its refits and rebuilds take `[f64; 3]` too
+    /// ([`Scene::refit_f64`](crate::Scene::refit_f64),
+    /// [`Scene::rebuild_f64`](crate::Scene::rebuild_f64)).
+    ///
+    /// A vertex 0.95e-3 in front of a triangle near x = 20000, where floats lie 2^-9 (about
+    /// 1.95e-3) apart: rounded to float they are 2^-9 apart, beyond r = 1e-3, and a float scene
+    /// of the rounded positions loses the pair; the float64 scene finds it.
+    ///
+    /// ```
+    /// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc, SceneFlags};
+    /// let (plane, point) = (20000.0009, 20000.00185);
+    /// let vertices = [[plane, -1.0, -1.0], [plane, 2.0, -1.0], [plane, -1.0, 2.0], [point, 0.0, 0.0]];
+    /// let triangles = [[0, 1, 2]];
+    /// let r = 1e-3f32;
+    /// assert!(point - plane <= f64::from(r)); // within r in double...
+    /// assert!(point as f32 - plane as f32 > r); // ...but not once rounded to float
+    ///
+    /// let device = Device::cpu()?;
+    /// let query = Query::vt(Mode::Box, r).with_flags(QueryFlags::LEAF_EXACT);
+    /// let mut pairs = PairBuffer::new()?;
+    /// let rounded: Vec<[f32; 3]> = vertices.iter().map(|v| v.map(|x| x as f32)).collect();
+    /// let float_scene = Scene::new(&device, &SceneDesc::new(&rounded, &triangles))?;
+    /// assert!(float_scene.query(&query, &mut pairs)?.is_empty());
+    ///
+    /// let desc = SceneDesc::new_f64(&vertices, &triangles);
+    /// assert_eq!(desc.flags, SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT);
+    /// let scene = Scene::new(&device, &desc)?;
+    /// assert!(scene.is_float64());
+    /// assert_eq!(scene.query(&query, &mut pairs)?, &[[3, 0]]); // (vertex, triangle)
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn new_f64(vertices: &'a [[f64; 3]], triangles: &'a [[i32; 3]]) -> SceneDesc<'a, [f64; 3]> {
+        SceneDesc {
+            vertices,
+            triangles,
+            edges: &[],
+            flags: SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT,
+        }
+    }
+}
+
+impl<'a, V> SceneDesc<'a, V> {
     /// The same description with explicit edges.
     ///
     /// ```
@@ -51,7 +106,7 @@ impl<'a> SceneDesc<'a> {
     /// let desc = minkq::SceneDesc::new(&[[0.0; 3]; 3], &[[0, 1, 2]]).edges(&edges);
     /// assert_eq!(desc.edges.len(), 2);
     /// ```
-    pub fn edges(mut self, edges: &'a [[i32; 2]]) -> SceneDesc<'a> {
+    pub fn edges(mut self, edges: &'a [[i32; 2]]) -> SceneDesc<'a, V> {
         self.edges = edges;
         self
     }
@@ -63,7 +118,7 @@ impl<'a> SceneDesc<'a> {
     /// let desc = minkq::SceneDesc::new(&[[0.0; 3]; 3], &[[0, 1, 2]]).flags(SceneFlags::EE);
     /// assert_eq!(desc.flags, SceneFlags::EE);
     /// ```
-    pub fn flags(mut self, flags: SceneFlags) -> SceneDesc<'a> {
+    pub fn flags(mut self, flags: SceneFlags) -> SceneDesc<'a, V> {
         self.flags = flags;
         self
     }
@@ -71,6 +126,7 @@ impl<'a> SceneDesc<'a> {
 
 /// A [`SceneDesc`] over [`Buffer`]s instead of slices: strided records, host or CUDA device
 /// memory (`minkq_scene_desc`). Build it from a `SceneDesc` with `From`, or from buffers.
+/// Double vertices need [`SceneFlags::FLOAT64`] in `flags` (see [`SceneBuffers::flags`]).
 ///
 /// ```
 /// use minkq::{Buffer, SceneBuffers, SceneDesc, SceneFlags};
@@ -83,13 +139,16 @@ impl<'a> SceneDesc<'a> {
 /// ```
 #[derive(Clone, Copy, Debug)]
 pub struct SceneBuffers<'a> {
-    /// Vertex positions: 3 floats per record (byte stride >= 12).
+    /// Vertex positions: 3 floats per record (byte stride >= 12), or with
+    /// [`SceneFlags::FLOAT64`] 3 doubles (byte stride >= 24). A buffer made from a slice of
+    /// the other precision is refused; a raw buffer is read as the flag says.
     pub vertices: Buffer<'a>,
     /// Triangles: 3 int32 vertex indices per record (byte stride >= 12).
     pub triangles: Buffer<'a>,
     /// Edges: 2 int32 vertex indices per record (byte stride >= 8), or empty to derive them.
     pub edges: Buffer<'a>,
-    /// Which trees to build (at least one of VT and EE) and whether to drop incident pairs.
+    /// Which trees to build (at least one of VT and EE), whether to drop incident pairs, and
+    /// whether the vertices are doubles ([`SceneFlags::FLOAT64`]).
     pub flags: SceneFlags,
 }
 
@@ -130,12 +189,28 @@ impl<'a> SceneBuffers<'a> {
         self
     }
 
-    /// The same description with other flags.
+    /// The same description with other flags: [`SceneFlags::FLOAT64`] for double vertices,
+    /// from a slice of `[f64; 3]` or a raw buffer of 3 doubles per record.
     ///
     /// ```
-    /// use minkq::{Buffer, SceneBuffers, SceneFlags};
+    /// use minkq::{Buffer, Device, Error, Memory, Scene, SceneBuffers, SceneFlags};
     /// let desc = SceneBuffers::new(Buffer::empty(), Buffer::empty()).flags(SceneFlags::VT);
     /// assert_eq!(desc.flags, SceneFlags::VT);
+    ///
+    /// // x, y, z and a fourth double per vertex (32-byte records), read in place.
+    /// let padded = [[0.0f64, 0.0, 0.0, 9.0], [1.0, 0.0, 0.0, 9.0], [0.0, 1.0, 0.0, 9.0]];
+    /// // SAFETY: three 32-byte records starting with 3 doubles, borrowed from `padded`.
+    /// let vertices = unsafe { Buffer::from_raw_parts(padded.as_ptr().cast(), 32, 3, Memory::Host) };
+    /// let triangles = [[0, 1, 2]];
+    /// let desc = SceneBuffers::new(vertices, Buffer::from_slice(&triangles)).flags(SceneFlags::EE | SceneFlags::FLOAT64);
+    /// let scene = Scene::from_buffers(&Device::cpu()?, &desc)?;
+    /// assert!(scene.is_float64() && scene.edge_count() == 3);
+    ///
+    /// // A slice of the other precision is refused: [f32; 3] with FLOAT64, [f64; 3] without.
+    /// let floats = [[0.0f32; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let mixed = SceneBuffers::new(Buffer::from_slice(&floats), Buffer::from_slice(&triangles)).flags(desc.flags);
+    /// assert!(matches!(Scene::from_buffers(&Device::cpu()?, &mixed), Err(Error::InvalidArgument(_))));
+    /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn flags(mut self, flags: SceneFlags) -> SceneBuffers<'a> {
         self.flags = flags;
@@ -143,13 +218,18 @@ impl<'a> SceneBuffers<'a> {
     }
 }
 
-impl<'a> From<&SceneDesc<'a>> for SceneBuffers<'a> {
-    fn from(desc: &SceneDesc<'a>) -> SceneBuffers<'a> {
+/// The slices as packed host buffers; `[f64; 3]` vertices add [`SceneFlags::FLOAT64`].
+impl<'a, V: Vertex> From<&SceneDesc<'a, V>> for SceneBuffers<'a> {
+    fn from(desc: &SceneDesc<'a, V>) -> SceneBuffers<'a> {
+        let mut flags = desc.flags;
+        if V::PRECISION == Some(Precision::F64) {
+            flags |= SceneFlags::FLOAT64;
+        }
         SceneBuffers {
             vertices: Buffer::from_slice(desc.vertices),
             triangles: Buffer::from_slice(desc.triangles),
             edges: Buffer::from_slice(desc.edges),
-            flags: desc.flags,
+            flags,
         }
     }
 }

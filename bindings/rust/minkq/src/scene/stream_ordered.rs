@@ -48,7 +48,9 @@ impl Scene {
     /// leaves the scene's positions as they were and records the scene's pending error, which
     /// [`Scene::async_status`] returns (and clears). Errors at once: as
     /// [`Scene::refit_buffer`] except [`Error::NonFinite`]; [`Error::InvalidArgument`] without
-    /// the reservation, or for host vertices on a CUDA device (device ones on the CPU).
+    /// the reservation, or for host vertices on a CUDA device (device ones on the CPU). On a
+    /// [`SceneFlags::FLOAT64`](crate::SceneFlags::FLOAT64) scene the records are 3 doubles, as
+    /// for [`Scene::refit_buffer`].
     ///
     /// ```
     /// # use minkq::*;
@@ -64,10 +66,11 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn refit_async(&mut self, vertices: Buffer<'_>, stream: Stream) -> Result<()> {
+        let vertices = self.vertex_buffer("refit_async", &vertices)?;
         // SAFETY: a live scene; the buffer's constructor promised records readable until the
         // enqueued work has run (host slices are read before this returns: CPU devices only);
         // the stream's constructor promised a stream of the scene's device.
-        check(unsafe { sys::minkq_scene_refit_async(self.raw.as_ptr(), vertices.raw(), stream.as_raw()) })
+        check(unsafe { sys::minkq_scene_refit_async(self.raw.as_ptr(), vertices, stream.as_raw()) })
     }
 
     /// [`Scene::rebuild_buffer`], enqueued on `stream` as [`Scene::refit_async`] is
@@ -91,8 +94,9 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn rebuild_async(&mut self, vertices: Buffer<'_>, stream: Stream) -> Result<()> {
+        let vertices = self.vertex_buffer("rebuild_async", &vertices)?;
         // SAFETY: as in refit_async.
-        check(unsafe { sys::minkq_scene_rebuild_async(self.raw.as_ptr(), vertices.raw(), stream.as_raw()) })
+        check(unsafe { sys::minkq_scene_rebuild_async(self.raw.as_ptr(), vertices, stream.as_raw()) })
     }
 
     /// [`Scene::query_to`], enqueued on `stream` (`minkq_scene_query_async`): writes the exact
