@@ -328,6 +328,13 @@ minkq::QueryRequest checked_scene_request(const minkq_scene* scene, const minkq_
   require(vt || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
           "sphere mode needs point queries; use capsule_ray or capsule_exact for EE");
   require_radius(query->radius);
+  if (scene->store->swept()) {
+    require(!(query->flags & MINKQ_QUERY_LEAF_EXACT), Status::kUnsupported,
+            name + "->flags asks for MINKQ_QUERY_LEAF_EXACT on swept positions: that needs a narrow phase "
+                   "(the time of closest approach), which minkq leaves to the caller; query without it");
+    require(vt || query->mode == MINKQ_MODE_BOX, Status::kUnsupported,
+            name + ": swept EE queries run box mode only (a moving edge sweeps no segment)");
+  }
   uint32_t filters = 0;
   if (scene->flags & MINKQ_SCENE_DROP_INCIDENT) filters |= minkq::kDropIncident;
   if (query->flags & MINKQ_QUERY_LEAF_EXACT) filters |= minkq::kLeafExact;
@@ -575,6 +582,24 @@ minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices) {
     scene->store->rebuild(values);
   });
 }
+
+minkq_status minkq_scene_refit_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1) {
+  return guarded([&] {
+    const minkq::Strided start = checked_vertices(scene, x0, "refit_swept");  // checks scene first
+    const minkq::Strided end = checked_vertices(scene, x1, "refit_swept");
+    scene->store->refit_swept(start, end);
+  });
+}
+
+minkq_status minkq_scene_rebuild_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1) {
+  return guarded([&] {
+    const minkq::Strided start = checked_vertices(scene, x0, "rebuild_swept");  // checks scene first
+    const minkq::Strided end = checked_vertices(scene, x1, "rebuild_swept");
+    scene->store->rebuild_swept(start, end);
+  });
+}
+
+int minkq_scene_is_swept(const minkq_scene* scene) { return scene && scene->store->swept() ? 1 : 0; }
 
 minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth) {
   return guarded([&] {

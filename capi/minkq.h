@@ -177,6 +177,27 @@ minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices);
  * numbering are kept. Same errors as minkq_scene_refit; the scene then keeps its positions and
  * trees. */
 minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
+/* Swept positions, for continuous collision detection (CCD): every vertex moves linearly from
+ * x0 to x1 over the step (both buffers as for minkq_scene_refit: the scene's vertex count and
+ * precision, host or device memory, finite). The scene keeps both, boxes each element over both
+ * positions, and refits its trees to those boxes (minkq_scene_refit_swept) or builds them afresh
+ * (minkq_scene_rebuild_swept). Its queries are then swept until the next minkq_scene_refit or
+ * minkq_scene_rebuild: they report every pair whose two elements come within r at some time t
+ * in [0, 1] (x(t) = x0 + t (x1 - x0) for each vertex), the candidates a CCD narrow phase then
+ * decides. The modes, as node and primitive tests against the elements' swept boxes:
+ *   VT  the vertex is its path, the segment x0 -> x1: box (the segment's box grown by r),
+ *       capsule_ray and capsule_exact (the capsule of radius r around the path, as for
+ *       segments), sphere = capsule_exact (the sphere swept along the path);
+ *   EE  box (the edge's swept box grown by r); the segment modes are UNSUPPORTED.
+ * MINKQ_QUERY_LEAF_EXACT is UNSUPPORTED (it would need the time of closest approach); the
+ * scene's DROP_INCIDENT and the once-per-pair EE rule apply as for static queries. At x0 == x1
+ * the pairs are the static queries' (VT capsule_exact and sphere: the static sphere mode's).
+ * Errors: those of minkq_scene_refit for either buffer (the message names the call); on error
+ * the scene keeps its positions and trees. minkq_scene_is_swept returns 1 while the scene's
+ * positions are swept ones, else 0 (also for NULL). */
+minkq_status minkq_scene_refit_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1);
+minkq_status minkq_scene_rebuild_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1);
+int minkq_scene_is_swept(const minkq_scene* scene);
 /* Writes to *out_growth how far the refits since the last build have stretched the trees: their
  * area cost now over its value right after that build, for the larger of the scene's trees;
  * 1 after a build. The area cost (the surface areas of every node's child boxes, summed, over

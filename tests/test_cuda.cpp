@@ -432,6 +432,45 @@ TEST_F(Cuda, float64_vertices_from_host_and_device_memory_match_cpu) {
   EXPECT_NE(std::string(minkq_last_error_message()).find("vertex 17"), std::string::npos) << minkq_last_error_message();
 }
 
+// Swept positions (minkq_scene_refit_swept / rebuild_swept): the same swept boxes and path
+// tests on the device, from host and from device memory, float and float64.
+TEST_F(Cuda, swept_queries_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  for (uint32_t precision : {0u, uint32_t(MINKQ_SCENE_FLOAT64)}) {
+    Mesh from = reference::twisted_sheet(40, 3.0);
+    const float r = float(0.5 * reference::mean_edge_length(from));
+    Mesh to = from;
+    reference::transform(to, 1.02, 0.01);
+    if (precision) {
+      reference::set_float64(from, test::far_doubles(from.xyz));
+      reference::set_float64(to, test::far_doubles(to.xyz));
+    }
+    const uint32_t flags = kBoth | MINKQ_SCENE_DROP_INCIDENT | precision;
+    cxx::Scene on_cpu = make_scene(cpu.get(), from, flags, test::vertices_of(from, flags));
+    ASSERT_EQ(minkq_scene_rebuild_swept(on_cpu.get(), test::vertices_of(from, flags), test::vertices_of(to, flags)),
+              MINKQ_SUCCESS);
+    const size_t stride = precision ? 24 : 12;
+    DeviceMemory x0 = precision ? device_vertices(from.xyz64, stride) : device_vertices(from.xyz, stride);
+    DeviceMemory x1 = precision ? device_vertices(to.xyz64, stride) : device_vertices(to.xyz, stride);
+    for (bool device_memory : {false, true}) {
+      const std::string what = std::string(precision ? "float64" : "float") + (device_memory ? " device" : " host");
+      cxx::Scene on_gpu = make_scene(cuda.get(), from, flags, test::vertices_of(from, flags));
+      const minkq_buffer a = device_memory ? device_buffer(x0.ptr, from.vertex_count(), stride) : test::vertices_of(from, flags);
+      const minkq_buffer b = device_memory ? device_buffer(x1.ptr, from.vertex_count(), stride) : test::vertices_of(to, flags);
+      for (bool rebuild : {false, true}) {
+        ASSERT_EQ(rebuild ? minkq_scene_rebuild_swept(on_gpu.get(), a, b) : minkq_scene_refit_swept(on_gpu.get(), a, b),
+                  MINKQ_SUCCESS)
+            << minkq_last_error_message();
+        for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+          expect_same(scene_query(on_cpu.get(), MINKQ_QUERY_VT, mode, r, MINKQ_QUERY_DIGEST),
+                      scene_query(on_gpu.get(), MINKQ_QUERY_VT, mode, r, MINKQ_QUERY_DIGEST), what + " VT");
+        expect_same(scene_query(on_cpu.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_DIGEST),
+                    scene_query(on_gpu.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_DIGEST), what + " EE");
+      }
+    }
+  }
+}
+
 TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
   test::Device cuda("cuda");
   Mesh mesh = reference::twisted_sheet(40, 3.0);

@@ -119,6 +119,12 @@ class MeshStore : public Store {
  public:
   // The scene's edges, copied to host memory (edge_count entries).
   virtual void copy_edges(Edge* host_out) = 0;
+  // Swept positions: the vertices move linearly from x0 to x1 over the step, and the trees box
+  // each element over both (refit or build afresh); queries are then swept (queries.h) until a
+  // plain refit or rebuild. The caller checks the buffers and the queries a swept scene runs.
+  virtual void refit_swept(const Strided& x0, const Strided& x1) = 0;
+  virtual void rebuild_swept(const Strided& x0, const Strided& x1) = 0;
+  virtual bool swept() const = 0;
   // A VT and an EE query in one pass (one parallel loop; on CUDA one kernel launch and one
   // count readback): each query's total, pairs and work as query() gives them alone.
   virtual std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) = 0;

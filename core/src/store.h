@@ -13,9 +13,10 @@
 //   finish()                       completes the call's work and reports its errors.
 //   gather(values, Array<T>&)      packs strided Vec3 or Box records (host or, on CUDA, device
 //                                  memory) into an array.
-//   gather_float64(values, Array<Vec3>&, Array<float>& rho)
+//   gather_float64(values, Array<Vec3>&, Array<float>& rho, accumulate)
 //                                  the same from float64 vertices, rounded to nearest, with
-//                                  rho[0] the farthest the rounding moved one (float64.h).
+//                                  rho[0] the farthest the rounding moved one (float64.h), or
+//                                  the larger of that and rho[0] as it was (accumulate).
 //   upload(Array<T>&, vector<T>)   takes host topology over.
 //   download(T* host, Array<T>, n) copies n records to the host.
 //   sort_by_morton(boxes, n, Array<int32_t>& ids)
@@ -146,18 +147,34 @@ class MeshStoreOn final : public MeshStore {
 
   void refit(const Strided& vertices) override {
     [[maybe_unused]] const auto scope = x_.scope();
+    swept_ = false;
     gather_vertices(vertices);
-    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
-    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
+    refit_trees();
     x_.finish();
   }
 
   void rebuild(const Strided& vertices) override {
     [[maybe_unused]] const auto scope = x_.scope();
+    swept_ = false;
     gather_vertices(vertices);
     build_trees();
     x_.finish();
   }
+
+  void refit_swept(const Strided& x0, const Strided& x1) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    gather_swept(x0, x1);
+    refit_trees();
+    x_.finish();
+  }
+
+  void rebuild_swept(const Strided& x0, const Strided& x1) override {
+    [[maybe_unused]] const auto scope = x_.scope();
+    gather_swept(x0, x1);
+    build_trees();
+    x_.finish();
+  }
+  bool swept() const override { return swept_; }
 
   double tree_growth() override {
     [[maybe_unused]] const auto scope = x_.scope();
@@ -211,13 +228,14 @@ class MeshStoreOn final : public MeshStore {
 
   void refit_async(const Strided& vertices, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    swept_ = false;
     x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRefit);
-    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
-    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
+    refit_trees();
   }
 
   void rebuild_async(const Strided& vertices, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    swept_ = false;
     x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRebuild);
     build_trees();
   }
@@ -244,23 +262,39 @@ class MeshStoreOn final : public MeshStore {
 
  private:
   // Calls fn with the QueryPass of a VT request, or of an EE request.
+  // Swept, a vertex is a segment (its path): the segment shapes, sphere mode as capsule_exact.
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
-                                        request.filters, rho()};
-    with_pass<true>(request, triangle_tree_.view(), queries, num_vertices_, out, fn);
+                                        request.filters, rho(), vertices1()};
+    if (!swept_) return with_pass<true>(request, triangle_tree_.view(), queries, num_vertices_, out, fn);
+    QueryRequest path = request;
+    if (path.mode == Mode::kSphere) path.mode = Mode::kCapsuleExact;
+    with_pass<false>(path, triangle_tree_.view(), queries, num_vertices_, out, fn);
   }
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const BvhView edge_tree = edge_tree_.view();
     const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree.sorted_prims, request.r, request.filters,
-                                  rho()};
+                                  rho(), vertices1()};
     with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
   }
 
-  // The scene's vertices from the caller's (float64 ones rounded, with rho).
-  void gather_vertices(const Strided& vertices) {
-    if (float64_) x_.gather_float64(vertices, vertices_, rho_); else x_.gather(vertices, vertices_);
+  // The scene's vertices from the caller's (float64 ones rounded, with rho, the larger of both
+  // positions' for a swept scene).
+  void gather_vertices(const Strided& vertices) { gather_into(vertices, vertices_, false); }
+  void gather_swept(const Strided& x0, const Strided& x1) {
+    gather_into(x0, vertices_, false);
+    gather_into(x1, vertices1_, true);
+    swept_ = true;
+  }
+  void gather_into(const Strided& values, Array<Vec3>& dst, bool accumulate) {
+    if (float64_) x_.gather_float64(values, dst, rho_, accumulate); else x_.gather(values, dst);
+  }
+  const Vec3* vertices1() const { return swept_ ? vertices1_.data() : nullptr; }
+  void refit_trees() {
+    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
+    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
   }
   // Where the queries read rho (executor memory): nullptr for float input, whose radius stays r.
   float* rho() { return float64_ ? rho_.data() : nullptr; }
@@ -273,8 +307,8 @@ class MeshStoreOn final : public MeshStore {
     }
     if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
   }
-  TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data()}; }
-  EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data()}; }
+  TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data(), vertices1()}; }
+  EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data(), vertices1()}; }
 
   X x_;  // first: holds its device while the members below are created and destroyed
   Array<Vec3> vertices_;
@@ -282,10 +316,12 @@ class MeshStoreOn final : public MeshStore {
   Array<Edge> edges_;
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
+  Array<Vec3> vertices1_;  // swept: the positions at the end of the step (vertices_: at its start)
   Array<float> rho_;     // float64 input: rho[0], how far rounding moved the vertices at most
   int32_t num_vertices_, num_triangles_, num_edges_;
   bool has_triangle_tree_, has_edge_tree_;
   bool float64_;  // vertices come as float64 (every call: the scene's scalar type)
+  bool swept_ = false;  // the last positions were swept ones (vertices_ to vertices1_)
   Reservation reserved_;
   typename X::Tree triangle_tree_, edge_tree_;
 };

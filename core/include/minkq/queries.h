@@ -28,20 +28,30 @@ constexpr uint32_t kDropIncident = 1u;  // VT: vertex of the triangle; EE: edges
 constexpr uint32_t kLeafExact = 2u;     // primitive distance test at the leaves
 
 // ---- Primitive boxes -----------------------------------------------------------------------
+// A swept scene (vertices moving linearly from `vertices` to `vertices1`) boxes each element
+// over both positions: every position between holds it, since each of its points at time t is
+// a convex combination of its vertices' two positions.
 struct TriangleBoxes {
   const Vec3* vertices;
   const Triangle* triangles;
+  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
   MINKQ_HD Box operator()(int32_t t) const {
     const Triangle tri = triangles[t];
-    return box_expand(box_expand(Box::of_point(vertices[tri.v[0]]), vertices[tri.v[1]]), vertices[tri.v[2]]);
+    Box b = box_expand(box_expand(Box::of_point(vertices[tri.v[0]]), vertices[tri.v[1]]), vertices[tri.v[2]]);
+    if (vertices1)
+      for (int k = 0; k < 3; ++k) b = box_expand(b, vertices1[tri.v[k]]);
+    return b;
   }
 };
 struct EdgeBoxes {
   const Vec3* vertices;
   const Edge* edges;
+  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
   MINKQ_HD Box operator()(int32_t e) const {
     const Edge edge = edges[e];
-    return box_expand(Box::of_point(vertices[edge.v[0]]), vertices[edge.v[1]]);
+    Box b = box_expand(Box::of_point(vertices[edge.v[0]]), vertices[edge.v[1]]);
+    if (vertices1) b = box_expand(box_expand(b, vertices1[edge.v[0]]), vertices1[edge.v[1]]);
+    return b;
   }
 };
 struct PointBoxes {
@@ -69,7 +79,10 @@ MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uin
 MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(key & 0xffffffffu)}; }
 
 // Vertex v against the triangle tree; pairs (v, t). Queries run in `order` when given (the
-// vertices' Morton order: neighbouring queries then walk the same nodes).
+// vertices' Morton order: neighbouring queries then walk the same nodes). Swept (vertices1
+// set), vertex v is its path, the segment from vertices[v] to vertices1[v], against the
+// triangles' swept boxes: segment shapes (capsules), and no leaf-exact test (the front end
+// refuses it).
 struct VertexTriangleQueries {
   const Vec3* vertices;
   const Triangle* triangles;
@@ -77,9 +90,12 @@ struct VertexTriangleQueries {
   float r;
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
+  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
-  MINKQ_HD QueryGeometry geometry(int32_t v) const { return {vertices[v], vertices[v], radius()}; }
+  MINKQ_HD QueryGeometry geometry(int32_t v) const {
+    return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
+  }
   // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t, const Box& /*t_box*/) const {
@@ -108,11 +124,19 @@ struct EdgeEdgeQueries {
   float r;
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
+  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
+  // Static: the edge as a segment. Swept: the edge's swept box, as the box from its low to its
+  // high corner (box mode only: the front end refuses the segment modes).
   MINKQ_HD QueryGeometry geometry(int32_t e) const {
+    if (vertices1) {
+      const Box b = boxes()(e);
+      return {b.lo, b.hi, radius()};
+    }
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], radius()};
   }
+  MINKQ_HD EdgeBoxes boxes() const { return {vertices, edges, vertices1}; }
   // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box.
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f, const Box& /*f_box*/) const {
@@ -124,7 +148,7 @@ struct EdgeEdgeQueries {
     if ((filters & kDropIncident) && share_vertex(a, b)) return false;
     // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
     // finer test against e's box (nothing for the box mode).
-    if (!Shape::from(geometry(f)).finer(EdgeBoxes{vertices, edges}(e))) return false;
+    if (!Shape::from(geometry(f)).finer(boxes()(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;

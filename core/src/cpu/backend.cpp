@@ -2,6 +2,7 @@
 // TBB pass runner), and the backend's own input checks.
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -35,8 +36,10 @@ class CpuExecutor {
   void gather(const Strided& values, std::vector<T>& dst) {
     dst = gather_host<T>(values);
   }
-  void gather_float64(const Strided& values, std::vector<Vec3>& dst, std::vector<float>& rho) {
-    rho.assign(1, gather_float64_host(values, dst));
+  void gather_float64(const Strided& values, std::vector<Vec3>& dst, std::vector<float>& rho, bool accumulate) {
+    const float moved = gather_float64_host(values, dst);
+    rho.resize(1, 0.0f);
+    rho[0] = accumulate ? std::max(rho[0], moved) : moved;
   }
   template <class T>
   void upload(std::vector<T>& dst, std::vector<T>&& host) {

@@ -55,8 +55,8 @@ class CudaExecutor {
   void gather(const Strided& values, DeviceBuffer<T>& dst) {
     gather_to_device(values, dst);
   }
-  void gather_float64(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho) {
-    gather_float64_to_device(values, dst, rho);
+  void gather_float64(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho, bool accumulate) {
+    gather_float64_to_device(values, dst, rho, accumulate);
   }
   template <class T>
   void upload(DeviceBuffer<T>& dst, std::vector<T>&& host) {

@@ -303,18 +303,27 @@ static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, uns
   }
 }
 
-// Float64 vertices (host or device memory) rounded into a device array, rho[0] set.
-inline void gather_float64_to_device(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho) {
+static __global__ void max_into_kernel(unsigned int* bits, float value) {
+  unsigned int value_bits;
+  memcpy(&value_bits, &value, 4);
+  atomicMax(bits, value_bits);  // non-negative floats order as their bits
+}
+
+// Float64 vertices (host or device memory) rounded into a device array, rho[0] set (or, with
+// accumulate, raised to their rho where that is larger).
+inline void gather_float64_to_device(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho,
+                                     bool accumulate) {
   const size_t count = size_t(values.count);
   dst.ensure(count);
   rho.ensure(1);
+  if (!accumulate) zero(rho, 1);
   if (values.memory == Memory::kHost) {
     std::vector<Vec3> packed;
     const float moved = gather_float64_host(values, packed);
     upload(dst, packed.data(), count);
-    return upload(rho, &moved, 1);
+    launch("max_into_kernel launch", max_into_kernel, 1, 1, reinterpret_cast<unsigned int*>(rho.data()), moved);
+    return;
   }
-  zero(rho, 1);
   launch("gather_float64_kernel launch", gather_float64_kernel, values.count, kThreads,
          static_cast<const char*>(values.data), values.stride, values.count, is_aligned8(values), dst.data(),
          reinterpret_cast<unsigned int*>(rho.data()));

@@ -210,6 +210,15 @@ extern "C" {
     pub fn minkq_scene_rebuild(scene: *mut minkq_scene, vertices: minkq_buffer) -> minkq_status;
 }
 extern "C" {
+    pub fn minkq_scene_refit_swept(scene: *mut minkq_scene, x0: minkq_buffer, x1: minkq_buffer) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_rebuild_swept(scene: *mut minkq_scene, x0: minkq_buffer, x1: minkq_buffer) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_is_swept(scene: *const minkq_scene) -> ::std::os::raw::c_int;
+}
+extern "C" {
     pub fn minkq_scene_tree_growth(scene: *const minkq_scene, out_growth: *mut f64) -> minkq_status;
 }
 extern "C" {
