@@ -183,6 +183,34 @@ impl Array<u64> {
     }
 }
 
+/// A scene's vertex rows: 3 floats each, or 3 doubles each in a float64 scene
+/// (MINKQ_SCENE_FLOAT64, whose every vertex buffer the library reads as doubles).
+enum Vertices {
+    Float32(Array<f32>),
+    Float64(Array<f64>),
+}
+
+impl Vertices {
+    fn get(obj: &PyAny, float64: bool) -> PyResult<Vertices> {
+        Ok(if float64 {
+            Vertices::Float64(Array::get(obj, "vertices", &[3], false)?)
+        } else {
+            Vertices::Float32(Array::get(obj, "vertices", &[3], false)?)
+        })
+    }
+
+    /// The rows as a minkq buffer (record stride 12 or 24 bytes for numpy rows).
+    ///
+    /// # Safety
+    /// As `Array::buffer`.
+    unsafe fn buffer(&self) -> Buffer<'_> {
+        match self {
+            Vertices::Float32(array) => array.buffer(),
+            Vertices::Float64(array) => array.buffer(),
+        }
+    }
+}
+
 /// The stream an asynchronous call is enqueued on, from its address (a cudaStream_t; 0: CUDA's
 /// default stream; ignored on the CPU).
 fn stream(address: usize) -> Stream {
@@ -239,7 +267,7 @@ impl PyDevice {
     }
 }
 
-/// A mesh scene: VT and EE queries.
+/// A mesh scene: VT and EE queries; float32 vertices, or float64 ones with `float64`.
 #[pyclass(module = "minkq._native", name = "Scene")]
 struct PyScene {
     inner: Mutex<Scene>,
@@ -249,6 +277,9 @@ struct PyScene {
     triangle_count: usize,
     #[pyo3(get)]
     edge_count: usize,
+    /// Whether the scene reads its vertices as doubles (MINKQ_SCENE_FLOAT64).
+    #[pyo3(get)]
+    float64: bool,
 }
 
 #[pymethods]
@@ -264,8 +295,9 @@ impl PyScene {
         vt: bool,
         ee: bool,
         drop_incident: bool,
+        float64: bool,
     ) -> PyResult<Self> {
-        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        let vertices = Vertices::get(vertices, float64)?;
         let triangles = Array::<i32>::get(triangles, "triangles", &[3], false)?;
         let edges = edges.map(|e| Array::<i32>::get(e, "edges", &[2], false)).transpose()?;
         let mut flags = SceneFlags::empty();
@@ -278,7 +310,11 @@ impl PyScene {
         if drop_incident {
             flags |= SceneFlags::DROP_INCIDENT;
         }
-        // SAFETY: shapes checked: rows of 3 floats, 3 and 2 int32; the arrays live in this frame.
+        if float64 {
+            flags |= SceneFlags::FLOAT64;
+        }
+        // SAFETY: shapes checked: rows of 3 floats (doubles with FLOAT64), 3 and 2 int32; the
+        // arrays live in this frame.
         let desc = unsafe {
             SceneBuffers {
                 vertices: vertices.buffer(),
@@ -293,21 +329,22 @@ impl PyScene {
             vertex_count: scene.vertex_count(),
             triangle_count: scene.triangle_count(),
             edge_count: scene.edge_count(),
+            float64,
             inner: Mutex::new(scene),
         })
     }
 
     fn refit(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
-        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
-        // SAFETY: rows of 3 floats, alive in this frame.
+        let vertices = Vertices::get(vertices, self.float64)?;
+        // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
         py.allow_threads(|| lock(scene).refit_buffer(vertices)).map_err(|e| to_py_err(py, e))
     }
 
     fn rebuild(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
-        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
-        // SAFETY: rows of 3 floats, alive in this frame.
+        let vertices = Vertices::get(vertices, self.float64)?;
+        // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
         py.allow_threads(|| lock(scene).rebuild_buffer(vertices)).map_err(|e| to_py_err(py, e))
@@ -401,9 +438,9 @@ impl PyScene {
 
     /// minkq_scene_refit_async on the stream at `stream_address`.
     fn refit_async(&self, py: Python<'_>, vertices: &PyAny, stream_address: usize) -> PyResult<()> {
-        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
-        // SAFETY: rows of 3 floats, alive in this frame (on CUDA, the caller keeps them alive
-        // until the enqueued work has run).
+        let vertices = Vertices::get(vertices, self.float64)?;
+        // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame (on CUDA,
+        // the caller keeps them alive until the enqueued work has run).
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
         py.allow_threads(|| lock(scene).refit_async(vertices, stream(stream_address))).map_err(|e| to_py_err(py, e))
@@ -411,7 +448,7 @@ impl PyScene {
 
     /// minkq_scene_rebuild_async on the stream at `stream_address`.
     fn rebuild_async(&self, py: Python<'_>, vertices: &PyAny, stream_address: usize) -> PyResult<()> {
-        let vertices = Array::<f32>::get(vertices, "vertices", &[3], false)?;
+        let vertices = Vertices::get(vertices, self.float64)?;
         // SAFETY: as in refit_async.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;

@@ -1,8 +1,9 @@
-"""Host arrays of other dtypes than minkq's (float64 vertices, int64 / uint32 indices, as
-trimesh and most mesh loaders give) are converted once into a copy; float32 / int32
+"""Host arrays of other dtypes than minkq's (int64 / uint32 indices, as trimesh and most mesh
+loaders give; float16 or byte-swapped vertices) are converted once into a copy; float32 / int32
 C-contiguous numpy arrays are read in place; an index that does not fit in int32 is refused
 naming the element; arrays of other libraries (DLPack, CUDA array interface) are never
-converted."""
+converted. float64 vertices make a float64 scene (test_float64.py), which gives a float32
+scene's pairs for values that are floats already."""
 
 import numpy as np
 import pytest
@@ -125,7 +126,8 @@ class _Foreign:
 def test_arrays_of_other_libraries_stay_strict(device, mesh):
     xyz, tris = mesh
     minkq.Scene(device, _Foreign(xyz), _Foreign(tris))  # exact dtypes: read in place
-    with pytest.raises(TypeError, match=r"vertices: expected a float32 array, got float64"):
-        minkq.Scene(device, _Foreign(xyz.astype(np.float64)), tris)
+    assert minkq.Scene(device, _Foreign(xyz.astype(np.float64)), tris).dtype == np.float64  # read in place
+    with pytest.raises(TypeError, match=r"vertices: expected a float32 or float64 array, got float16"):
+        minkq.Scene(device, _Foreign(xyz.astype(np.float16)), tris)
     with pytest.raises(TypeError, match=r"triangles: expected a int32 array, got int64"):
         minkq.Scene(device, xyz, _Foreign(tris.astype(np.int64)))

@@ -138,8 +138,8 @@ def test_strided_rows_are_read_in_place_and_inner_strides_rejected(device, mesh)
 
 def test_wrong_dtype_or_shape_names_the_argument(device, mesh):
     xyz, tris = mesh
-    with pytest.raises(TypeError, match="vertices: expected a float32 array, got float64"):
-        minkq.Scene(device, DLPackOnly(xyz.astype(np.float64)), tris)
+    with pytest.raises(TypeError, match="vertices: expected a float32 or float64 array, got float16"):
+        minkq.Scene(device, DLPackOnly(xyz.astype(np.float16)), tris)
     with pytest.raises(TypeError, match="triangles: expected a int32 array, got int64"):
         minkq.Scene(device, xyz, DLPackOnly(tris.astype(np.int64)))
     with pytest.raises(ValueError, match=r"edges: expected shape \(n, 2\), got \(4, 3\)"):

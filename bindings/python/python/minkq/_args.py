@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
 KINDS = ("vt", "ee")
 MODES = ("box", "sphere", "capsule_ray", "capsule_exact")
+FLOAT32, FLOAT64 = np.dtype(np.float32), np.dtype(np.float64)
 
 
 def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.ndarray:
@@ -42,17 +43,7 @@ def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.nd
     converted: see :func:`minkq._interop.checked`.
     """
     dtype = np.dtype(dtype)
-    if isinstance(value, np.ndarray):
-        array = value
-    else:
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError) as e:
-            raise TypeError(f"{name}: expected an array of {dtype.name}, got {type(value).__name__}: {e}") from None
-        if array.size == 0:
-            array = array.astype(dtype)
-        if array.size == 0 and array.ndim == 1:
-            array = array.reshape((0,) + trailing)
+    array = _array(value, name, dtype, trailing)
     if array.dtype != dtype:
         array = _converted(array, name, dtype)
     if array.ndim != 1 + len(trailing) or array.shape[1:] != trailing:
@@ -61,6 +52,49 @@ def _rows(value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> np.nd
     if not (array.flags.c_contiguous and array.flags.aligned):
         array = np.require(array, requirements=("C", "A"))  # strided input: a contiguous copy
     return array
+
+
+def _array(value: Any, name: str, dtype: np.dtype, trailing: Tuple[int, ...]) -> np.ndarray:
+    """``value`` as a numpy array, itself if it is one, in the dtype numpy reads it in (an empty
+    sequence as an empty (0, *trailing) array of ``dtype``)."""
+    if isinstance(value, np.ndarray):
+        return value
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise TypeError(f"{name}: expected an array of {dtype.name}, got {type(value).__name__}: {e}") from None
+    if array.size == 0:
+        array = array.astype(dtype)
+    if array.size == 0 and array.ndim == 1:
+        array = array.reshape((0,) + trailing)
+    return array
+
+
+def _vertex_precision(name: str, found: np.dtype, scene: Optional[np.dtype], where: str, converts: str) -> np.dtype:
+    """The dtype vertices of dtype ``found`` are passed in to a scene of precision ``scene``
+    (None: a new scene, float64 from float64 values, float32 from narrower floats and
+    integers); TypeError naming the argument where that would round: double values for a
+    float32 scene, floats wider than double, and, unless ``converts`` is empty (then they are
+    converted exactly), other dtypes for a float64 scene (``converts`` says why not)."""
+    if found.kind == "f" and found.itemsize > 8:
+        raise TypeError(
+            f"{name}: expected float32 or float64 values, got {found}{where}: minkq does not round wider floats; "
+            "convert them to float64 yourself"
+        )
+    double = found.kind == "f" and found.itemsize == 8
+    if scene is None:
+        return FLOAT64 if double else FLOAT32
+    if scene == FLOAT32 and double:
+        raise TypeError(
+            f"{name}: got {found} values{where} for a scene created from float32 vertices, which would round "
+            "them to float32 and could lose a pair within r in double: create the scene from float64 vertices "
+            "to have every pair within r in double reported, or pass float32 values"
+        )
+    if scene == FLOAT64 and found != FLOAT64 and converts:
+        raise TypeError(
+            f"{name}: expected float64 values, the dtype of the scene's vertices, got {found}{where}: {converts}"
+        )
+    return scene
 
 
 def _converted(array: np.ndarray, name: str, dtype: np.dtype) -> np.ndarray:
@@ -115,6 +149,27 @@ class _Args:
         array = checked(view(value, name, self.device, self.stream), name, dtype, trailing)
         self.views.append(array)
         return array.descriptor()
+
+    def vertices(self, value: Any, name: str, scene: Optional[np.dtype], *, convert: bool = True) -> Tuple[Any, np.dtype]:
+        """Vertex rows (n, 3) for a scene of precision ``scene`` (FLOAT32 or FLOAT64; None for a
+        new scene: FLOAT64 from float64 values, FLOAT32 from any other), and that precision.
+        Host values for a float64 scene are converted to float64 (exactly: from float32 and
+        narrower) when ``convert`` (the blocking calls); arrays of other libraries, and host
+        arrays where not ``convert`` (the stream-ordered calls), must have the scene's dtype.
+        Double values for a float32 scene raise TypeError rather than be rounded."""
+        if has_protocol(value):
+            array = view(value, name, self.device, self.stream)
+            if scene is None and array.dtype not in (FLOAT32, FLOAT64):
+                raise TypeError(f"{name}: expected a float32 or float64 array, got {array.dtype.name} ({array.kind}, {array.where})")
+            never = "arrays of other libraries are read in place, never converted: pass a float64 array"
+            scene = _vertex_precision(name, array.dtype, scene, f" ({array.kind}, {array.where})", never)
+            array = checked(array, name, scene, (3,))
+            self.views.append(array)
+            return array.descriptor(), scene
+        host = _array(value, name, FLOAT32, (3,))
+        never = "" if convert else "the stream-ordered calls read their arrays in place, never converted"
+        scene = _vertex_precision(name, host.dtype, scene, "", never)
+        return _rows(host, name, scene, (3,)), scene
 
     def boxes(self, value: Any, name: str) -> Any:
         if not has_protocol(value):

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any, Callable, Optional, Tuple
 import numpy as np
 
 from . import _native
-from ._args import KINDS, MODES, _Args, _choice, _like, _radius
+from ._args import FLOAT64, KINDS, MODES, _Args, _choice, _like, _radius
 from ._device import Device
 from ._interop import stream_handle
 from ._results import QueryInfo, WorkStats, _SizedQueries
@@ -19,13 +19,27 @@ if TYPE_CHECKING:
 class Scene(_SizedQueries):
     """A triangle mesh on a device with the BVHs for VT and/or EE queries.
 
-    ``vertices``: (n, 3) float32; ``triangles``: (m, 3) int32; ``edges``: (e, 2) int32, or None
-    (or an empty array) to derive them from the triangles (every distinct undirected edge as
-    (min, max), sorted).
+    ``vertices``: (n, 3) float32 or float64; ``triangles``: (m, 3) int32; ``edges``: (e, 2)
+    int32, or None (or an empty array) to derive them from the triangles (every distinct
+    undirected edge as (min, max), sorted).
     C-contiguous numpy arrays of exactly these dtypes are used without a copy; other host
-    arrays (float64 vertices, int64 indices, ...) are converted once: a copy is made (an index
-    that does not fit in int32 raises IndexOutOfRangeError naming it). Arrays of other
-    libraries must have exactly these dtypes.
+    arrays (int64 indices, strided or byte-swapped arrays, lists, ...) are converted once: a
+    copy is made (an index that does not fit in int32 raises IndexOutOfRangeError naming it).
+    Arrays of other libraries must have exactly these dtypes.
+
+    Precision (:attr:`dtype`): float64 vertices (numpy, Warp ``wp.vec3d`` / float64, PyTorch
+    float64, ...; also lists of Python floats, which numpy reads as float64) make a float64
+    scene (``MINKQ_SCENE_FLOAT64``): it reads them as doubles, rounds them to float for its
+    trees and widens every query radius by twice the farthest the rounding moved a vertex, so
+    that every pair within r in double is reported, in every mode (extras lie within that
+    wider radius). float32 vertices make a float32 scene, as do float16 and integer ones
+    (converted to float32). The precision is the scene's for good: :meth:`refit` and
+    :meth:`rebuild` of a float64 scene take float64 (float32 and narrower host arrays are
+    converted to float64 exactly; arrays of other libraries and the stream-ordered calls must
+    be float64 already); a float32 scene refuses float64 values with TypeError rather than
+    round them to float32 (create it from float64 vertices to have the guarantee in double).
+    Floats wider than float64 (``np.longdouble``) raise TypeError: minkq rounds none itself.
+
     ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
     a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
 
@@ -49,10 +63,13 @@ class Scene(_SizedQueries):
     >>> scene = minkq.Scene(minkq.Device("cpu"), v, t)
     >>> scene.query("vt", "sphere", 0.2, leaf_exact=True, canonical=True).tolist()
     [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
+    >>> minkq.Scene(minkq.Device("cpu"), v.astype(np.float64), t).dtype
+    dtype('float64')
 
-    Raises :class:`NonFiniteError`, :class:`IndexOutOfRangeError`, :class:`SizeOverflowError` or
-    :class:`InvalidArgumentError` (with the library's message) for bad input, and
-    TypeError / ValueError naming the argument for a wrong dtype or shape.
+    Raises :class:`NonFiniteError` (also for a double beyond the float range, about 3.4e38),
+    :class:`IndexOutOfRangeError`, :class:`SizeOverflowError` or :class:`InvalidArgumentError`
+    (with the library's message) for bad input, and TypeError / ValueError naming the argument
+    for a wrong dtype or shape.
     """
 
     def __init__(
@@ -71,13 +88,21 @@ class Scene(_SizedQueries):
             raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
         self.device = device
         args = _Args(device)
-        vertices = args.rows(vertices, "vertices", np.float32, (3,))
+        vertices, self._dtype = args.vertices(vertices, "vertices", None)
         self._like = _like(args.last)
         triangles = args.rows(triangles, "triangles", np.int32, (3,))
         if edges is not None:
             edges = args.rows(edges, "edges", np.int32, (2,))
-        self._native = _native.Scene(device._native, vertices, triangles, edges, bool(vt), bool(ee), bool(drop_incident))
+        flags = (bool(vt), bool(ee), bool(drop_incident), self._dtype == FLOAT64)
+        self._native = _native.Scene(device._native, vertices, triangles, edges, *flags)
         self._stream = 0  # the stream of the last stream-ordered call, for async_status
+
+    @property
+    def dtype(self) -> np.dtype:
+        """The precision of the scene's vertices: ``float32``, or ``float64`` for a scene
+        created from float64 vertices (every pair within r in double is reported), whose
+        refits and rebuilds take float64."""
+        return self._dtype
 
     @property
     def vertex_count(self) -> int:
@@ -102,14 +127,14 @@ class Scene(_SizedQueries):
         return out
 
     def refit(self, vertices: Any) -> None:
-        """Moves the vertices ((n, 3) float32, same n; numpy or read in place as in the
-        constructor) and refits the trees in place: the per-step call of a simulation. On error
+        """Moves the vertices ((n, 3) of the scene's :attr:`dtype`, same n; numpy or read in
+        place as in the constructor) and refits the trees in place: the per-step call of a simulation. On error
         the scene keeps its previous positions. A refit keeps the grouping of the last build:
         after large deformations the boxes overlap more and queries visit more nodes
         (:meth:`tree_growth` measures it, :meth:`rebuild` resets it); the pairs found never
         change."""
         args = _Args(self.device)
-        native = args.rows(vertices, "vertices", np.float32, (3,))
+        native = args.vertices(vertices, "vertices", self._dtype)[0]
         self._native.refit(native)
         self._like = _like(args.last)
 
@@ -130,7 +155,7 @@ class Scene(_SizedQueries):
         ([], 1.0)
         """
         args = _Args(self.device)
-        native = args.rows(vertices, "vertices", np.float32, (3,))
+        native = args.vertices(vertices, "vertices", self._dtype)[0]
         self._native.rebuild(native)
         self._like = _like(args.last)
 
@@ -290,14 +315,17 @@ class Scene(_SizedQueries):
         ``wp.ScopedCapture``). On a CUDA device ``vertices`` are device memory (a Warp, PyTorch
         or CuPy array on the scene's GPU), read when the stream runs the work: keep them alive
         (for a captured graph, as long as it is replayed). On the CPU they are host memory
-        (numpy, or a Warp CPU array) and the refit has run when this returns.
+        (numpy, or a Warp CPU array) and the refit has run when this returns. Nothing is
+        converted: the vertices have the scene's :attr:`dtype` (a float64 scene takes float64
+        only).
 
         ``stream``: None for the current stream of the array's library (Warp:
         ``wp.get_stream(device)``, the capture stream inside ``wp.ScopedCapture``; PyTorch:
         ``torch.cuda.current_stream(device)``; CuPy: ``cupy.cuda.get_current_stream()``), or an
         int (a ``cudaStream_t``) or a stream with ``.cuda_stream`` / ``.ptr``; ignored on the
         CPU. Needs :meth:`reserve` (``refit=True``): :class:`InvalidArgumentError` without it.
-        A NaN or infinity is no error here: the scene keeps its positions and
+        A NaN or infinity (or, in a float64 scene, a double beyond the float range) is no
+        error here: the scene keeps its positions and
         :meth:`async_status` raises :class:`NonFiniteError`, naming the call and the vertex."""
         self._move_async(vertices, stream, self._native.refit_async)
 
@@ -382,7 +410,7 @@ class Scene(_SizedQueries):
     def _move_async(self, vertices: Any, stream: Any, call: Callable[[Any, int], None]) -> None:
         handle = stream_handle(stream, self.device, (vertices,))
         args = _Args(self.device, handle)
-        native = args.rows(vertices, "vertices", np.float32, (3,))
+        native = args.vertices(vertices, "vertices", self._dtype, convert=False)[0]
         call(native, handle)
         self._like = _like(args.last)
         self._stream = handle
@@ -411,4 +439,5 @@ class Scene(_SizedQueries):
         return self._run((kind, mode) + flags, lambda out: self._native.query_into(out, kind, mode, r, *flags), target)
 
     def __repr__(self) -> str:
-        return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges)"
+        precision = ", float64" if self._dtype == FLOAT64 else ""
+        return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges{precision})"
