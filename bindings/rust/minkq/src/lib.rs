@@ -58,6 +58,16 @@
 //! precision are refused with [`Error::InvalidArgument`], and a double beyond the float range
 //! is [`Error::NonFinite`].
 //!
+//! # Swept positions
+//! For continuous collision detection, [`Scene::refit_swept`] and [`Scene::rebuild_swept`]
+//! take the positions at the start and the end of a step (`[f64; 3]`:
+//! [`Scene::refit_swept_f64`], [`Scene::rebuild_swept_f64`]; [`Buffer`]s:
+//! [`Scene::refit_swept_buffers`], [`Scene::rebuild_swept_buffers`]). Every vertex moves
+//! linearly between them, and the queries report every pair whose elements come within r at
+//! some time of the step: the candidates a narrow phase then decides. VT tests the vertex's
+//! path, EE runs [`Mode::Box`] only, and [`QueryFlags::LEAF_EXACT`] is [`Error::Unsupported`].
+//! The scene stays swept ([`Scene::is_swept`]) until a plain refit or rebuild.
+//!
 //! # Threads
 //! The C API allows different objects to be used from different threads at once, but one
 //! object only from one thread at a time, and lets scenes on different threads share a device.

@@ -1,5 +1,6 @@
 //! Mesh scenes (`minkq_scene`): the [`Scene`] type, its creation, refit and rebuild, and its
-//! counts. Its descriptions, blocking queries and stream-ordered calls live in the submodules.
+//! counts. Its descriptions, blocking queries, stream-ordered calls and swept positions live in
+//! the submodules.
 use std::fmt;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
@@ -14,6 +15,7 @@ use crate::sys;
 mod desc;
 mod queries;
 mod stream_ordered;
+mod swept;
 
 pub use desc::{SceneBuffers, SceneDesc};
 

@@ -1,0 +1,249 @@
+//! A scene's swept positions (`minkq_scene_refit_swept`, `minkq_scene_rebuild_swept`), for
+//! continuous collision detection: every vertex moves linearly from `x0` to `x1` over a step,
+//! and the queries report every pair whose elements come within r at some time of it.
+use super::Scene;
+use crate::buffer::Buffer;
+use crate::error::{check, Result};
+use crate::sys;
+
+impl Scene {
+    /// Swept positions, for continuous collision detection (CCD): every vertex moves linearly
+    /// from `x0` to `x1` over the step (`x(t) = x0 + t (x1 - x0)`, t in [0, 1]). The scene
+    /// keeps both, boxes each element over both positions and refits its trees to those boxes
+    /// (keeping the grouping of the last build, as [`Scene::refit`] does). Its queries are then
+    /// swept until the next plain refit or rebuild ([`Scene::is_swept`]): they report every
+    /// pair whose two elements come within r at some time of the step, the candidates a CCD
+    /// narrow phase then decides.
+    ///
+    /// The modes, as node and primitive tests against the elements' swept boxes:
+    /// - VT: the vertex is its path, the segment `x0 -> x1`: [`Mode::Box`] (the segment's box
+    ///   grown by r), [`Mode::CapsuleRay`] and [`Mode::CapsuleExact`] (the capsule of radius r
+    ///   around the path), and [`Mode::Sphere`], the same as [`Mode::CapsuleExact`] (the sphere
+    ///   swept along the path);
+    /// - EE: [`Mode::Box`] only (each edge's swept box grown by r); the other modes are
+    ///   [`Error::Unsupported`].
+    ///
+    /// [`QueryFlags::LEAF_EXACT`] is [`Error::Unsupported`] on swept positions (it would need
+    /// the time of closest approach, which the narrow phase finds);
+    /// [`SceneFlags::DROP_INCIDENT`] and the once-per-pair EE rule apply as for static queries.
+    /// At `x0 == x1` the pairs are the static queries' (VT [`Mode::CapsuleExact`] and
+    /// [`Mode::Sphere`]: the static [`Mode::Sphere`] pairs).
+    ///
+    /// Errors: those of [`Scene::refit`] for either slice (a vertex count other than the
+    /// scene's, [`Error::NonFinite`]; on a [`SceneFlags::FLOAT64`] scene, which takes
+    /// [`Scene::refit_swept_f64`], [`Error::InvalidArgument`]). On error the scene keeps its
+    /// positions, trees and swept state.
+    ///
+    /// A vertex flying through a still triangle: apart at both ends of the step, found by the
+    /// swept query.
+    ///
+    /// ```
+    /// use minkq::{Device, Error, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
+    /// // Triangle 0 in the plane x = 0; vertex 3 goes from x = -1 to x = +1 straight through it.
+    /// let x0 = [[0.0, -1.0, -1.0], [0.0, 2.0, -1.0], [0.0, -1.0, 2.0], [-1.0, 0.1, 0.1]];
+    /// let mut x1 = x0;
+    /// x1[3][0] = 1.0;
+    /// let triangles = [[0, 1, 2]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &triangles))?;
+    /// let query = Query::vt(Mode::CapsuleExact, 0.01);
+    /// let mut pairs = PairBuffer::new()?;
+    /// // Static queries at either end find nothing: the vertex is 1 from the triangle.
+    /// assert!(scene.query(&query, &mut pairs)?.is_empty());
+    /// scene.refit(&x1)?;
+    /// assert!(scene.query(&query, &mut pairs)?.is_empty());
+    /// // Over the step, its path crosses the triangle.
+    /// scene.refit_swept(&x0, &x1)?;
+    /// assert!(scene.is_swept());
+    /// assert_eq!(scene.query(&query, &mut pairs)?, &[[3, 0]]);
+    /// assert_eq!(scene.query(&Query::vt(Mode::Box, 0.01), &mut pairs)?, &[[3, 0]]);
+    ///
+    /// // Swept EE queries run box mode only; leaf-exact needs a narrow phase.
+    /// let err = scene.query(&Query::ee(Mode::CapsuleExact, 0.01), &mut pairs).unwrap_err();
+    /// assert!(matches!(err, Error::Unsupported(m) if m.contains("box mode only")));
+    /// let leaf_exact = query.with_flags(QueryFlags::LEAF_EXACT);
+    /// assert!(matches!(scene.query(&leaf_exact, &mut pairs), Err(Error::Unsupported(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`Mode::Box`]: crate::Mode::Box
+    /// [`Mode::Sphere`]: crate::Mode::Sphere
+    /// [`Mode::CapsuleRay`]: crate::Mode::CapsuleRay
+    /// [`Mode::CapsuleExact`]: crate::Mode::CapsuleExact
+    /// [`Error::Unsupported`]: crate::Error::Unsupported
+    /// [`Error::NonFinite`]: crate::Error::NonFinite
+    /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
+    /// [`QueryFlags::LEAF_EXACT`]: crate::QueryFlags::LEAF_EXACT
+    /// [`SceneFlags::DROP_INCIDENT`]: crate::SceneFlags::DROP_INCIDENT
+    /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
+    pub fn refit_swept(&mut self, x0: &[[f32; 3]], x1: &[[f32; 3]]) -> Result<()> {
+        self.refit_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+    }
+
+    /// [`Scene::refit_swept`] with `[f64; 3]` positions, for a [`SceneFlags::FLOAT64`] scene
+    /// ([`SceneDesc::new_f64`](crate::SceneDesc::new_f64)): both rounded to float, the query
+    /// radii widened as for [`Scene::refit_f64`], so that every pair within r in double at
+    /// some time of the step is reported. A float scene refuses them with
+    /// [`Error::InvalidArgument`]; a double beyond the float range is [`Error::NonFinite`].
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// // The flying vertex of `refit_swept`, far from the origin, in double.
+    /// let base = 7000.0;
+    /// let x0 = [[base, -1.0, -1.0], [base, 2.0, -1.0], [base, -1.0, 2.0], [base - 1.0, 0.1, 0.1]];
+    /// let mut x1 = x0;
+    /// x1[3][0] = base + 1.0;
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&x0, &[[0, 1, 2]]))?;
+    /// scene.refit_swept_f64(&x0, &x1)?;
+    /// assert!(scene.is_swept());
+    /// assert_eq!(scene.query(&Query::vt(Mode::Sphere, 1e-3), &mut PairBuffer::new()?)?, &[[3, 0]]);
+    /// // Floats are refused, for either end: the scene reads 3 doubles per vertex.
+    /// let floats: Vec<[f32; 3]> = x1.iter().map(|v| v.map(|x| x as f32)).collect();
+    /// let err = scene.refit_swept_buffers(Buffer::from_slice(&x0), Buffer::from_slice(&floats)).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("refit_swept: x1: [f32; 3] vertices, but a scene with SceneFlags::FLOAT64 reads [f64; 3]".into()));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
+    /// [`Error::NonFinite`]: crate::Error::NonFinite
+    /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
+    pub fn refit_swept_f64(&mut self, x0: &[[f64; 3]], x1: &[[f64; 3]]) -> Result<()> {
+        self.refit_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+    }
+
+    /// [`Scene::refit_swept`] from two [`Buffer`]s: strided records, host or (on a CUDA
+    /// device) device memory, read in place on the device. Records and precision as for
+    /// [`Scene::refit_buffer`], for each buffer; a slice buffer of the other precision is
+    /// [`Error::InvalidArgument`] naming the buffer (`x0` or `x1`). On error the scene keeps
+    /// its positions, trees and swept state.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let x0 = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &[[0, 1, 2]]))?;
+    /// // The triangle lifted by 1 over the step, as 16-byte (vec4) records.
+    /// let x1 = [[0.0f32, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 0.0]];
+    /// // SAFETY: three 16-byte records starting with x, y, z, borrowed from `x1`.
+    /// let x1 = unsafe { Buffer::from_raw_parts(x1.as_ptr().cast(), 16, 3, Memory::Host) };
+    /// scene.refit_swept_buffers(Buffer::from_slice(&x0), x1)?;
+    /// assert!(scene.is_swept());
+    /// // Doubles on a float scene are refused before the library could misread them.
+    /// let doubles = [[0.0f64; 3]; 3];
+    /// let err = scene.refit_swept_buffers(Buffer::from_slice(&doubles), x1).unwrap_err();
+    /// assert!(matches!(err, Error::InvalidArgument(m) if m.starts_with("refit_swept: x0: [f64; 3] vertices")));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
+    pub fn refit_swept_buffers(&mut self, x0: Buffer<'_>, x1: Buffer<'_>) -> Result<()> {
+        let (x0, x1) = self.swept_buffers("refit_swept", &x0, &x1)?;
+        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
+        // scene's precision where the buffers know it (checked above).
+        check(unsafe { sys::minkq_scene_refit_swept(self.raw.as_ptr(), x0, x1) })
+    }
+
+    /// Swept positions like [`Scene::refit_swept`], with the trees built afresh for the
+    /// elements' swept boxes (as [`Scene::rebuild`] builds them for static positions). The
+    /// pairs are the same as after [`Scene::refit_swept`]; only the speed of later queries
+    /// differs. Same errors; on error the scene keeps its positions, trees and swept state. A
+    /// [`SceneFlags::FLOAT64`] scene takes [`Scene::rebuild_swept_f64`].
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// // Two triangles 1 apart in z, one flying onto the other over the step.
+    /// let x0 = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+    ///           [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]];
+    /// let mut x1 = x0;
+    /// for v in &mut x1[3..] {
+    ///     v[2] = -1.0; // through the lower triangle and 1 beyond it
+    /// }
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &[[0, 1, 2], [3, 4, 5]]))?;
+    /// let query = Query::vt(Mode::Sphere, 0.01).with_flags(QueryFlags::CANONICAL);
+    /// let mut pairs = PairBuffer::new()?;
+    /// assert!(scene.query(&query, &mut pairs)?.is_empty());
+    /// scene.rebuild_swept(&x0, &x1)?;
+    /// assert_eq!(scene.tree_growth()?, 1.0);
+    /// assert_eq!(scene.query(&query, &mut pairs)?, &[[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]);
+    /// let err = scene.rebuild_swept(&x0, &x1[..5]).unwrap_err();
+    /// assert_eq!(err, Error::InvalidArgument("rebuild_swept with 5 vertices but the scene has 6".into()));
+    /// assert!(scene.is_swept()); // kept
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
+    pub fn rebuild_swept(&mut self, x0: &[[f32; 3]], x1: &[[f32; 3]]) -> Result<()> {
+        self.rebuild_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+    }
+
+    /// [`Scene::rebuild_swept`] with `[f64; 3]` positions, for a [`SceneFlags::FLOAT64`]
+    /// scene. Same errors as [`Scene::refit_swept_f64`]; on error the scene keeps its
+    /// positions, trees and swept state.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let x0 = [[0.0, -1.0, -1.0], [0.0, 2.0, -1.0], [0.0, -1.0, 2.0], [-1.0, 0.1, 0.1]];
+    /// let mut x1 = x0;
+    /// x1[3][0] = 1.0;
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&x0, &[[0, 1, 2]]))?;
+    /// scene.rebuild_swept_f64(&x0, &x1)?;
+    /// assert_eq!(scene.query(&Query::vt(Mode::CapsuleRay, 0.01), &mut PairBuffer::new()?)?, &[[3, 0]]);
+    /// // A double beyond the float range cannot be rounded to a float: non-finite.
+    /// x1[1][2] = 1e39;
+    /// assert!(matches!(scene.rebuild_swept_f64(&x0, &x1), Err(Error::NonFinite(m)) if m.contains("vertex 1")));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
+    pub fn rebuild_swept_f64(&mut self, x0: &[[f64; 3]], x1: &[[f64; 3]]) -> Result<()> {
+        self.rebuild_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+    }
+
+    /// [`Scene::rebuild_swept`] from two [`Buffer`]s: records, memory and precision as for
+    /// [`Scene::refit_swept_buffers`]. On error the scene keeps its positions, trees and swept
+    /// state.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let x0 = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &[[0, 1, 2]]))?;
+    /// let x1 = [[0.0f32, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, f32::NAN, 1.0]];
+    /// let err = scene.rebuild_swept_buffers(Buffer::from_slice(&x0), Buffer::from_slice(&x1)).unwrap_err();
+    /// assert!(matches!(err, Error::NonFinite(m) if m.starts_with("vertex 2 ")));
+    /// assert!(!scene.is_swept()); // kept its static positions
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn rebuild_swept_buffers(&mut self, x0: Buffer<'_>, x1: Buffer<'_>) -> Result<()> {
+        let (x0, x1) = self.swept_buffers("rebuild_swept", &x0, &x1)?;
+        // SAFETY: as in refit_swept_buffers.
+        check(unsafe { sys::minkq_scene_rebuild_swept(self.raw.as_ptr(), x0, x1) })
+    }
+
+    /// Whether the scene's positions are swept ones ([`Scene::refit_swept`],
+    /// [`Scene::rebuild_swept`] and their variants), so that its queries are swept; false
+    /// after creation and after every plain refit or rebuild, blocking or stream-ordered.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let x = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x, &[[0, 1, 2]]))?;
+    /// assert!(!scene.is_swept());
+    /// scene.refit_swept(&x, &x)?;
+    /// assert!(scene.is_swept());
+    /// scene.refit(&x)?; // static again
+    /// assert!(!scene.is_swept());
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn is_swept(&self) -> bool {
+        // SAFETY: a live scene.
+        unsafe { sys::minkq_scene_is_swept(self.raw.as_ptr()) != 0 }
+    }
+
+    /// The C buffers of `call`'s two positions, each checked for the scene's precision.
+    fn swept_buffers(
+        &self,
+        call: &str,
+        x0: &Buffer<'_>,
+        x1: &Buffer<'_>,
+    ) -> Result<(sys::minkq_buffer, sys::minkq_buffer)> {
+        Ok((self.vertex_buffer(&format!("{call}: x0"), x0)?, self.vertex_buffer(&format!("{call}: x1"), x1)?))
+    }
+}
