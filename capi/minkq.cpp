@@ -190,9 +190,10 @@ void require_finite(minkq::Backend& backend, const minkq::Strided& values, int f
 }
 
 // A scene's vertex buffer, checked: 3 floats each, or 3 doubles for a MINKQ_SCENE_FLOAT64 scene.
-minkq::Strided checked_vertex_buffer(const minkq_device* device, const minkq_buffer& buffer, uint32_t scene_flags) {
+minkq::Strided checked_vertex_buffer(const minkq_device* device, const minkq_buffer& buffer, uint32_t scene_flags,
+                                     const char* what = "vertices") {
   const bool float64 = (scene_flags & MINKQ_SCENE_FLOAT64) != 0;
-  minkq::Strided values = checked_buffer(device, buffer, float64 ? 24 : 12, "vertices");
+  minkq::Strided values = checked_buffer(device, buffer, float64 ? 24 : 12, what);
   values.scalar = float64 ? minkq::Scalar::kFloat64 : minkq::Scalar::kFloat32;
   return values;
 }
@@ -354,13 +355,15 @@ std::array<minkq::QueryRequest, 2> checked_vt_ee_requests(const minkq_scene* sce
 }
 
 // New vertex positions for a scene, validated: `verb` names the call in messages.
-minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* verb) {
+minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* verb,
+                                const char* what = "vertices") {
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-  const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags);
+  const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags, what);
   require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
-          std::string(verb) + " with " + std::to_string(values.count) + " vertices but the scene has " +
+          std::string(verb) + " with " + std::to_string(values.count) + " " + what + " but the scene has " +
               std::to_string(scene->vertex_count));
-  require_finite(*scene->device->backend, values, 3, "vertex");
+  const std::string element = std::string(what) == "vertices" ? "vertex" : std::string(what) + " vertex";
+  require_finite(*scene->device->backend, values, 3, element.c_str());
   return values;
 }
 
@@ -409,18 +412,19 @@ minkq_memory async_memory(const minkq_device* device) {
 // New vertex positions for an asynchronous refit or rebuild, validated as far as the host can
 // (their coordinates are checked on the device), with the reservation the call needs.
 minkq::Strided checked_async_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* call,
-                                      bool rebuild) {
+                                      bool rebuild, bool swept = false, const char* what = "vertices") {
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
   const minkq::Reservation& reserved = scene->store->reservation();
-  require(rebuild ? reserved.rebuild : reserved.refit, Status::kInvalidArgument,
+  require((rebuild ? reserved.rebuild : reserved.refit) && (!swept || reserved.swept), Status::kInvalidArgument,
           std::string(call) + " needs scratch reserved first: minkq_scene_reserve(scene, " +
-              (rebuild ? "MINKQ_RESERVE_REBUILD" : "MINKQ_RESERVE_REFIT") + ", ...)");
-  const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags);
+              (rebuild ? "MINKQ_RESERVE_REBUILD" : "MINKQ_RESERVE_REFIT") + (swept ? " | MINKQ_RESERVE_SWEPT" : "") +
+              ", ...)");
+  const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags, what);
   require(enum_value(vertices.memory) == async_memory(scene->device), Status::kInvalidArgument,
-          "vertices are host memory but " + std::string(call) + " on " + scene->device->name +
+          std::string(what) + " are host memory but " + call + " on " + scene->device->name +
               " reads device memory (MINKQ_MEMORY_DEVICE)");
   require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
-          std::string(call) + " with " + std::to_string(values.count) + " vertices but the scene has " +
+          std::string(call) + " with " + std::to_string(values.count) + " " + what + " but the scene has " +
               std::to_string(scene->vertex_count));
   return values;
 }
@@ -585,16 +589,16 @@ minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices) {
 
 minkq_status minkq_scene_refit_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1) {
   return guarded([&] {
-    const minkq::Strided start = checked_vertices(scene, x0, "refit_swept");  // checks scene first
-    const minkq::Strided end = checked_vertices(scene, x1, "refit_swept");
+    const minkq::Strided start = checked_vertices(scene, x0, "refit_swept", "x0");  // checks scene first
+    const minkq::Strided end = checked_vertices(scene, x1, "refit_swept", "x1");
     scene->store->refit_swept(start, end);
   });
 }
 
 minkq_status minkq_scene_rebuild_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1) {
   return guarded([&] {
-    const minkq::Strided start = checked_vertices(scene, x0, "rebuild_swept");  // checks scene first
-    const minkq::Strided end = checked_vertices(scene, x1, "rebuild_swept");
+    const minkq::Strided start = checked_vertices(scene, x0, "rebuild_swept", "x0");  // checks scene first
+    const minkq::Strided end = checked_vertices(scene, x1, "rebuild_swept", "x1");
     scene->store->rebuild_swept(start, end);
   });
 }
@@ -644,7 +648,7 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
   });
 }
 
-constexpr uint32_t kKnownReserveFlags = MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD;
+constexpr uint32_t kKnownReserveFlags = MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD | MINKQ_RESERVE_SWEPT;
 
 minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity) {
   return guarded([&] {
@@ -655,6 +659,7 @@ minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t cano
     minkq::Reservation wanted;
     wanted.refit = (flags & (MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD)) != 0;
     wanted.rebuild = (flags & MINKQ_RESERVE_REBUILD) != 0;
+    wanted.swept = (flags & MINKQ_RESERVE_SWEPT) != 0;
     wanted.canonical_capacity = canonical_capacity;
     scene->store->reserve(wanted);
   });
@@ -671,6 +676,25 @@ minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices
   return guarded([&] {
     const minkq::Strided values = checked_async_vertices(scene, vertices, "minkq_scene_rebuild_async", true);
     scene->store->rebuild_async(values, stream);
+  });
+}
+
+minkq_status minkq_scene_refit_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1, minkq_stream stream) {
+  return guarded([&] {
+    const char* call = "minkq_scene_refit_swept_async";
+    const minkq::Strided start = checked_async_vertices(scene, x0, call, false, true, "x0");
+    const minkq::Strided end = checked_async_vertices(scene, x1, call, false, true, "x1");
+    scene->store->refit_swept_async(start, end, stream);
+  });
+}
+
+minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1,
+                                             minkq_stream stream) {
+  return guarded([&] {
+    const char* call = "minkq_scene_rebuild_swept_async";
+    const minkq::Strided start = checked_async_vertices(scene, x0, call, true, true, "x0");
+    const minkq::Strided end = checked_async_vertices(scene, x1, call, true, true, "x1");
+    scene->store->rebuild_swept_async(start, end, stream);
   });
 }
 
@@ -702,10 +726,13 @@ minkq_status minkq_scene_async_status(minkq_scene* scene, minkq_stream stream) {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
     const minkq::PendingError pending = scene->store->take_pending_error(stream);
     if (pending.call == minkq::PendingError::kNone) return;
-    const bool rebuild = pending.call == minkq::PendingError::kRebuild;
-    fail(Status::kNonFinite, std::string(rebuild ? "minkq_scene_rebuild_async" : "minkq_scene_refit_async") +
-                                 ": vertex " + std::to_string(pending.vertex) +
-                                 " has a non-finite coordinate; the scene kept its positions" +
+    using Call = minkq::PendingError::Call;
+    const bool rebuild = pending.call == Call::kRebuild || pending.call == Call::kRebuildSwept;
+    const bool swept = pending.call == Call::kRefitSwept || pending.call == Call::kRebuildSwept;
+    const std::string call = std::string("minkq_scene_") + (rebuild ? "rebuild" : "refit") + (swept ? "_swept" : "") + "_async";
+    fail(Status::kNonFinite, call + ": vertex " + std::to_string(pending.vertex) +
+                                 (swept ? " has a non-finite coordinate (in x0 or x1); the scene kept its positions, at rest"
+                                        : " has a non-finite coordinate; the scene kept its positions") +
                                  (rebuild ? " and built its trees for them" : ""));
   });
 }

@@ -335,13 +335,15 @@ minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc*
 typedef void* minkq_stream;
 
 typedef enum minkq_reserve_flags {
-  MINKQ_RESERVE_REFIT = 1,  /* scratch for minkq_scene_refit_async and the pending error */
-  MINKQ_RESERVE_REBUILD = 2 /* also the tree builds' scratch, for minkq_scene_rebuild_async */
+  MINKQ_RESERVE_REFIT = 1,   /* scratch for minkq_scene_refit_async and the pending error */
+  MINKQ_RESERVE_REBUILD = 2, /* also the tree builds' scratch, for minkq_scene_rebuild_async */
+  MINKQ_RESERVE_SWEPT = 4    /* with REFIT or REBUILD: the swept calls' second positions */
 } minkq_reserve_flags;
 
 /* Reserves, on the scene's device, the scratch its asynchronous calls use, so that they never
  * allocate: MINKQ_RESERVE_REFIT for refits (a copy of the vertices), MINKQ_RESERVE_REBUILD for
- * refits and rebuilds (about the trees' size again), and canonical_capacity pairs for the sort
+ * refits and rebuilds (about the trees' size again), MINKQ_RESERVE_SWEPT with either for the swept
+ * calls (two more copies of the vertices), and canonical_capacity pairs for the sort
  * of canonical asynchronous queries (queries with a larger capacity return INVALID_ARGUMENT).
  * Queries without MINKQ_QUERY_CANONICAL need no reservation. Reservations only grow and last
  * as long as the scene; call this before capturing. A blocking call (it may allocate and
@@ -359,6 +361,16 @@ minkq_status minkq_scene_refit_async(minkq_scene* scene, minkq_buffer vertices, 
 /* minkq_scene_rebuild, enqueued on `stream`, as minkq_scene_refit_async; its trees are those
  * minkq_scene_rebuild builds. Needs MINKQ_RESERVE_REBUILD. */
 minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
+
+/* minkq_scene_refit_swept and minkq_scene_rebuild_swept, enqueued on `stream`, as
+ * minkq_scene_refit_async and minkq_scene_rebuild_async are: x0 and x1 in device memory on CUDA,
+ * checked together on the device; with a non-finite coordinate in either the scene keeps its
+ * positions at rest (x1 = x0: queries then give the static pairs at x0) and
+ * minkq_scene_async_status reports it. Need MINKQ_RESERVE_SWEPT with MINKQ_RESERVE_REFIT (refit)
+ * or MINKQ_RESERVE_REBUILD (rebuild). */
+minkq_status minkq_scene_refit_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1, minkq_stream stream);
+minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1,
+                                             minkq_stream stream);
 
 /* minkq_scene_query, enqueued on `stream`: writes the exact number of pairs to *out_count (a
  * uint64_t in device memory on CUDA, host memory on the CPU), also when it exceeds capacity,

@@ -269,6 +269,83 @@ inline void check_async_non_finite_is_pending(AsyncMemory& memory, minkq_device*
       << minkq_last_error_message();
 }
 
+// The swept stream-ordered calls (minkq_scene_refit_swept_async / rebuild_swept_async) equal
+// the blocking swept calls over several steps; a bad coordinate in x1 leaves the scene at rest
+// at its kept x0 (static pairs there) and is reported naming the swept call; without
+// MINKQ_RESERVE_SWEPT they are refused. extra_flags as check_async_matches_blocking's.
+inline void check_async_swept_matches_blocking(AsyncMemory& memory, minkq_device* device, minkq_device* cpu,
+                                               uint32_t extra_flags = 0) {
+  const bool float64 = extra_flags & MINKQ_SCENE_FLOAT64;
+  const reference::Mesh base = reference::twisted_sheet(24, 2.0);
+  reference::Mesh mesh = base;
+  if (float64) reference::set_float64(mesh, far_doubles(base.xyz));
+  const float r = float(0.5 * reference::mean_edge_length(base));
+  AsyncScene s(memory, device, cpu, mesh, extra_flags);
+  auto positions = [&](int step) {  // the step's start (step) or end (step + 1) positions, in float
+    reference::Mesh m = base;
+    reference::transform(m, 1.0 + 0.05 * step, 0.01 * step);
+    for (size_t v = 0; v < m.vertex_count(); ++v) m.xyz[3 * v + 1] += 0.03f * float(std::sin(0.2 * double(v) + step));
+    return m.xyz;
+  };
+  auto buffer = [&](const std::vector<float>& xyz) {
+    return float64 ? s.vertices_in_memory(far_doubles(xyz)) : s.vertices_in_memory(xyz);
+  };
+  auto host = [&](const std::vector<float>& xyz, std::vector<double>& keep) {
+    if (!float64) return host_buffer(xyz.data(), xyz.size() / 3);
+    keep = far_doubles(xyz);
+    return host_buffer(keep.data(), keep.size() / 3);
+  };
+  const minkq_buffer x0 = buffer(positions(0)), x1 = buffer(positions(1));
+  EXPECT_EQ(minkq_scene_refit_swept_async(s.scene.get(), x0, x1, memory.stream()), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(minkq_last_error_message()).find("MINKQ_RESERVE_REFIT | MINKQ_RESERVE_SWEPT"), std::string::npos)
+      << minkq_last_error_message();
+  ASSERT_EQ(minkq_scene_reserve(s.scene.get(), MINKQ_RESERVE_REBUILD | MINKQ_RESERVE_SWEPT, 1 << 16), MINKQ_SUCCESS)
+      << minkq_last_error_message();
+  const minkq_query_desc queries[] = {
+      {MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, r},
+      {MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_EXACT, 0, r},
+      {MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, r},
+  };
+  for (int step = 0; step < 3; ++step) {
+    const bool rebuild = step == 2;
+    const std::vector<float> a = positions(step), b = positions(step + 1);
+    ASSERT_EQ(rebuild ? minkq_scene_rebuild_swept_async(s.scene.get(), buffer(a), buffer(b), memory.stream())
+                      : minkq_scene_refit_swept_async(s.scene.get(), buffer(a), buffer(b), memory.stream()),
+              MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    std::vector<double> ka, kb;
+    const minkq_buffer ha = host(a, ka), hb = host(b, kb);
+    ASSERT_EQ(rebuild ? minkq_scene_rebuild_swept(s.blocking.get(), ha, hb) : minkq_scene_refit_swept(s.blocking.get(), ha, hb),
+              MINKQ_SUCCESS);
+    for (const minkq_query_desc& q : queries) {
+      const Pairs expected = s.blocking.query(q.kind, q.mode, r);
+      const AsyncScene::Outcome out = s.query_async(q, expected.size() + 8);
+      ASSERT_EQ(out.status, MINKQ_SUCCESS) << minkq_last_error_message();
+      ASSERT_EQ(out.count, expected.size()) << "step " << step << " mode " << q.mode;
+      const Pairs got = pairs_of(out.raw, out.count);
+      EXPECT_EQ((q.flags & MINKQ_QUERY_CANONICAL) ? got : sorted(got), expected) << "step " << step << " mode " << q.mode;
+    }
+  }
+  // A NaN in x1: at rest at the last accepted start, positions(2); static pairs there.
+  std::vector<float> bad = positions(9);
+  bad[3 * 11 + 2] = std::numeric_limits<float>::quiet_NaN();
+  ASSERT_EQ(minkq_scene_refit_swept_async(s.scene.get(), buffer(positions(8)), buffer(bad), memory.stream()),
+            MINKQ_SUCCESS);
+  EXPECT_EQ(minkq_scene_async_status(s.scene.get(), memory.stream()), MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(std::string(minkq_last_error_message())
+                .find("minkq_scene_refit_swept_async: vertex 11 has a non-finite coordinate (in x0 or x1)"),
+            std::string::npos)
+      << minkq_last_error_message();
+  std::vector<double> kept;
+  ASSERT_EQ(minkq_scene_refit(s.blocking.get(), host(positions(2), kept)), MINKQ_SUCCESS);
+  for (minkq_query_kind kind : {MINKQ_QUERY_VT, MINKQ_QUERY_EE}) {
+    const minkq_query_desc q{kind, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL, r};
+    const Pairs expected = s.blocking.query(kind, MINKQ_MODE_BOX, r);
+    const AsyncScene::Outcome out = s.query_async(q, expected.size() + 8);
+    EXPECT_EQ(pairs_of(out.raw, out.count), expected) << "at rest, kind " << kind;
+  }
+}
+
 // What the asynchronous calls refuse at once, naming the argument, with nothing enqueued.
 inline void check_async_argument_errors(AsyncMemory& memory, minkq_device* device, minkq_device* cpu) {
   const reference::Mesh mesh = reference::twisted_sheet(12, 1.0);

@@ -20,6 +20,11 @@ TEST_F(AsyncOnCpu, float64_queries_match_the_blocking_calls_over_refits_and_rebu
   check_async_matches_blocking(memory, cpu.get(), cpu.get(), MINKQ_SCENE_FLOAT64);
 }
 
+TEST_F(AsyncOnCpu, swept_steps_match_the_blocking_swept_calls) {
+  check_async_swept_matches_blocking(memory, cpu.get(), cpu.get());
+  check_async_swept_matches_blocking(memory, cpu.get(), cpu.get(), MINKQ_SCENE_FLOAT64);
+}
+
 TEST_F(AsyncOnCpu, non_finite_vertices_keep_the_positions_and_are_reported_once) {
   check_async_non_finite_is_pending(memory, cpu.get(), cpu.get());
 }

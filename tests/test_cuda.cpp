@@ -752,6 +752,11 @@ TEST_F(CudaAsync, float64_queries_match_the_blocking_calls_over_refits_and_rebui
   test::check_async_matches_blocking(memory(), cuda->get(), cpu->get(), MINKQ_SCENE_FLOAT64);
 }
 
+TEST_F(CudaAsync, swept_steps_match_the_blocking_swept_calls) {
+  test::check_async_swept_matches_blocking(memory(), cuda->get(), cpu->get());
+  test::check_async_swept_matches_blocking(memory(), cuda->get(), cpu->get(), MINKQ_SCENE_FLOAT64);
+}
+
 TEST_F(CudaAsync, non_finite_vertices_keep_the_positions_and_are_reported_once) {
   test::check_async_non_finite_is_pending(memory(), cuda->get(), cpu->get());
 }

@@ -262,6 +262,8 @@ TEST(Swept, what_swept_scenes_refuse_is_named) {
   bad[7] = NAN;
   EXPECT_EQ(minkq_scene_rebuild_swept(scene.get(), test::vertices_of(sheet, 0), cxx::host_buffer(bad.data(), bad.size() / 3)),
             MINKQ_ERROR_NON_FINITE);
+  EXPECT_NE(std::string(minkq_last_error_message()).find("x1 vertex 2 has a non-finite coordinate"), std::string::npos)
+      << minkq_last_error_message();
   EXPECT_EQ(minkq_scene_is_swept(scene.get()), 1);  // kept
   EXPECT_EQ(minkq_scene_is_swept(nullptr), 0);
   EXPECT_EQ(minkq_scene_refit_swept(nullptr, test::vertices_of(sheet, 0), test::vertices_of(sheet, 0)),

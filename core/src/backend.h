@@ -80,12 +80,13 @@ struct PairOutput {
 struct Reservation {
   bool refit = false;    // a staging copy of the vertices and the pending error
   bool rebuild = false;  // the tree builds' scratch, kept
+  bool swept = false;    // the end positions of swept steps and their staging copy
   size_t canonical_capacity = 0;  // pairs the canonical sort's scratch holds
 };
 
 // The first data error of the asynchronous refits and rebuilds since it was last taken.
 struct PendingError {
-  enum Call : int { kNone = 0, kRefit = 1, kRebuild = 2 };
+  enum Call : int { kNone = 0, kRefit = 1, kRebuild = 2, kRefitSwept = 3, kRebuildSwept = 4 };
   Call call = kNone;
   int64_t vertex = -1;  // the first vertex with a non-finite coordinate in that call
 };
@@ -139,6 +140,10 @@ class MeshStore : public Store {
   // recorded. Need reservation().refit (rebuild_async: .rebuild); the caller checks that.
   virtual void refit_async(const Strided& vertices, Stream stream) = 0;
   virtual void rebuild_async(const Strided& vertices, Stream stream) = 0;
+  // refit_swept / rebuild_swept, enqueued: with a non-finite coordinate in either buffer the
+  // scene keeps its positions at rest (x1 = x0). Need reservation().swept too.
+  virtual void refit_swept_async(const Strided& x0, const Strided& x1, Stream stream) = 0;
+  virtual void rebuild_swept_async(const Strided& x0, const Strided& x1, Stream stream) = 0;
   // Queries whose outputs have `count` set (executor memory); canonical ones within the
   // reserved canonical capacity (the caller checks). No work counts.
   virtual void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) = 0;

@@ -40,6 +40,10 @@
 //                                  dst = values (executor memory) unless a coordinate is not
 //                                  finite; then dst is kept and the pending error recorded.
 //                                  Float64 values also set *rho (rho: nullptr for float).
+//   commit_finite_swept(x0, x1, staging0, staging1, dst0, dst1, rho, call)
+//                                  the same for a swept step's two positions, checked
+//                                  together: on a bad coordinate in either, dst0 is kept and
+//                                  dst1 = dst0 (the scene at rest).
 //   take_pending()                 the pending error (after wait()), cleared.
 //
 // cpu/backend.cpp and cuda/backend.cu define the two executors; a query's pairs, counts and
@@ -210,6 +214,11 @@ class MeshStoreOn final : public MeshStore {
       x_.reserve_pending();
       reserved_.refit = true;
     }
+    if (wanted.swept && !reserved_.swept) {
+      x_.reserve_staging(staging1_, num_vertices_);
+      x_.reserve_staging(vertices1_, num_vertices_);
+      reserved_.swept = true;
+    }
     if (wanted.rebuild && !reserved_.rebuild) {
       if (has_triangle_tree_) {
         x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
@@ -237,6 +246,20 @@ class MeshStoreOn final : public MeshStore {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
     swept_ = false;
     x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRebuild);
+    build_trees();
+  }
+
+  void refit_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    swept_ = true;
+    x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRefitSwept);
+    refit_trees();
+  }
+
+  void rebuild_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    swept_ = true;
+    x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRebuildSwept);
     build_trees();
   }
 
@@ -316,6 +339,7 @@ class MeshStoreOn final : public MeshStore {
   Array<Edge> edges_;
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
   Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
+  Array<Vec3> staging1_;  // asynchronous swept steps: the end positions, checked likewise
   Array<Vec3> vertices1_;  // swept: the positions at the end of the step (vertices_: at its start)
   Array<float> rho_;     // float64 input: rho[0], how far rounding moved the vertices at most
   int32_t num_vertices_, num_triangles_, num_edges_;

@@ -84,6 +84,21 @@ class CpuExecutor {
     }
     if (values.scalar == Scalar::kFloat64) *rho = gather_float64_host(values, dst); else gather(values, dst);
   }
+  void commit_finite_swept(const Strided& x0, const Strided& x1, std::vector<Vec3>&, std::vector<Vec3>&,
+                           std::vector<Vec3>& dst0, std::vector<Vec3>& dst1, float* rho, PendingError::Call call) {
+    const int64_t bad0 = first_non_finite_host(x0, 3), bad1 = first_non_finite_host(x1, 3);
+    if (bad0 >= 0 || bad1 >= 0) {
+      if (pending_.call == PendingError::kNone) pending_ = {call, bad0 >= 0 && (bad1 < 0 || bad0 < bad1) ? bad0 : bad1};
+      dst1 = dst0;  // at rest where it was
+      return;
+    }
+    if (x0.scalar == Scalar::kFloat64) {
+      *rho = std::max(gather_float64_host(x0, dst0), gather_float64_host(x1, dst1));
+    } else {
+      gather(x0, dst0);
+      gather(x1, dst1);
+    }
+  }
   PendingError take_pending() { return std::exchange(pending_, PendingError{}); }
 
  private:

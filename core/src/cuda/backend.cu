@@ -104,14 +104,20 @@ class CudaExecutor {
   void commit_finite(const Strided& values, DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst, float* rho,
                      PendingError::Call call) {
     if (values.count == 0) return;
-    const bool float64 = values.scalar == Scalar::kFloat64;
-    check(cudaMemsetAsync(pending_.data(), 0xFF, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
-    if (float64) check(cudaMemsetAsync(pending_.data() + 2, 0, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
-    launch("gather_checked_kernel launch", gather_checked_kernel, values.count, kThreads,
-           static_cast<const char*>(values.data), values.stride, values.count, float64, is_aligned(values),
-           staging.data(), pending_.data());
-    launch("commit_checked_kernel launch", commit_checked_kernel, values.count, kThreads, staging.data(), values.count,
-           static_cast<unsigned long long>(call), dst.data(), float64 ? rho : nullptr, pending_.data());
+    begin_check(values);
+    stage(values, staging);
+    commit(staging, dst, values, rho, nullptr, call);
+  }
+  // Both positions of a swept step checked together; on a bad one dst1 = dst0 (kept).
+  void commit_finite_swept(const Strided& x0, const Strided& x1, DeviceBuffer<Vec3>& staging0,
+                           DeviceBuffer<Vec3>& staging1, DeviceBuffer<Vec3>& dst0, DeviceBuffer<Vec3>& dst1, float* rho,
+                           PendingError::Call call) {
+    if (x0.count == 0) return;
+    begin_check(x0);
+    stage(x0, staging0);
+    stage(x1, staging1);
+    commit(staging0, dst0, x0, rho, nullptr, call);
+    commit(staging1, dst1, x1, rho, dst0.data(), call);
   }
   PendingError take_pending() {
     unsigned long long recorded = 0;
@@ -123,6 +129,24 @@ class CudaExecutor {
   }
 
  private:
+  // commit_finite's steps: reset this call's check words, stage one buffer, commit one.
+  void begin_check(const Strided& values) {
+    check(cudaMemsetAsync(pending_.data(), 0xFF, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
+    if (values.scalar == Scalar::kFloat64)
+      check(cudaMemsetAsync(pending_.data() + 2, 0, sizeof(unsigned long long), stream()), "cudaMemsetAsync");
+  }
+  void stage(const Strided& values, DeviceBuffer<Vec3>& staging) {
+    launch("gather_checked_kernel launch", gather_checked_kernel, values.count, kThreads,
+           static_cast<const char*>(values.data), values.stride, values.count, values.scalar == Scalar::kFloat64,
+           is_aligned(values), staging.data(), pending_.data());
+  }
+  void commit(const DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst, const Strided& values, float* rho,
+              const Vec3* keep, PendingError::Call call) {
+    launch("commit_checked_kernel launch", commit_checked_kernel, values.count, kThreads, staging.data(), values.count,
+           static_cast<unsigned long long>(call), dst.data(), values.scalar == Scalar::kFloat64 ? rho : nullptr, keep,
+           pending_.data());
+  }
+
   int ordinal_;
   DeviceSwitch device_;  // declared before the buffers: destroyed after them
   // The blocking queries' scratch, grown as they need, and the asynchronous ones', sized only by

@@ -288,17 +288,21 @@ static __global__ void gather_checked_kernel(const char* base, size_t stride, in
 }
 
 // Then the staged vertices become the scene's if all were finite (and thread 0 sets *rho, for
-// float64 input); otherwise thread 0 records (call, vertex) in words[1] unless an earlier
-// call's error is pending there (0: none).
+// float64 input); otherwise they become `keep` where given (a swept step's end: its kept
+// start), and thread 0 records (call, vertex) in words[1] unless an error is pending there
+// (0: none).
 static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, unsigned long long call, Vec3* vertices,
-                                             float* rho, unsigned long long* words) {
+                                             float* rho, const Vec3* keep, unsigned long long* words) {
   const int64_t i = global_index();
   if (i >= n) return;
   const unsigned long long bad = words[0];
   if (bad == kNoVertex) {
     vertices[i] = staging[i];
     if (rho && i == 0) memcpy(rho, &words[2], sizeof(float));  // the low half: little-endian
-  } else if (i == 0 && words[1] == 0) {
+    return;
+  }
+  if (keep) vertices[i] = keep[i];
+  if (i == 0 && words[1] == 0) {
     words[1] = (call << 32) | bad;  // vertex indices are below 2^31
   }
 }

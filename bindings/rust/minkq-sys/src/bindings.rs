@@ -459,6 +459,7 @@ extern "C" {
 pub type minkq_stream = *mut ::std::os::raw::c_void;
 pub const MINKQ_RESERVE_REFIT: minkq_reserve_flags = 1;
 pub const MINKQ_RESERVE_REBUILD: minkq_reserve_flags = 2;
+pub const MINKQ_RESERVE_SWEPT: minkq_reserve_flags = 4;
 pub type minkq_reserve_flags = ::std::os::raw::c_uint;
 extern "C" {
     pub fn minkq_scene_reserve(scene: *mut minkq_scene, flags: u32, canonical_capacity: usize) -> minkq_status;
@@ -474,6 +475,22 @@ extern "C" {
     pub fn minkq_scene_rebuild_async(
         scene: *mut minkq_scene,
         vertices: minkq_buffer,
+        stream: minkq_stream,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_refit_swept_async(
+        scene: *mut minkq_scene,
+        x0: minkq_buffer,
+        x1: minkq_buffer,
+        stream: minkq_stream,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_rebuild_swept_async(
+        scene: *mut minkq_scene,
+        x0: minkq_buffer,
+        x1: minkq_buffer,
         stream: minkq_stream,
     ) -> minkq_status;
 }
