@@ -12,20 +12,7 @@
 #include "contact_checks.h"
 
 using minkq::reference::Pairs;
-
-Pairs read_pairs(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw std::runtime_error("cannot read " + path);
-  std::vector<char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (bytes.size() % 8) throw std::runtime_error(path + ": size is not a multiple of 8 bytes");
-  Pairs pairs(bytes.size() / 8);
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    int32_t ab[2];
-    std::memcpy(ab, bytes.data() + 8 * i, 8);  // little-endian int32, as the host
-    pairs[i] = {ab[0], ab[1]};
-  }
-  return pairs;
-}
+using minkq::test::read_pairs;
 
 template <class Distance>
 int compare(const char* kind, const Pairs& reported, const Pairs& truth, float r, Distance distance) {

@@ -1,9 +1,15 @@
 // Distances of reported pairs by the reference oracle, with the operand size S of
-// predicates.h, for checking that leaf-exact extras lie within r + 2^-19 * S.
+// predicates.h, for checking that leaf-exact extras lie within r + 2^-19 * S; the pair files
+// the CLI writes.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "minkq_reference.h"
@@ -42,6 +48,21 @@ inline long double ee_distance(const Mesh& mesh, const std::vector<int32_t>& edg
     for (int k = 0; k < 3; ++k) d[i][k] = pts[i][k];
   *scale = pair_scale({pts[0], pts[1], pts[2], pts[3]});
   return reference::segment_segment_distance(d[0], d[1], d[2], d[3]);
+}
+
+// The pairs `minkq query --out` wrote to a file: little-endian int32 (a, b) pairs.
+inline reference::Pairs read_pairs(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw std::runtime_error("cannot read " + path);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (bytes.size() % 8) throw std::runtime_error(path + ": size is not a multiple of 8 bytes");
+  reference::Pairs pairs(bytes.size() / 8);
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    int32_t ab[2];
+    std::memcpy(ab, bytes.data() + 8 * i, 8);  // little-endian int32, as the host
+    pairs[i] = {ab[0], ab[1]};
+  }
+  return pairs;
 }
 
 }  // namespace minkq::test

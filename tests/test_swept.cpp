@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "capi_util.h"
+#include "swept_steps.h"
 #include "minkq_reference.h"
 #include "test_util.h"
 
@@ -23,31 +24,11 @@ namespace {
 
 using reference::Mesh;
 using test::Pairs;
+using test::Step;
+using test::sampled_contacts;
 
-constexpr uint32_t kBothDrop = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
+constexpr uint32_t kBothDrop = test::kSweptScene;
 const minkq_mode kVtModes[] = {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT};
-
-// The positions of a step: `from` at t = 0, `to` at t = 1 (same topology); float64 input when
-// both carry xyz64.
-struct Step {
-  Mesh from, to;
-  bool float64() const { return !from.xyz64.empty(); }
-  uint32_t flags() const { return kBothDrop | (float64() ? uint32_t(MINKQ_SCENE_FLOAT64) : 0u); }
-  // The mesh at time t, in double (or float) as the input is.
-  Mesh at(double t) const {
-    Mesh m = from;
-    if (float64()) {
-      std::vector<double> xyz(from.xyz64.size());
-      for (size_t i = 0; i < xyz.size(); ++i) xyz[i] = from.xyz64[i] + t * (to.xyz64[i] - from.xyz64[i]);
-      reference::set_float64(m, std::move(xyz));
-    } else {
-      std::vector<double> xyz(from.xyz.size());
-      for (size_t i = 0; i < xyz.size(); ++i) xyz[i] = double(from.xyz[i]) + t * (double(to.xyz[i]) - from.xyz[i]);
-      reference::set_float64(m, std::move(xyz));  // the oracle reads the exact positions between
-    }
-    return m;
-  }
-};
 
 // A scene holding the step's swept positions (rebuilt for them, or refitted from x0).
 test::Scene swept_scene(minkq_device* device, const Step& step, bool rebuild) {
@@ -58,21 +39,6 @@ test::Scene swept_scene(minkq_device* device, const Step& step, bool rebuild) {
       << minkq_last_error_message();
   EXPECT_EQ(minkq_scene_is_swept(scene.get()), 1);
   return scene;
-}
-
-// Contacts of the static oracle at `samples` + 1 evenly spaced times, united.
-std::pair<Pairs, Pairs> sampled_contacts(const Step& step, double r, int samples) {
-  Pairs vt, ee;
-  for (int k = 0; k <= samples; ++k) {
-    const Mesh m = step.at(double(k) / samples);
-    for (auto [all, found] : {std::pair{&vt, reference::vt_contacts(m, r, true)},
-                              std::pair{&ee, reference::ee_contacts(m, r, true)}}) {
-      Pairs merged;
-      std::set_union(all->begin(), all->end(), found.begin(), found.end(), std::back_inserter(merged));
-      *all = std::move(merged);
-    }
-  }
-  return {vt, ee};
 }
 
 // The box mode's definition on every pair, in float as the scene holds the positions: each

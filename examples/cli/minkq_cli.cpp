@@ -1,5 +1,6 @@
 // minkq: the command-line tool. `demo` measures every query mode on a built-in scene against
-// the reference oracle; `query` runs one mode on a mesh file and prints comparable digests.
+// the reference oracle; `query` runs one mode on a mesh file (or, swept, from one frame to the
+// next) and prints comparable digests.
 #include "minkq.h"
 #include "minkq.hpp"
 #include "minkq_reference.h"
@@ -32,7 +33,7 @@ commands:
       with the double-precision reference oracle and prints candidates, true contacts,
       false-positive ratio, false negatives, query time (median of 3) and speedup over box
       (the box query of the same kind).
-  query MESH --radius R [--mode M] [--backend B] [--out PREFIX] [--stats]
+  query MESH [--to MESH1] --radius R [--mode M] [--backend B] [--out PREFIX] [--stats]
       Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) in mode M:
         box            r-padded boxes
         sphere         VT sphere, EE capsule_exact (the exact Minkowski node test of each)
@@ -45,6 +46,12 @@ commands:
       (a, b) pairs in canonical order. --stats adds a line of work counts per kind: internal
       nodes visited, node-shape tests, primitive tests and candidates (MINKQ_QUERY_STATS;
       the same on every backend).
+      --to MESH1: swept queries from MESH to MESH1 (same vertices and triangles, read in
+      double precision): every pair whose elements come within r while each vertex moves
+      linearly from its first to its second position, the candidates of a CCD narrow phase.
+      Modes: box (default), sphere or capsule_exact (VT: the capsule around each vertex's
+      path), capsule_ray (VT: its slab test); EE runs box in every mode; no leaf_exact. The
+      same output lines and files. R = 0 reports elements that touch.
   version
       Library, ABI and header versions, and the number of CUDA devices.
 
@@ -233,14 +240,38 @@ void write_pairs(const std::string& path, const minkq_result* r) {
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
+// The scene of `query`: static on `first` (float, as loaded), or swept from `first` to `*to`
+// (float64 input, read in double; the same topology).
+Scene query_scene(minkq_device* device, const std::string& first, const std::string* to) {
+  if (!to) return make_scene(device, ref::load_mesh(first));
+  const ref::Mesh a = ref::load_mesh(first, true), b = ref::load_mesh(*to, true);
+  if (a.vertex_count() != b.vertex_count() || a.tris != b.tris)
+    throw std::runtime_error("--to " + *to + ": not the same mesh as " + first + " (" + std::to_string(b.vertex_count()) +
+                             " vertices and " + std::to_string(b.triangle_count()) + " triangles against " +
+                             std::to_string(a.vertex_count()) + " and " + std::to_string(a.triangle_count()) +
+                             ", or other triangles)");
+  minkq_scene_desc desc{};
+  desc.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT | MINKQ_SCENE_FLOAT64;
+  desc.vertices = host_buffer(a.xyz64.data(), a.vertex_count());
+  desc.triangles = host_buffer(a.tris.data(), a.triangle_count());
+  Scene scene = new_scene(device, desc);
+  check(minkq_scene_rebuild_swept(scene.get(), desc.vertices, host_buffer(b.xyz64.data(), b.vertex_count())),
+        "minkq_scene_rebuild_swept");
+  return scene;
+}
+
 int query(const Args& args) {
   if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
   if (!args.get("--radius")) throw UsageError("query needs --radius R");
   const double radius = parse_number("--radius", *args.get("--radius"));
   if (radius < 0) throw UsageError("--radius: must be >= 0");
   if (!std::isfinite(float(radius))) throw UsageError("--radius: too large for a float");
-  const std::string mode = args.get("--mode") ? *args.get("--mode") : "leaf_exact";
+  const std::string* to = args.get("--to");
+  const std::string mode = args.get("--mode") ? *args.get("--mode") : (to ? "box" : "leaf_exact");
   const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";
+  if (to && mode == "leaf_exact")
+    throw UsageError("--mode leaf_exact: swept queries (--to) report candidates for a narrow phase; use box, sphere, "
+                     "capsule_ray or capsule_exact");
 
   // (VT mode, EE mode, flags) for each name; see the usage text.
   minkq_mode vt_mode, ee_mode;
@@ -248,18 +279,17 @@ int query(const Args& args) {
   if (mode == "box") {
     vt_mode = ee_mode = MINKQ_MODE_BOX;
   } else if (mode == "sphere" || mode == "capsule_exact") {
-    vt_mode = MINKQ_MODE_SPHERE, ee_mode = MINKQ_MODE_CAPSULE_EXACT;
+    vt_mode = to ? MINKQ_MODE_CAPSULE_EXACT : MINKQ_MODE_SPHERE, ee_mode = to ? MINKQ_MODE_BOX : MINKQ_MODE_CAPSULE_EXACT;
   } else if (mode == "capsule_ray") {
-    vt_mode = MINKQ_MODE_CAPSULE_RAY, ee_mode = MINKQ_MODE_CAPSULE_RAY;
+    vt_mode = MINKQ_MODE_CAPSULE_RAY, ee_mode = to ? MINKQ_MODE_BOX : MINKQ_MODE_CAPSULE_RAY;
   } else if (mode == "leaf_exact") {
     vt_mode = ee_mode = MINKQ_MODE_BOX, flags |= MINKQ_QUERY_LEAF_EXACT;
   } else {
     throw UsageError("--mode: unknown mode '" + mode + "' (box, sphere, capsule_ray, capsule_exact, leaf_exact)");
   }
 
-  const ref::Mesh mesh = ref::load_mesh(args.positional[0]);
   Device device = open_device(backend);
-  Scene scene = make_scene(device.get(), mesh);
+  Scene scene = query_scene(device.get(), args.positional[0], to);
   Result result = new_result();
   const std::string* out = args.get("--out");
   for (const auto& [kind, name, m] : {std::tuple{MINKQ_QUERY_VT, "vt", vt_mode}, std::tuple{MINKQ_QUERY_EE, "ee", ee_mode}}) {
@@ -297,7 +327,7 @@ int main(int argc, char** argv) {
     if (command == "version" || command == "--version") return version();
     if (command == "demo") return demo(Args(argc, argv, 2, {"--backend", "--size", "--radius-factor"}));
     if (command == "query")
-      return query(Args(argc, argv, 2, {"--radius", "--mode", "--backend", "--out"}, {"--stats"}));
+      return query(Args(argc, argv, 2, {"--radius", "--mode", "--backend", "--out", "--to"}, {"--stats"}));
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "minkq: %s\n(run 'minkq --help' for usage)\n", e.what());

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -123,7 +124,27 @@ void check_indices(const std::string& path, Mesh& m) {
   m.edges = derive_edges(m.tris);
 }
 
-Mesh load_obj(const std::string& path) {
+// The OBJ's vertex lines ("v x y z ...") parsed as doubles, in file order (tinyobjloader's).
+std::vector<double> obj_doubles(const std::string& path) {
+  std::ifstream f(path);
+  std::vector<double> xyz;
+  std::string line;
+  while (std::getline(f, line)) {
+    const size_t at = line.find_first_not_of(" \t");
+    if (at == std::string::npos || (line.compare(at, 2, "v ") != 0 && line.compare(at, 2, "v\t") != 0)) continue;
+    const char* p = line.c_str() + at + 2;
+    for (int a = 0; a < 3; ++a) {
+      char* end = nullptr;
+      const double x = std::strtod(p, &end);
+      if (end == p) fail(path, "malformed vertex line '" + line + "'");
+      xyz.push_back(x);
+      p = end;
+    }
+  }
+  return xyz;
+}
+
+Mesh load_obj(const std::string& path, bool float64) {
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
@@ -142,6 +163,11 @@ Mesh load_obj(const std::string& path) {
     }
   }
   if (m.tris.empty()) fail(path, "no triangles");
+  if (float64) {
+    std::vector<double> xyz = obj_doubles(path);
+    if (xyz.size() != m.xyz.size()) fail(path, "vertex lines and parsed vertices differ in number");
+    set_float64(m, std::move(xyz));
+  }
   check_indices(path, m);
   return m;
 }
@@ -204,7 +230,7 @@ class PlyReader {
   std::istringstream text_;
 };
 
-Mesh load_ply(const std::string& path, std::string data) {
+Mesh load_ply(const std::string& path, std::string data, bool float64) {
   const size_t end = data.find("end_header");
   if (end == std::string::npos) fail(path, "PLY header has no end_header");
   const size_t body = data.find('\n', end);
@@ -267,7 +293,10 @@ Mesh load_ply(const std::string& path, std::string data) {
           for (size_t k = 2; k < poly.size(); ++k) m.tris.insert(m.tris.end(), {poly[0], poly[k - 1], poly[k]});  // fan
       }
       if (e.name == "vertex")
-        for (int a = 0; a < 3; ++a) m.xyz.push_back(float(row[axis[a]]));
+        for (int a = 0; a < 3; ++a) {
+          m.xyz.push_back(float(row[axis[a]]));
+          if (float64) m.xyz64.push_back(row[axis[a]]);
+        }
     }
   }
   if (m.tris.empty()) fail(path, "no triangles");
@@ -277,14 +306,14 @@ Mesh load_ply(const std::string& path, std::string data) {
 
 }  // namespace
 
-Mesh load_mesh(const std::string& path) {
+Mesh load_mesh(const std::string& path, bool float64) {
   std::ifstream f(path, std::ios::binary);
   if (!f) fail(path, "cannot open file");
   std::string data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (data.compare(0, 4, "ply\n") == 0 || data.compare(0, 5, "ply\r\n") == 0) return load_ply(path, std::move(data));
+  if (data.compare(0, 4, "ply\n") == 0 || data.compare(0, 5, "ply\r\n") == 0) return load_ply(path, std::move(data), float64);
   std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (ext == ".obj") return load_obj(path);
+  if (ext == ".obj") return load_obj(path, float64);
   fail(path, "unknown mesh format (expected .obj or a PLY file)");
 }
 

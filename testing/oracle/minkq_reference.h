@@ -82,7 +82,9 @@ void set_float64(Mesh& mesh, std::vector<double> xyz64);
 // Loads an OBJ (tinyobjloader: polygons triangulated, all shapes merged into one mesh) or a PLY
 // (ascii, binary_little_endian or binary_big_endian; vertex x, y, z of any scalar type, faces
 // as a list, polygons fan-triangulated). Fills edges with derive_edges. Throws
-// std::runtime_error naming the file and the problem.
-Mesh load_mesh(const std::string& path);
+// std::runtime_error naming the file and the problem. With float64, xyz64 holds the file's
+// coordinates in double (OBJ text parsed as doubles, PLY values as stored) and xyz their
+// rounding to nearest float.
+Mesh load_mesh(const std::string& path, bool float64 = false);
 
 }  // namespace minkq::reference
