@@ -66,7 +66,9 @@
 //! linearly between them, and the queries report every pair whose elements come within r at
 //! some time of the step: the candidates a narrow phase then decides. VT tests the vertex's
 //! path, EE runs [`Mode::Box`] only, and [`QueryFlags::LEAF_EXACT`] is [`Error::Unsupported`].
-//! The scene stays swept ([`Scene::is_swept`]) until a plain refit or rebuild.
+//! The scene stays swept ([`Scene::is_swept`]) until a plain refit or rebuild. Stream-ordered
+//! swept steps: [`Scene::refit_swept_async`] and [`Scene::rebuild_swept_async`] (with
+//! [`Reserve::SWEPT`]; a non-finite coordinate in either buffer leaves the scene at rest).
 //!
 //! # Threads
 //! The C API allows different objects to be used from different threads at once, but one

@@ -256,6 +256,7 @@ flags! {
     /// use minkq::Reserve;
     /// let both = Reserve::REFIT | Reserve::REBUILD;
     /// assert!(both.contains(Reserve::REBUILD) && !Reserve::REFIT.contains(Reserve::REBUILD));
+    /// assert_eq!((Reserve::REFIT | Reserve::SWEPT).bits(), 5);
     /// ```
     Reserve {
         /// Scratch for [`Scene::refit_async`](crate::Scene::refit_async) (a copy of the
@@ -264,6 +265,12 @@ flags! {
         /// Also the tree builds' scratch (about the trees' size again), for
         /// [`Scene::rebuild_async`](crate::Scene::rebuild_async).
         REBUILD = sys::MINKQ_RESERVE_REBUILD;
+        /// With `REFIT` or `REBUILD`: the swept calls' second positions and their staging (two
+        /// more copies of the vertices), for
+        /// [`Scene::refit_swept_async`](crate::Scene::refit_swept_async) (`REFIT | SWEPT`) and
+        /// [`Scene::rebuild_swept_async`](crate::Scene::rebuild_swept_async)
+        /// (`REBUILD | SWEPT`).
+        SWEPT = sys::MINKQ_RESERVE_SWEPT;
     }
 }
 

@@ -12,7 +12,8 @@ impl Scene {
     /// Reserves, on the scene's device, the scratch its asynchronous calls use, so that they
     /// never allocate (`minkq_scene_reserve`): [`Reserve::REFIT`] for
     /// [`Scene::refit_async`], [`Reserve::REBUILD`] for [`Scene::rebuild_async`] (and
-    /// refits), and `canonical_capacity` pairs for the sort of asynchronous queries with
+    /// refits), [`Reserve::SWEPT`] with either for [`Scene::refit_swept_async`] and
+    /// [`Scene::rebuild_swept_async`], and `canonical_capacity` pairs for the sort of asynchronous queries with
     /// [`QueryFlags::CANONICAL`] (whose capacity may not exceed it). Queries without
     /// `CANONICAL` need no reservation. Reservations only grow and last as long as the scene.
     /// A blocking call (it may allocate and synchronise): make it before capturing a graph.
@@ -214,7 +215,8 @@ impl Scene {
 
     /// Waits for the work enqueued on `stream` (CUDA), then returns the scene's pending error
     /// and clears it (`minkq_scene_async_status`): `Ok` when every asynchronous refit and
-    /// rebuild since the last call (or the reservation) accepted its vertices, else the error
+    /// rebuild (swept ones too: [`Scene::refit_swept_async`], [`Scene::rebuild_swept_async`])
+    /// since the last call (or the reservation) accepted its vertices, else the error
     /// of the first that did not, [`Error::NonFinite`] with a message naming the call and the
     /// vertex (`"minkq_scene_refit_async: vertex 12 has a non-finite coordinate; the scene
     /// kept its positions"`). A blocking call: after it, the counts and pairs of the queries

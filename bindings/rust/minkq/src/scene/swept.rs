@@ -1,9 +1,12 @@
 //! A scene's swept positions (`minkq_scene_refit_swept`, `minkq_scene_rebuild_swept`), for
 //! continuous collision detection: every vertex moves linearly from `x0` to `x1` over a step,
-//! and the queries report every pair whose elements come within r at some time of it.
+//! and the queries report every pair whose elements come within r at some time of it. Also
+//! the stream-ordered swept steps (`minkq_scene_refit_swept_async`,
+//! `minkq_scene_rebuild_swept_async`).
 use super::Scene;
 use crate::buffer::Buffer;
 use crate::error::{check, Result};
+use crate::stream::Stream;
 use crate::sys;
 
 impl Scene {
@@ -164,7 +167,7 @@ impl Scene {
     /// assert_eq!(scene.tree_growth()?, 1.0);
     /// assert_eq!(scene.query(&query, &mut pairs)?, &[[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]);
     /// let err = scene.rebuild_swept(&x0, &x1[..5]).unwrap_err();
-    /// assert_eq!(err, Error::InvalidArgument("rebuild_swept with 5 vertices but the scene has 6".into()));
+    /// assert_eq!(err, Error::InvalidArgument("rebuild_swept with 5 x1 but the scene has 6".into()));
     /// assert!(scene.is_swept()); // kept
     /// # Ok::<(), minkq::Error>(())
     /// ```
@@ -217,9 +220,128 @@ impl Scene {
         check(unsafe { sys::minkq_scene_rebuild_swept(self.raw.as_ptr(), x0, x1) })
     }
 
+    /// [`Scene::refit_swept_buffers`], enqueued on `stream` (`minkq_scene_refit_swept_async`)
+    /// as [`Scene::refit_async`] is: on a CUDA device `x0` and `x1` are device memory, read by
+    /// the work enqueued (so the promise of [`Buffer::from_raw_parts`] lasts until that work
+    /// has run), and the call returns without waiting, allocating or synchronising, so that it
+    /// can be captured into a CUDA graph. On the CPU they are host memory and the step has run
+    /// when this returns. Needs [`Reserve::REFIT`] `|` [`Reserve::SWEPT`]. The scene's queries
+    /// are then those [`Scene::refit_swept`] gives for the same positions.
+    ///
+    /// Both buffers are checked together where they are read, on the device: with a NaN or
+    /// infinity in either, the scene keeps its positions at rest (the start of its last
+    /// accepted step, or its static positions, as both ends: its queries give the static pairs
+    /// there, as at `x0 == x1`, and [`Scene::is_swept`] is true) and records the pending
+    /// error, which [`Scene::async_status`] returns as [`Error::NonFinite`] naming the call and
+    /// the first bad vertex. Errors at once: as [`Scene::refit_swept_buffers`] except
+    /// [`Error::NonFinite`] (a slice buffer of the other precision is
+    /// [`Error::InvalidArgument`] naming `x0` or `x1`); [`Error::InvalidArgument`] without the
+    /// reservation, or for host buffers on a CUDA device (device ones on the CPU).
+    ///
+    /// The flying vertex of [`Scene::refit_swept`], stepped on a stream:
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let x0 = [[0.0, -1.0, -1.0], [0.0, 2.0, -1.0], [0.0, -1.0, 2.0], [-1.0, 0.1, 0.1]];
+    /// let mut x1 = x0;
+    /// x1[3][0] = 1.0;
+    /// let triangles = [[0, 1, 2]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &triangles))?;
+    /// let step = |scene: &mut Scene, x1: &[[f32; 3]]| {
+    ///     scene.refit_swept_async(Buffer::from_slice(&x0), Buffer::from_slice(x1), Stream::null())
+    /// };
+    /// // A plain refit's reservation does not cover swept steps.
+    /// scene.reserve(Reserve::REFIT, 0)?;
+    /// assert!(matches!(step(&mut scene, &x1), Err(Error::InvalidArgument(m)) if m.contains("MINKQ_RESERVE_SWEPT")));
+    /// scene.reserve(Reserve::REFIT | Reserve::SWEPT, 0)?;
+    /// step(&mut scene, &x1)?;
+    /// scene.async_status(Stream::null())?;
+    /// assert!(scene.is_swept());
+    /// // The blocking swept step's pairs.
+    /// let mut blocking = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &triangles))?;
+    /// blocking.refit_swept(&x0, &x1)?;
+    /// let query = Query::vt(Mode::CapsuleExact, 0.01);
+    /// let (mut pairs, mut want) = (PairBuffer::new()?, PairBuffer::new()?);
+    /// assert_eq!(scene.query(&query, &mut pairs)?, blocking.query(&query, &mut want)?);
+    /// assert_eq!(scene.query(&query, &mut pairs)?, &[[3, 0]]);
+    ///
+    /// // A NaN in x1: accepted at once, reported by async_status. The scene is at rest at x0,
+    /// // where the vertex is 1 from the triangle: no pair.
+    /// x1[3][1] = f32::NAN;
+    /// step(&mut scene, &x1)?;
+    /// let err = scene.async_status(Stream::null()).unwrap_err();
+    /// assert!(matches!(&err, Error::NonFinite(m) if m.contains("minkq_scene_refit_swept_async: vertex 3")));
+    /// assert!(scene.query(&query, &mut pairs)?.is_empty());
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`Error::NonFinite`]: crate::Error::NonFinite
+    /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
+    /// [`Reserve::REFIT`]: crate::Reserve::REFIT
+    /// [`Reserve::SWEPT`]: crate::Reserve::SWEPT
+    pub fn refit_swept_async(&mut self, x0: Buffer<'_>, x1: Buffer<'_>, stream: Stream) -> Result<()> {
+        let (x0, x1) = self.swept_buffers("refit_swept_async", &x0, &x1)?;
+        // SAFETY: a live scene; the buffers' constructors promised records readable until the
+        // enqueued work has run (host slices are read before this returns: CPU devices only),
+        // of the scene's precision where the buffers know it (checked above); the stream's
+        // constructor promised a stream of the scene's device.
+        check(unsafe { sys::minkq_scene_refit_swept_async(self.raw.as_ptr(), x0, x1, stream.as_raw()) })
+    }
+
+    /// [`Scene::rebuild_swept_buffers`], enqueued on `stream` as [`Scene::refit_swept_async`]
+    /// is (`minkq_scene_rebuild_swept_async`): the trees [`Scene::rebuild_swept`] builds for
+    /// the elements' swept boxes. Needs [`Reserve::REBUILD`] `|` [`Reserve::SWEPT`]. With a NaN
+    /// or infinity in either buffer the scene keeps its positions at rest (its trees then built
+    /// for those), as [`Scene::refit_swept_async`] does, and [`Scene::async_status`] reports
+    /// it. On a [`SceneFlags::FLOAT64`] scene both buffers hold 3 doubles per vertex.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// // Two triangles 1 apart in z, in double, the upper one flying through the lower one.
+    /// let x0 = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+    ///           [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]];
+    /// let mut x1 = x0;
+    /// for v in &mut x1[3..] {
+    ///     v[2] = -1.0;
+    /// }
+    /// let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&x0, &triangles))?;
+    /// let (b0, b1) = (Buffer::from_slice(&x0), Buffer::from_slice(&x1));
+    /// // A refit's reservation does not cover rebuilds.
+    /// scene.reserve(Reserve::REFIT | Reserve::SWEPT, 0)?;
+    /// assert!(matches!(scene.rebuild_swept_async(b0, b1, Stream::null()), Err(Error::InvalidArgument(_))));
+    /// scene.reserve(Reserve::REBUILD | Reserve::SWEPT, 0)?;
+    /// scene.rebuild_swept_async(b0, b1, Stream::null())?;
+    /// scene.async_status(Stream::null())?;
+    /// assert_eq!(scene.tree_growth()?, 1.0);
+    /// let mut blocking = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&x0, &triangles))?;
+    /// blocking.rebuild_swept_f64(&x0, &x1)?;
+    /// let query = Query::vt(Mode::Sphere, 0.01).with_flags(QueryFlags::CANONICAL);
+    /// let (mut pairs, mut want) = (PairBuffer::new()?, PairBuffer::new()?);
+    /// assert_eq!(scene.query(&query, &mut pairs)?, blocking.query(&query, &mut want)?);
+    /// assert_eq!(scene.query(&query, &mut pairs)?.len(), 6);
+    /// // Floats for either end are refused at once, naming the buffer.
+    /// let floats: Vec<[f32; 3]> = x1.iter().map(|v| v.map(|x| x as f32)).collect();
+    /// let err = scene.rebuild_swept_async(b0, Buffer::from_slice(&floats), Stream::null()).unwrap_err();
+    /// let Error::InvalidArgument(m) = err else { panic!("{err:?}") };
+    /// assert!(m.starts_with("rebuild_swept_async: x1: [f32; 3] vertices"));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// [`Reserve::REBUILD`]: crate::Reserve::REBUILD
+    /// [`Reserve::SWEPT`]: crate::Reserve::SWEPT
+    /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
+    pub fn rebuild_swept_async(&mut self, x0: Buffer<'_>, x1: Buffer<'_>, stream: Stream) -> Result<()> {
+        let (x0, x1) = self.swept_buffers("rebuild_swept_async", &x0, &x1)?;
+        // SAFETY: as in refit_swept_async.
+        check(unsafe { sys::minkq_scene_rebuild_swept_async(self.raw.as_ptr(), x0, x1, stream.as_raw()) })
+    }
+
     /// Whether the scene's positions are swept ones ([`Scene::refit_swept`],
-    /// [`Scene::rebuild_swept`] and their variants), so that its queries are swept; false
-    /// after creation and after every plain refit or rebuild, blocking or stream-ordered.
+    /// [`Scene::rebuild_swept`], their variants and the stream-ordered
+    /// [`Scene::refit_swept_async`] and [`Scene::rebuild_swept_async`], also one that fell
+    /// back to rest), so that its queries are swept; false after creation and after every
+    /// plain refit or rebuild, blocking or stream-ordered.
     ///
     /// ```
     /// # use minkq::*;
