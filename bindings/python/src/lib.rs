@@ -191,11 +191,11 @@ enum Vertices {
 }
 
 impl Vertices {
-    fn get(obj: &PyAny, float64: bool) -> PyResult<Vertices> {
+    fn get(obj: &PyAny, name: &str, float64: bool) -> PyResult<Vertices> {
         Ok(if float64 {
-            Vertices::Float64(Array::get(obj, "vertices", &[3], false)?)
+            Vertices::Float64(Array::get(obj, name, &[3], false)?)
         } else {
-            Vertices::Float32(Array::get(obj, "vertices", &[3], false)?)
+            Vertices::Float32(Array::get(obj, name, &[3], false)?)
         })
     }
 
@@ -297,7 +297,7 @@ impl PyScene {
         drop_incident: bool,
         float64: bool,
     ) -> PyResult<Self> {
-        let vertices = Vertices::get(vertices, float64)?;
+        let vertices = Vertices::get(vertices, "vertices", float64)?;
         let triangles = Array::<i32>::get(triangles, "triangles", &[3], false)?;
         let edges = edges.map(|e| Array::<i32>::get(e, "edges", &[2], false)).transpose()?;
         let mut flags = SceneFlags::empty();
@@ -335,7 +335,7 @@ impl PyScene {
     }
 
     fn refit(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
-        let vertices = Vertices::get(vertices, self.float64)?;
+        let vertices = Vertices::get(vertices, "vertices", self.float64)?;
         // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
@@ -343,11 +343,28 @@ impl PyScene {
     }
 
     fn rebuild(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
-        let vertices = Vertices::get(vertices, self.float64)?;
+        let vertices = Vertices::get(vertices, "vertices", self.float64)?;
         // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
         py.allow_threads(|| lock(scene).rebuild_buffer(vertices)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// Swept positions x0 -> x1, the trees refitted to the swept boxes (minkq_scene_refit_swept).
+    fn refit_swept(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
+        self.sweep(py, x0, x1, |scene, x0, x1| scene.refit_swept_buffers(x0, x1))
+    }
+
+    /// Swept positions x0 -> x1, the trees built afresh (minkq_scene_rebuild_swept).
+    fn rebuild_swept(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
+        self.sweep(py, x0, x1, |scene, x0, x1| scene.rebuild_swept_buffers(x0, x1))
+    }
+
+    /// Whether the scene's positions are swept ones (minkq_scene_is_swept).
+    fn is_swept(&self, py: Python<'_>) -> bool {
+        let scene = &self.inner;
+        // Without the GIL: the lock may wait for a call running on another thread.
+        py.allow_threads(|| lock(scene).is_swept())
     }
 
     /// The trees' area cost now over its value at the last build (minkq_scene_tree_growth).
@@ -424,7 +441,14 @@ impl PyScene {
     }
 
     /// Reserves the scratch of the asynchronous calls (minkq_scene_reserve).
-    fn reserve(&self, py: Python<'_>, refit: bool, rebuild: bool, canonical_capacity: usize) -> PyResult<()> {
+    fn reserve(
+        &self,
+        py: Python<'_>,
+        refit: bool,
+        rebuild: bool,
+        swept: bool,
+        canonical_capacity: usize,
+    ) -> PyResult<()> {
         let mut flags = Reserve::empty();
         if refit {
             flags |= Reserve::REFIT;
@@ -432,13 +456,16 @@ impl PyScene {
         if rebuild {
             flags |= Reserve::REBUILD;
         }
+        if swept {
+            flags |= Reserve::SWEPT;
+        }
         let scene = &self.inner;
         py.allow_threads(|| lock(scene).reserve(flags, canonical_capacity)).map_err(|e| to_py_err(py, e))
     }
 
     /// minkq_scene_refit_async on the stream at `stream_address`.
     fn refit_async(&self, py: Python<'_>, vertices: &PyAny, stream_address: usize) -> PyResult<()> {
-        let vertices = Vertices::get(vertices, self.float64)?;
+        let vertices = Vertices::get(vertices, "vertices", self.float64)?;
         // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame (on CUDA,
         // the caller keeps them alive until the enqueued work has run).
         let vertices = unsafe { vertices.buffer() };
@@ -448,11 +475,21 @@ impl PyScene {
 
     /// minkq_scene_rebuild_async on the stream at `stream_address`.
     fn rebuild_async(&self, py: Python<'_>, vertices: &PyAny, stream_address: usize) -> PyResult<()> {
-        let vertices = Vertices::get(vertices, self.float64)?;
+        let vertices = Vertices::get(vertices, "vertices", self.float64)?;
         // SAFETY: as in refit_async.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
         py.allow_threads(|| lock(scene).rebuild_async(vertices, stream(stream_address))).map_err(|e| to_py_err(py, e))
+    }
+
+    /// minkq_scene_refit_swept_async on the stream at `stream_address`.
+    fn refit_swept_async(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny, stream_address: usize) -> PyResult<()> {
+        self.sweep(py, x0, x1, |scene, x0, x1| scene.refit_swept_async(x0, x1, stream(stream_address)))
+    }
+
+    /// minkq_scene_rebuild_swept_async on the stream at `stream_address`.
+    fn rebuild_swept_async(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny, stream_address: usize) -> PyResult<()> {
+        self.sweep(py, x0, x1, |scene, x0, x1| scene.rebuild_swept_async(x0, x1, stream(stream_address)))
     }
 
     /// minkq_scene_query_async into `out` ((capacity, 2) int32) and `count` ((1,) uint64).
@@ -536,6 +573,25 @@ impl PyScene {
         let scene = &self.inner;
         let w = py.allow_threads(|| lock(scene).work(&query)).map_err(|e| to_py_err(py, e))?;
         Ok((w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates))
+    }
+}
+
+impl PyScene {
+    /// Runs `call` on the scene, without the GIL, with the swept positions `x0` and `x1` as
+    /// buffers of the scene's precision: the one path of the blocking and stream-ordered swept
+    /// calls.
+    fn sweep<F>(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny, call: F) -> PyResult<()>
+    where
+        F: for<'a> FnOnce(&mut Scene, Buffer<'a>, Buffer<'a>) -> minkq::Result<()> + Send,
+    {
+        let x0 = Vertices::get(x0, "x0", self.float64)?;
+        let x1 = Vertices::get(x1, "x1", self.float64)?;
+        // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame (on CUDA,
+        // for the stream-ordered calls, the caller keeps them alive until the enqueued work has
+        // run).
+        let (x0, x1) = unsafe { (x0.buffer(), x1.buffer()) };
+        let scene = &self.inner;
+        py.allow_threads(|| call(&mut lock(scene), x0, x1)).map_err(|e| to_py_err(py, e))
     }
 }
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -14,6 +14,9 @@ from ._results import QueryInfo, WorkStats, _SizedQueries
 
 if TYPE_CHECKING:
     from ._args import Kind, Mode, Pairs
+
+_BLOCKING = object()
+"""The ``stream`` of :meth:`Scene._move` for the blocking calls."""
 
 
 class Scene(_SizedQueries):
@@ -133,10 +136,7 @@ class Scene(_SizedQueries):
         after large deformations the boxes overlap more and queries visit more nodes
         (:meth:`tree_growth` measures it, :meth:`rebuild` resets it); the pairs found never
         change."""
-        args = _Args(self.device)
-        native = args.vertices(vertices, "vertices", self._dtype)[0]
-        self._native.refit(native)
-        self._like = _like(args.last)
+        self._move(self._native.refit, {"vertices": vertices})
 
     def rebuild(self, vertices: Any) -> None:
         """Moves the vertices like :meth:`refit` and builds the trees afresh for the new
@@ -154,10 +154,77 @@ class Scene(_SizedQueries):
         >>> scene.query("vt", "sphere", 0.2).tolist(), scene.tree_growth()
         ([], 1.0)
         """
-        args = _Args(self.device)
-        native = args.vertices(vertices, "vertices", self._dtype)[0]
-        self._native.rebuild(native)
-        self._like = _like(args.last)
+        self._move(self._native.rebuild, {"vertices": vertices})
+
+    # ---- Swept positions (continuous collision detection) -----------------------------------
+
+    def refit_swept(self, x0: Any, x1: Any) -> None:
+        """Swept positions, for continuous collision detection (CCD): every vertex moves
+        linearly from ``x0`` to ``x1`` over the step (x(t) = x0 + t (x1 - x0), t in [0, 1]; each
+        (n, 3) as for :meth:`refit`). The scene keeps both, boxes each element over both and
+        refits its trees to those boxes (keeping the grouping of the last build, as
+        :meth:`refit` does). Its queries are then swept (:attr:`is_swept`) until the next
+        :meth:`refit` or :meth:`rebuild`: they report every pair whose elements come within r at
+        some time of the step, the candidates a CCD narrow phase then decides.
+
+        The modes test the elements' swept boxes. VT takes the vertex as its path, the segment
+        x0 -> x1: ``"box"`` (its box grown by r), ``"capsule_ray"`` and ``"capsule_exact"`` (the
+        capsule of radius r around it), and ``"sphere"``, the same as ``"capsule_exact"`` (the
+        sphere swept along the path). EE runs ``"box"`` only (each edge's swept box grown by r):
+        its other modes, and ``leaf_exact=True`` in every query (it needs the time of closest
+        approach, which the narrow phase finds), raise :class:`UnsupportedError`.
+        ``drop_incident`` and the once-per-pair EE rule apply as for static queries. At
+        ``x0 == x1`` the pairs are the static ones (VT ``"capsule_exact"`` and ``"sphere"``:
+        the static ``"sphere"`` pairs). A float64 scene reports every pair within r in double at
+        some time of the step. Results are like the vertices last given (``x1``, else ``x0``,
+        when of another library).
+
+        Errors: those of :meth:`refit` for either array (a wrong dtype or shape names ``x0`` or
+        ``x1``); on error the scene keeps its positions, trees and swept state.
+
+        A vertex flying from x = -1 to x = +1 through a still triangle in the plane x = 0: no
+        static query at either end finds it, the swept ones do.
+
+        >>> import numpy as np, minkq
+        >>> x0 = np.array([[0, -1, -1], [0, 2, -1], [0, -1, 2], [-1, .1, .1]], np.float32)
+        >>> x1 = x0.copy()
+        >>> x1[3, 0] = 1.0  # vertex 3 crosses triangle 0
+        >>> scene = minkq.Scene(minkq.Device("cpu"), x0, np.array([[0, 1, 2]], np.int32))
+        >>> modes = ("box", "sphere", "capsule_ray", "capsule_exact")
+        >>> for x in (x0, x1):  # at rest at either end, 1 from the triangle
+        ...     scene.refit(x)
+        ...     print([scene.query("vt", mode, 0.01).tolist() for mode in modes])
+        [[], [], [], []]
+        [[], [], [], []]
+        >>> scene.refit_swept(x0, x1)
+        >>> scene.is_swept, [scene.query("vt", mode, 0.01).tolist() for mode in modes]
+        (True, [[[3, 0]], [[3, 0]], [[3, 0]], [[3, 0]]])
+        >>> try:
+        ...     scene.query("ee", "capsule_exact", 0.01)
+        ... except minkq.UnsupportedError as e:
+        ...     print(e)
+        query: swept EE queries run box mode only (a moving edge sweeps no segment)
+        >>> scene.refit(x1)  # a plain refit: static again
+        >>> scene.is_swept
+        False
+        """
+        self._move(self._native.refit_swept, {"x0": x0, "x1": x1})
+
+    def rebuild_swept(self, x0: Any, x1: Any) -> None:
+        """Swept positions like :meth:`refit_swept`, with the trees built afresh for the
+        elements' swept boxes, as :meth:`rebuild` builds them for static positions. The pairs
+        are those of :meth:`refit_swept`; only the speed of later queries differs (worth it when
+        a step's motion is large next to the elements). Same errors; on error the scene keeps
+        its positions, trees and swept state."""
+        self._move(self._native.rebuild_swept, {"x0": x0, "x1": x1})
+
+    @property
+    def is_swept(self) -> bool:
+        """Whether the scene's positions are swept ones (:meth:`refit_swept`,
+        :meth:`rebuild_swept` and their stream-ordered variants, from the call on), so that its
+        queries are swept: False after creation and after every plain refit or rebuild, blocking
+        or stream-ordered."""
+        return self._native.is_swept()
 
     def tree_growth(self) -> float:
         """How far the refits since the last build (the constructor or :meth:`rebuild`) have
@@ -283,13 +350,18 @@ class Scene(_SizedQueries):
 
     # ---- Stream-ordered calls ----------------------------------------------------------------
 
-    def reserve(self, refit: bool = True, rebuild: bool = False, canonical_capacity: int = 0) -> None:
+    def reserve(
+        self, refit: bool = True, rebuild: bool = False, canonical_capacity: int = 0, *, swept: bool = False
+    ) -> None:
         """Reserves, on the scene's device, the scratch the stream-ordered calls use, so that
         they never allocate: ``refit`` for :meth:`refit_async`, ``rebuild`` for
-        :meth:`rebuild_async` (and refits), and ``canonical_capacity`` pairs for the sort of
-        ``canonical=True`` :meth:`query_async` calls (whose capacity may not exceed it; other
-        queries need no reservation). Reservations only grow and last as long as the scene. A
-        blocking call (it may allocate and synchronise): call it before capturing a graph.
+        :meth:`rebuild_async` (and refits), ``swept`` with either for the swept ones
+        (:meth:`refit_swept_async` needs ``refit`` and ``swept``, :meth:`rebuild_swept_async`
+        ``rebuild`` and ``swept``: two more copies of the vertices), and ``canonical_capacity``
+        pairs for the sort of ``canonical=True`` :meth:`query_async` calls (whose capacity may
+        not exceed it; other queries need no reservation). Reservations only grow and last as
+        long as the scene. A blocking call (it may allocate and synchronise): call it before
+        capturing a graph.
 
         >>> import numpy as np, minkq
         >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
@@ -307,7 +379,7 @@ class Scene(_SizedQueries):
             raise TypeError(f"canonical_capacity: expected an int, got {type(canonical_capacity).__name__}")
         if canonical_capacity < 0:
             raise ValueError(f"canonical_capacity: expected a count >= 0, got {canonical_capacity}")
-        self._native.reserve(bool(refit), bool(rebuild), int(canonical_capacity))
+        self._native.reserve(bool(refit), bool(rebuild), bool(swept), int(canonical_capacity))
 
     def refit_async(self, vertices: Any, stream: Any = None) -> None:
         """:meth:`refit`, enqueued on ``stream`` without waiting, allocating or synchronising
@@ -327,12 +399,54 @@ class Scene(_SizedQueries):
         A NaN or infinity (or, in a float64 scene, a double beyond the float range) is no
         error here: the scene keeps its positions and
         :meth:`async_status` raises :class:`NonFiniteError`, naming the call and the vertex."""
-        self._move_async(vertices, stream, self._native.refit_async)
+        self._move(self._native.refit_async, {"vertices": vertices}, stream)
 
     def rebuild_async(self, vertices: Any, stream: Any = None) -> None:
         """:meth:`rebuild`, enqueued on ``stream`` as :meth:`refit_async` is
         (``minkq_scene_rebuild_async``). Needs :meth:`reserve` with ``rebuild=True``."""
-        self._move_async(vertices, stream, self._native.rebuild_async)
+        self._move(self._native.rebuild_async, {"vertices": vertices}, stream)
+
+    def refit_swept_async(self, x0: Any, x1: Any, stream: Any = None) -> None:
+        """:meth:`refit_swept`, enqueued on ``stream`` as :meth:`refit_async` is
+        (``minkq_scene_refit_swept_async``): ``x0`` and ``x1`` are device memory on a CUDA
+        device (kept alive until the stream has run the work), host memory on the CPU, both of
+        the scene's :attr:`dtype` (a float64 scene takes float64 only). ``stream=None`` is the
+        current stream of the library of the first array that has one; each array's own stream
+        is ordered before the call as for :meth:`refit_async`. Needs :meth:`reserve` with
+        ``refit=True, swept=True``: :class:`InvalidArgumentError` without it. Both arrays are
+        checked together on the device: with a NaN or infinity in either, the scene stays at
+        rest at the start positions it kept (of its last accepted step, or its static
+        positions; not this call's ``x0``) as both ends, so that its queries give the static
+        pairs there while :attr:`is_swept` is True, and :meth:`async_status` raises
+        :class:`NonFiniteError` naming the call and the vertex.
+
+        >>> import numpy as np, minkq
+        >>> x0 = np.array([[0, -1, -1], [0, 2, -1], [0, -1, 2], [-1, .1, .1]], np.float32)
+        >>> x1 = x0.copy()
+        >>> x1[3, 0] = 1.0  # the flying vertex of refit_swept
+        >>> scene = minkq.Scene(minkq.Device("cpu"), x0, np.array([[0, 1, 2]], np.int32))
+        >>> scene.reserve(refit=True, swept=True)
+        >>> scene.refit_swept_async(x0, x1)
+        >>> scene.async_status()
+        >>> scene.query("vt", "capsule_exact", 0.01).tolist()
+        [[3, 0]]
+        >>> x1[3, 1] = np.nan
+        >>> scene.refit_swept_async(x0, x1)  # accepted: the scene is at rest at x0
+        >>> scene.query("vt", "capsule_exact", 0.01).tolist(), scene.is_swept
+        ([], True)
+        >>> try:
+        ...     scene.async_status()
+        ... except minkq.NonFiniteError as e:
+        ...     print(str(e).split(";")[0])
+        minkq_scene_refit_swept_async: vertex 3 has a non-finite coordinate (in x0 or x1)
+        """
+        self._move(self._native.refit_swept_async, {"x0": x0, "x1": x1}, stream)
+
+    def rebuild_swept_async(self, x0: Any, x1: Any, stream: Any = None) -> None:
+        """:meth:`rebuild_swept`, enqueued on ``stream`` as :meth:`refit_swept_async` is
+        (``minkq_scene_rebuild_swept_async``; with a NaN or infinity, the trees are built for
+        the positions at rest). Needs :meth:`reserve` with ``rebuild=True, swept=True``."""
+        self._move(self._native.rebuild_swept_async, {"x0": x0, "x1": x1}, stream)
 
     def query_async(
         self,
@@ -400,20 +514,30 @@ class Scene(_SizedQueries):
     def async_status(self, stream: Any = None) -> None:
         """Waits for the work enqueued on ``stream`` (CUDA; None: the stream of this scene's
         last stream-ordered call), then raises the scene's pending error and clears it:
-        :class:`NonFiniteError` when a :meth:`refit_async` or :meth:`rebuild_async` since the
-        last call met a NaN or infinity (the first such call, named in the message with the
-        vertex; the scene kept its positions). Afterwards the counts and pairs of the queries
-        enqueued on the stream are ready. A blocking call: not for inside a graph capture."""
+        :class:`NonFiniteError` when a :meth:`refit_async`, :meth:`rebuild_async` or swept
+        one since the last call met a NaN or infinity (the first such call, named in the message
+        with the vertex; the scene kept its positions, at rest for a swept one). Afterwards the
+        counts and pairs of the queries enqueued on the stream are ready. A blocking call: not
+        for inside a graph capture."""
         handle = self._stream if stream is None else stream_handle(stream, self.device)
         self._native.async_status(handle)
 
-    def _move_async(self, vertices: Any, stream: Any, call: Callable[[Any, int], None]) -> None:
-        handle = stream_handle(stream, self.device, (vertices,))
+    def _move(self, call: Callable[..., None], positions: Dict[str, Any], stream: Any = _BLOCKING) -> None:
+        """Passes vertex positions (by argument name: ``vertices``, or ``x0`` and ``x1``) of the
+        scene's precision to ``call``: for a blocking call (no ``stream``) with host arrays
+        converted to it; for a stream-ordered one read in place, with the handle of ``stream``
+        (None: the current stream of the positions' library) after them. Results are then made
+        like the last array of another library among them."""
+        blocking = stream is _BLOCKING
+        handle = None if blocking else stream_handle(stream, self.device, tuple(positions.values()))
         args = _Args(self.device, handle)
-        native = args.vertices(vertices, "vertices", self._dtype, convert=False)[0]
-        call(native, handle)
+        native = [args.vertices(value, name, self._dtype, convert=blocking)[0] for name, value in positions.items()]
+        if blocking:
+            call(*native)
+        else:
+            call(*native, handle)
+            self._stream = handle
         self._like = _like(args.last)
-        self._stream = handle
 
     def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
         """Runs the query once with the library's work counters on and returns them (the pairs
