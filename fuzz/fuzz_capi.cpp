@@ -503,7 +503,8 @@ class Session {
       st_.scenes[slot] = {};
     }
     uint32_t flags = uint32_t(gen_.choice(8));
-    if (gen_.rarely()) flags |= gen_.choice(2) ? 8u : 0x80000000u;
+    // Unknown bits only (8 is MINKQ_SCENE_FLOAT64, whose double vertices this model does not make).
+    if (gen_.rarely()) flags |= gen_.choice(2) ? 16u : 0x80000000u;
     Buffer v = gen_.buffer(12, Fill::kCoordinates, "vertices", SIZE_MAX, 0, 32);
     const int32_t nv = int32_t(std::min<size_t>(v.count, 64));
     Buffer t = gen_.buffer(12, Fill::kIndices, "triangles", SIZE_MAX, nv, 32);
@@ -516,7 +517,7 @@ class Session {
     m.add(null_desc, MINKQ_ERROR_INVALID_ARGUMENT, "desc NULL");
     m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_scene NULL");
     if (!null_desc) {
-      m.add(flags & ~7u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flag bits");
+      m.add(flags & ~15u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flag bits");
       m.add(!(flags & 3u), MINKQ_ERROR_INVALID_ARGUMENT, "no query kind");
       m.merge(v.misuse);
       m.merge(t.misuse);
@@ -980,7 +981,7 @@ class Session {
       case 0: return 0u;
       case 1: case 2: return MINKQ_RESERVE_REFIT;
       case 3: return MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD;
-      case 4: return uint32_t(gen_.choice(4)) | (4u << gen_.choice(29));  // unknown bits
+      case 4: return uint32_t(gen_.choice(8)) | (8u << gen_.choice(28));  // unknown bits (above SWEPT)
       default: return MINKQ_RESERVE_REBUILD;
     }
   }
@@ -1002,8 +1003,8 @@ class Session {
   void reserve_on(SceneSlot* s, bool null_scene, uint32_t flags, size_t capacity) {
     Misuse m;
     m.add(null_scene, MINKQ_ERROR_INVALID_ARGUMENT, "scene NULL");
-    m.add(flags & ~uint32_t(MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD), MINKQ_ERROR_INVALID_ARGUMENT,
-          "unknown reserve flags");
+    m.add(flags & ~uint32_t(MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBUILD | MINKQ_RESERVE_SWEPT),
+          MINKQ_ERROR_INVALID_ARGUMENT, "unknown reserve flags");
     m.add(capacity > SIZE_MAX / (2 * sizeof(uint64_t)), MINKQ_ERROR_SIZE_OVERFLOW, "canonical_capacity overflows");
     const uint64_t before = null_scene ? 0 : scene_full_state(*s);
     const minkq_status st = minkq_scene_reserve(null_scene ? nullptr : s->handle, flags, capacity);
