@@ -318,29 +318,33 @@ minkq::QueryRequest checked_scene_request(const minkq_scene* scene, const minkq_
                                           const std::string& name) {
   require(query != nullptr, Status::kInvalidArgument, name + " is NULL");
   const int64_t kind = enum_value(query->kind), mode = enum_value(query->mode);
-  require(kind == MINKQ_QUERY_VT || kind == MINKQ_QUERY_EE, Status::kInvalidArgument,
+  require(kind >= MINKQ_QUERY_VT && kind <= MINKQ_QUERY_EV, Status::kInvalidArgument,
           name + "->kind is not a minkq_query_kind value");
   require(mode >= MINKQ_MODE_BOX && mode <= MINKQ_MODE_CAPSULE_EXACT, Status::kInvalidArgument,
           name + "->mode is not a minkq_mode value");
   require((query->flags & ~kKnownQueryFlags) == 0, Status::kInvalidArgument, name + "->flags has unknown bits");
-  const bool vt = query->kind == MINKQ_QUERY_VT;
-  require(scene->flags & (vt ? MINKQ_SCENE_VT : MINKQ_SCENE_EE), Status::kInvalidArgument,
-          vt ? "VT query on a scene created without MINKQ_SCENE_VT" : "EE query on a scene created without MINKQ_SCENE_EE");
-  require(vt || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
+  static const char* const kKindNames[] = {"VT", "EE", "VV", "EV"};
+  static const uint32_t kKindFlags[] = {MINKQ_SCENE_VT, MINKQ_SCENE_EE, MINKQ_SCENE_VV, MINKQ_SCENE_EV};
+  const std::string kind_name = kKindNames[kind];
+  require(scene->flags & kKindFlags[kind], Status::kInvalidArgument,
+          kind_name + " query on a scene created without MINKQ_SCENE_" + kind_name);
+  const bool ee = kind == MINKQ_QUERY_EE;
+  require(!ee || query->mode != MINKQ_MODE_SPHERE, Status::kInvalidArgument,
           "sphere mode needs point queries; use capsule_ray or capsule_exact for EE");
   require_radius(query->radius);
   if (scene->store->swept()) {
     require(!(query->flags & MINKQ_QUERY_LEAF_EXACT), Status::kUnsupported,
             name + "->flags asks for MINKQ_QUERY_LEAF_EXACT on swept positions: that needs a narrow phase "
                    "(the time of closest approach), which minkq leaves to the caller; query without it");
-    require(vt || query->mode == MINKQ_MODE_BOX, Status::kUnsupported,
+    require(!ee || query->mode == MINKQ_MODE_BOX, Status::kUnsupported,
             name + ": swept EE queries run box mode only (a moving edge sweeps no segment)");
   }
   uint32_t filters = 0;
   if (scene->flags & MINKQ_SCENE_DROP_INCIDENT) filters |= minkq::kDropIncident;
   if (query->flags & MINKQ_QUERY_LEAF_EXACT) filters |= minkq::kLeafExact;
-  return {vt ? minkq::QueryKind::kVertexTriangle : minkq::QueryKind::kEdgeEdge, static_cast<minkq::Mode>(query->mode),
-          filters, query->radius, {}, {}};
+  static const minkq::QueryKind kKinds[] = {minkq::QueryKind::kVertexTriangle, minkq::QueryKind::kEdgeEdge,
+                                            minkq::QueryKind::kVertexVertex, minkq::QueryKind::kVertexEdge};
+  return {kKinds[kind], static_cast<minkq::Mode>(query->mode), filters, query->radius, {}, {}};
 }
 
 // The two descriptions of a fused VT + EE call, checked (the scene too).
@@ -525,10 +529,12 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
     *out_scene = nullptr;
     require(device != nullptr, Status::kInvalidArgument, "device is NULL");
     require(desc != nullptr, Status::kInvalidArgument, "desc is NULL");
-    const uint32_t known = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT | MINKQ_SCENE_FLOAT64;
+    const uint32_t kinds = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_VV | MINKQ_SCENE_EV;
+    const uint32_t known = kinds | MINKQ_SCENE_DROP_INCIDENT | MINKQ_SCENE_FLOAT64;
     require((desc->flags & ~known) == 0, Status::kInvalidArgument, "desc->flags has unknown bits");
-    require(desc->flags & (MINKQ_SCENE_VT | MINKQ_SCENE_EE), Status::kInvalidArgument,
-            "desc->flags asks for no query: set MINKQ_SCENE_VT, MINKQ_SCENE_EE or both");
+    require(desc->flags & kinds, Status::kInvalidArgument,
+            "desc->flags asks for no query: set one or more of MINKQ_SCENE_VT, MINKQ_SCENE_EE, MINKQ_SCENE_VV and "
+            "MINKQ_SCENE_EV");
     minkq::Backend& backend = *device->backend;
     const minkq::Strided vertices = checked_vertex_buffer(device, desc->vertices, desc->flags);
     const minkq::Strided triangles = checked_buffer(device, desc->triangles, 12, "triangles");
@@ -544,15 +550,19 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
     if (edges.count > 0) {
       edge_list = host_copy<minkq::Edge>(backend, edges);
       require_indices<2>(edge_list, scene->vertex_count, "edge");
-    } else if (desc->flags & MINKQ_SCENE_EE) {
+    } else if (desc->flags & (MINKQ_SCENE_EE | MINKQ_SCENE_EV)) {
       edge_list = derive_edges(triangle_list);
       require(edge_list.size() <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
               "the triangles have more than 2^31 - 2 edges");
     }
     scene->triangle_count = triangle_list.size();
     scene->edge_count = edge_list.size();
-    scene->store = backend.create_mesh_store(vertices, std::move(triangle_list), std::move(edge_list),
-                                             desc->flags & MINKQ_SCENE_VT, desc->flags & MINKQ_SCENE_EE);
+    minkq::MeshTrees trees;
+    trees.triangles = desc->flags & MINKQ_SCENE_VT;
+    trees.edges = desc->flags & (MINKQ_SCENE_EE | MINKQ_SCENE_EV);
+    trees.vertices = desc->flags & MINKQ_SCENE_VV;
+    trees.vertex_order = desc->flags & (MINKQ_SCENE_VT | MINKQ_SCENE_EV);
+    scene->store = backend.create_mesh_store(vertices, std::move(triangle_list), std::move(edge_list), trees);
     *out_scene = scene.release();
   });
 }

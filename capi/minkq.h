@@ -142,11 +142,16 @@ typedef enum minkq_scene_flags {
    * plus the slack of float input; rho is at most sqrt(3)/2 ulp (float) of the largest
    * coordinate, and 0 for vertices that are floats already. A double beyond the float range
    * (about 3.4e38) is NON_FINITE, as a NaN or infinity is. */
-  MINKQ_SCENE_FLOAT64 = 8
+  MINKQ_SCENE_FLOAT64 = 8,
+  /* Codimensional elements (particles, rods, yarn): a vertex tree for vertex-vertex queries,
+   * and the edge tree for edge-vertex queries. Such scenes may hold no triangles (count 0)
+   * and take their edges from desc->edges. */
+  MINKQ_SCENE_VV = 16,
+  MINKQ_SCENE_EV = 32
 } minkq_scene_flags;
 
 typedef struct minkq_scene_desc {
-  uint32_t flags;         /* minkq_scene_flags; at least one of VT and EE */
+  uint32_t flags;         /* minkq_scene_flags; at least one of VT, EE, VV and EV */
   minkq_buffer vertices;  /* 3 floats (x, y, z) each, stride >= 12; with MINKQ_SCENE_FLOAT64 3 doubles */
   minkq_buffer triangles; /* 3 int32 vertex indices each; stride >= 12 */
   /* 2 int32 vertex indices each, or count 0 to derive them from the triangles: every distinct
@@ -155,10 +160,10 @@ typedef struct minkq_scene_desc {
 } minkq_scene_desc;
 
 /* Creates a scene on a device: copies the mesh (host or, on a CUDA device, device memory),
- * derives the edges when desc->edges is empty and the flags ask for EE, builds the trees the
- * flags ask for (a VT-only scene builds no edge tree) and stores the scene in *out_scene (NULL
- * on failure). Errors: INVALID_ARGUMENT (NULL pointer, a NULL buffer with a non-zero count,
- * unknown flag bits, neither VT nor EE, a stride under the element's size, device memory on a
+ * derives the edges when desc->edges is empty and the flags ask for EE or EV, builds the trees
+ * the flags ask for (a VT-only scene builds no edge tree) and stores the scene in *out_scene
+ * (NULL on failure). Errors: INVALID_ARGUMENT (NULL pointer, a NULL buffer with a non-zero count,
+ * unknown flag bits, none of VT, EE, VV and EV, a stride under the element's size, device memory on a
  * CPU device), NON_FINITE ("vertex 12 has a non-finite coordinate (...)"), INDEX_OUT_OF_RANGE
  * ("triangle 3 references vertex 9 but the scene has 8 vertices"), SIZE_OVERFLOW (over
  * 2^31 - 2 elements), OUT_OF_MEMORY, DEVICE. The scene holds its device, which must outlive
@@ -223,16 +228,19 @@ minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, siz
 /* ---- Queries ------------------------------------------------------------------------------- */
 typedef enum minkq_query_kind {
   MINKQ_QUERY_VT = 0, /* pairs (vertex, triangle): vertex within r of triangle */
-  MINKQ_QUERY_EE = 1  /* pairs (e, f), e < f: edge e within r of edge f */
+  MINKQ_QUERY_EE = 1, /* pairs (e, f), e < f: edge e within r of edge f */
+  MINKQ_QUERY_VV = 2, /* pairs (v, w), v < w: vertex v within r of vertex w (MINKQ_SCENE_VV) */
+  MINKQ_QUERY_EV = 3  /* pairs (vertex, edge): vertex within r of edge (MINKQ_SCENE_EV); with
+                         DROP_INCIDENT, without the vertex's own edges */
 } minkq_query_kind;
 
-/* The node test, from fast to tight. Points are zero-length capsules: for VT, capsule_ray is
- * the box test and capsule_exact the sphere test. EE keeps a pair {e, f} when the test passes
- * both ways (e's shape against f's box and f's shape against e's box), so the set does not
- * depend on which edge queried. */
+/* The node test, from fast to tight. Points are zero-length capsules: for VT, VV and EV,
+ * capsule_ray is the box test and capsule_exact the sphere test. EE and VV keep a pair {a, b}
+ * when the test passes both ways (a's shape against b's box and b's shape against a's box),
+ * so the set does not depend on which element queried. */
 typedef enum minkq_mode {
   MINKQ_MODE_BOX = 0,           /* r-padded box of the query element against node boxes */
-  MINKQ_MODE_SPHERE = 1,        /* point-box distance (point queries only: VT, spheres) */
+  MINKQ_MODE_SPHERE = 1,        /* point-box distance (point queries only: VT, VV, EV, spheres) */
   MINKQ_MODE_CAPSULE_RAY = 2,   /* segment against the r-inflated box (slab test) */
   MINKQ_MODE_CAPSULE_EXACT = 3  /* segment-box distance */
 } minkq_mode;
@@ -270,8 +278,9 @@ typedef struct minkq_query_info {
   minkq_query_stats stats; /* with MINKQ_QUERY_STATS (also when the buffer was too small); else 0 */
 } minkq_query_info;
 
-/* Runs a VT or EE query on a scene and writes its pairs (2 int32 each: (vertex, triangle) for
- * VT, (e, f) with e < f for EE) into out_pairs, which holds 2 * capacity int32 in out_memory
+/* Runs a VT, EE, VV or EV query on a scene and writes its pairs (2 int32 each: (vertex,
+ * triangle) for VT, (e, f) with e < f for EE, (v, w) with v < w for VV, (vertex, edge) for EV)
+ * into out_pairs, which holds 2 * capacity int32 in out_memory
  * (device memory on CUDA devices only); CANONICAL sorts them, else their order is unspecified.
  * *info is zeroed, then gets the exact count, and the digest and stats its flags ask for. If
  * more pairs exist than fit, returns CAPACITY with info->count the exact number needed and

@@ -471,6 +471,33 @@ TEST_F(Cuda, swept_queries_match_cpu) {
   }
 }
 
+// VV and EV (codimensional scenes: the sheet's vertices and edges, no triangles), static and
+// swept: the same pairs and digests on the device.
+TEST_F(Cuda, vv_and_ev_queries_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  Mesh codim = reference::twisted_sheet(40, 3.0);
+  const float r = float(0.5 * reference::mean_edge_length(codim));
+  codim.tris.clear();  // explicit edges, no triangles
+  const uint32_t flags = MINKQ_SCENE_VV | MINKQ_SCENE_EV | MINKQ_SCENE_DROP_INCIDENT;
+  test::Scene on_cpu(cpu.get(), codim, flags), on_gpu(cuda.get(), codim, flags);
+  for (bool swept : {false, true}) {
+    if (swept) {
+      Mesh to = codim;
+      reference::transform(to, 1.02, 0.01);
+      for (minkq_scene* scene : {on_cpu.get(), on_gpu.get()})
+        ASSERT_EQ(minkq_scene_rebuild_swept(scene, test::vertices_of(codim, 0), test::vertices_of(to, 0)), MINKQ_SUCCESS);
+    }
+    for (minkq_query_kind kind : {MINKQ_QUERY_VV, MINKQ_QUERY_EV})
+      for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE, MINKQ_MODE_CAPSULE_RAY, MINKQ_MODE_CAPSULE_EXACT})
+        for (uint32_t leaf : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)}) {
+          if (swept && leaf) continue;
+          const std::string what = std::string(kind == MINKQ_QUERY_VV ? "VV" : "EV") + (swept ? " swept" : "");
+          expect_same(scene_query(on_cpu.get(), kind, mode, r, leaf | MINKQ_QUERY_DIGEST),
+                      scene_query(on_gpu.get(), kind, mode, r, leaf | MINKQ_QUERY_DIGEST), what);
+        }
+  }
+}
+
 TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
   test::Device cuda("cuda");
   Mesh mesh = reference::twisted_sheet(40, 3.0);

@@ -52,7 +52,17 @@ struct Strided {
   Scalar scalar = Scalar::kFloat32;
 };
 
-enum class QueryKind : int { kVertexTriangle, kEdgeEdge, kUserSpheres, kUserCapsules, kUserBoxes };
+enum class QueryKind : int {
+  kVertexTriangle, kEdgeEdge, kUserSpheres, kUserCapsules, kUserBoxes, kVertexVertex, kVertexEdge
+};
+constexpr int kQueryKinds = 7;
+
+// The trees a mesh store builds (from the scene's flags) and whether it keeps the vertices'
+// Morton order, the query order of VT and EV.
+struct MeshTrees {
+  bool triangles = false, edges = false, vertices = false;
+  bool vertex_order = false;
+};
 
 struct QueryRequest {
   QueryKind kind;
@@ -168,8 +178,7 @@ class Backend {
   virtual void check_device_pointer(const void* data, const std::string& what) = 0;
   // Takes the topology over (host vectors, validated by the caller).
   virtual std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
-                                                       std::vector<Edge> edges, bool triangle_tree,
-                                                       bool edge_tree) = 0;
+                                                       std::vector<Edge> edges, const MeshTrees& trees) = 0;
   virtual std::unique_ptr<Store> create_box_store(const Strided& boxes) = 0;
 };
 

@@ -130,9 +130,10 @@ class MeshStoreOn final : public MeshStore {
 
  public:
   MeshStoreOn(typename X::Device device, const Strided& vertices, std::vector<Triangle> triangles,
-              std::vector<Edge> edges, bool triangle_tree, bool edge_tree)
+              std::vector<Edge> edges, const MeshTrees& trees)
       : x_(device), num_vertices_(int32_t(vertices.count)), num_triangles_(int32_t(triangles.size())),
-        num_edges_(int32_t(edges.size())), has_triangle_tree_(triangle_tree), has_edge_tree_(edge_tree),
+        num_edges_(int32_t(edges.size())), has_triangle_tree_(trees.triangles), has_edge_tree_(trees.edges),
+        has_vertex_tree_(trees.vertices), keeps_vertex_order_(trees.vertex_order),
         float64_(vertices.scalar == Scalar::kFloat64) {
     x_.hold();
     gather_vertices(vertices);
@@ -184,14 +185,14 @@ class MeshStoreOn final : public MeshStore {
     [[maybe_unused]] const auto scope = x_.scope();
     double g = has_triangle_tree_ ? tree_growth_of(triangle_tree_) : 0.0;
     if (has_edge_tree_) g = std::max(g, tree_growth_of(edge_tree_));
+    if (has_vertex_tree_) g = std::max(g, tree_growth_of(vertex_tree_));
     return g;
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     [[maybe_unused]] const auto scope = x_.scope();
     uint64_t total = 0;
-    auto run = [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; };
-    if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
+    with_mesh_pass(request, out, [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; });
     return total;
   }
 
@@ -220,11 +221,10 @@ class MeshStoreOn final : public MeshStore {
       reserved_.swept = true;
     }
     if (wanted.rebuild && !reserved_.rebuild) {
-      if (has_triangle_tree_) {
-        x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
-        x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
-      }
+      if (has_triangle_tree_) x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
+      if (keeps_vertex_order_) x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
       if (has_edge_tree_) x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
+      if (has_vertex_tree_) x_.reserve_build(vertex_tree_, vertex_boxes(), num_vertices_);
       reserved_.rebuild = true;
     }
     if (wanted.canonical_capacity > reserved_.canonical_capacity) {
@@ -265,8 +265,7 @@ class MeshStoreOn final : public MeshStore {
 
   void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    auto run = [&](const auto& pass) { run_counted(x_, {nullptr}, pass); };
-    if (request.kind == QueryKind::kVertexTriangle) with_vt_pass(request, out, run); else with_ee_pass(request, out, run);
+    with_mesh_pass(request, out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
   }
 
   void query_vt_ee_async(const QueryRequest& vt, const PairOutput& vt_out, const QueryRequest& ee,
@@ -284,16 +283,42 @@ class MeshStoreOn final : public MeshStore {
   }
 
  private:
+  // Calls fn with the QueryPass of a request of any mesh kind.
+  template <class Fn>
+  void with_mesh_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    switch (request.kind) {
+      case QueryKind::kVertexTriangle: return with_vt_pass(request, out, fn);
+      case QueryKind::kEdgeEdge: return with_ee_pass(request, out, fn);
+      case QueryKind::kVertexEdge: {
+        const VertexEdgeQueries queries{vertices_.data(), edges_.data(), vertex_order_.data(), request.r,
+                                        request.filters, rho(), vertices1()};
+        return with_vertex_pass(request, edge_tree_.view(), queries, out, fn);
+      }
+      case QueryKind::kVertexVertex: {
+        const BvhView tree = vertex_tree_.view();
+        const VertexVertexQueries queries{vertices_.data(), tree.sorted_prims, request.r, request.filters, rho(),
+                                          vertices1()};
+        return with_vertex_pass(request, tree, queries, out, fn);
+      }
+      default: fail(Status::kInternal, "not a mesh query kind");
+    }
+  }
   // Calls fn with the QueryPass of a VT request, or of an EE request.
-  // Swept, a vertex is a segment (its path): the segment shapes, sphere mode as capsule_exact.
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
                                         request.filters, rho(), vertices1()};
-    if (!swept_) return with_pass<true>(request, triangle_tree_.view(), queries, num_vertices_, out, fn);
+    with_vertex_pass(request, triangle_tree_.view(), queries, out, fn);
+  }
+  // Vertex queries (VT, EV, VV): points, or swept each vertex's path, a segment: the segment
+  // shapes, sphere mode as capsule_exact.
+  template <class Queries, class Fn>
+  void with_vertex_pass(const QueryRequest& request, const BvhView& tree, const Queries& queries,
+                        const PairOutput& out, Fn&& fn) {
+    if (!swept_) return with_pass<true>(request, tree, queries, num_vertices_, out, fn);
     QueryRequest path = request;
     if (path.mode == Mode::kSphere) path.mode = Mode::kCapsuleExact;
-    with_pass<false>(path, triangle_tree_.view(), queries, num_vertices_, out, fn);
+    with_pass<false>(path, tree, queries, num_vertices_, out, fn);
   }
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
@@ -318,36 +343,37 @@ class MeshStoreOn final : public MeshStore {
   void refit_trees() {
     if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
     if (has_edge_tree_) edge_tree_.refit(edge_boxes());
+    if (has_vertex_tree_) vertex_tree_.refit(vertex_boxes());
   }
   // Where the queries read rho (executor memory): nullptr for float input, whose radius stays r.
   float* rho() { return float64_ ? rho_.data() : nullptr; }
 
-  // The trees the flags ask for, and the VT query order, from the current vertices.
+  // The trees the flags ask for, and the VT / EV query order, from the current vertices.
   void build_trees() {
-    if (has_triangle_tree_) {
-      triangle_tree_.build(triangle_boxes(), num_triangles_);
-      x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
-    }
+    if (has_triangle_tree_) triangle_tree_.build(triangle_boxes(), num_triangles_);
+    if (keeps_vertex_order_) x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
     if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
+    if (has_vertex_tree_) vertex_tree_.build(vertex_boxes(), num_vertices_);
   }
   TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data(), vertices1()}; }
   EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data(), vertices1()}; }
+  PointBoxes vertex_boxes() const { return {vertices_.data(), vertices1()}; }
 
   X x_;  // first: holds its device while the members below are created and destroyed
   Array<Vec3> vertices_;
   Array<Triangle> triangles_;  // only with a triangle tree
   Array<Edge> edges_;
-  Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT query order
+  Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT and EV query order
   Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
   Array<Vec3> staging1_;  // asynchronous swept steps: the end positions, checked likewise
   Array<Vec3> vertices1_;  // swept: the positions at the end of the step (vertices_: at its start)
   Array<float> rho_;     // float64 input: rho[0], how far rounding moved the vertices at most
   int32_t num_vertices_, num_triangles_, num_edges_;
-  bool has_triangle_tree_, has_edge_tree_;
+  bool has_triangle_tree_, has_edge_tree_, has_vertex_tree_, keeps_vertex_order_;
   bool float64_;  // vertices come as float64 (every call: the scene's scalar type)
   bool swept_ = false;  // the last positions were swept ones (vertices_ to vertices1_)
   Reservation reserved_;
-  typename X::Tree triangle_tree_, edge_tree_;
+  typename X::Tree triangle_tree_, edge_tree_, vertex_tree_;
 };
 
 template <class X>

@@ -287,6 +287,14 @@ MINKQ_HD bool segment_segment_distance_within(Vec3 p0, Vec3 p1, Vec3 q0, Vec3 q1
   return leaf_within(segment_segment_distance2(a, b, c, d), r, scale);
 }
 
+// The EV and VV leaf tests: a point against a segment or a point, with the EE test's operand
+// size (a point is a zero-length segment).
+MINKQ_HD bool point_segment_within(Vec3 p, Vec3 a, Vec3 b, float r) {
+  const Vec3d pd = to_double(p), ad = to_double(a), bd = to_double(b);
+  return leaf_within(point_segment_distance2(pd, ad, bd), r, segments_scale(pd, pd, ad, bd));
+}
+MINKQ_HD bool point_point_within(Vec3 p, Vec3 q, float r) { return point_segment_within(p, q, q, r); }
+
 // ---- Separation screen for EE: a cheap proof that the leaf test rejects ------------------
 // Two sets whose projections onto an axis lie a gap g apart are at least g apart. Along the
 // axis v joining the two segments' centres (any axis serves, so the computed v is as good as

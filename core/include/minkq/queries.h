@@ -16,9 +16,10 @@ struct Edge {
   int32_t v[2];
 };
 
-// Whether triangle t has vertex v, and whether two edges share a vertex: the incidence the
-// kDropIncident filter drops.
+// Whether triangle t (edge e) has vertex v, and whether two edges share a vertex: the incidence
+// the kDropIncident filter drops.
 MINKQ_HD bool has_vertex(const Triangle& t, int32_t v) { return t.v[0] == v || t.v[1] == v || t.v[2] == v; }
+MINKQ_HD bool has_vertex(const Edge& e, int32_t v) { return e.v[0] == v || e.v[1] == v; }
 MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
   return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
 }
@@ -56,7 +57,11 @@ struct EdgeBoxes {
 };
 struct PointBoxes {
   const Vec3* points;
-  MINKQ_HD Box operator()(int32_t i) const { return Box::of_point(points[i]); }
+  const Vec3* points1 = nullptr;  // swept: the positions at t = 1 (the box of the path)
+  MINKQ_HD Box operator()(int32_t i) const {
+    const Box b = Box::of_point(points[i]);
+    return points1 ? box_expand(b, points1[i]) : b;
+  }
 };
 struct GivenBoxes {
   const Box* boxes;
@@ -78,14 +83,23 @@ struct Pair {
 MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uint32_t(first)) << 32 | uint32_t(second); }
 MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(key & 0xffffffffu)}; }
 
-// Vertex v against the triangle tree; pairs (v, t). Queries run in `order` when given (the
-// vertices' Morton order: neighbouring queries then walk the same nodes). Swept (vertices1
-// set), vertex v is its path, the segment from vertices[v] to vertices1[v], against the
-// triangles' swept boxes: segment shapes (capsules), and no leaf-exact test (the front end
-// refuses it).
-struct VertexTriangleQueries {
+// The leaf-exact test of a vertex against a triangle or an edge.
+MINKQ_HD bool point_within(const Vec3* vertices, Vec3 p, const Triangle& t, float r) {
+  return point_triangle_within(p, vertices[t.v[0]], vertices[t.v[1]], vertices[t.v[2]], r);
+}
+MINKQ_HD bool point_within(const Vec3* vertices, Vec3 p, const Edge& e, float r) {
+  return point_segment_within(p, vertices[e.v[0]], vertices[e.v[1]], r);
+}
+
+// Vertex v against the tree of `Prim`s, triangles (VT) or edges (EV); pairs (v, p). Queries run
+// in `order` when given (the vertices' Morton order: neighbouring queries then walk the same
+// nodes). Swept (vertices1 set), vertex v is its path, the segment from vertices[v] to
+// vertices1[v], against the primitives' swept boxes: segment shapes (capsules), and no
+// leaf-exact test (the front end refuses it).
+template <class Prim>
+struct VertexPrimQueries {
   const Vec3* vertices;
-  const Triangle* triangles;
+  const Prim* prims;
   const int32_t* order;  // or nullptr: vertex i is query i
   float r;
   uint32_t filters;
@@ -103,14 +117,15 @@ struct VertexTriangleQueries {
   }
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
-    const Triangle tri = triangles[t];
-    if ((filters & kDropIncident) && has_vertex(tri, v)) return false;
-    if (filters & kLeafExact)
-      return point_triangle_within(vertices[v], vertices[tri.v[0]], vertices[tri.v[1]], vertices[tri.v[2]], radius());
+    const Prim prim = prims[t];
+    if ((filters & kDropIncident) && has_vertex(prim, v)) return false;
+    if (filters & kLeafExact) return point_within(vertices, vertices[v], prim, radius());
     return true;
   }
   MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
 };
+using VertexTriangleQueries = VertexPrimQueries<Triangle>;
+using VertexEdgeQueries = VertexPrimQueries<Edge>;
 
 // The edge tree against itself, query i being the edge at sorted leaf position i: it reaches
 // only the leaves after it, so each unordered pair is met once and reported as (e, f), e < f.
@@ -155,6 +170,37 @@ struct EdgeEdgeQueries {
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
   }
   MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
+};
+
+// The vertex tree against itself (VV: points of codimensional meshes), query i being the
+// vertex at sorted leaf position i: as EdgeEdgeQueries, each unordered pair is met once,
+// reported as (v, w), v < w, and kept when the node test passes both ways. Swept, each vertex
+// is its path (segment shapes against the paths' boxes), with no leaf-exact test. No pair is
+// incident (a vertex never pairs with itself).
+struct VertexVertexQueries {
+  const Vec3* vertices;
+  const int32_t* sorted_vertices;  // the vertex tree's leaf order
+  float r;
+  uint32_t filters;
+  const float* rho = nullptr;       // float64 input: how far rounding moved the vertices (float64.h)
+  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
+  MINKQ_HD float radius() const { return query_radius(r, rho); }
+  MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_vertices[i], i}; }
+  MINKQ_HD QueryGeometry geometry(int32_t v) const {
+    return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
+  }
+  template <class Shape>
+  MINKQ_HD bool accept(int32_t v, int32_t w, const Box& /*w_box*/) const {
+    return accept<Shape>(v, w);
+  }
+  template <class Shape>
+  MINKQ_HD bool accept(int32_t v, int32_t w) const {
+    if (!Shape::from(geometry(w)).finer(PointBoxes{vertices, vertices1}(v))) return false;
+    if (!(filters & kLeafExact)) return true;
+    const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
+    return point_point_within(vertices[lo], vertices[hi], radius());
+  }
+  MINKQ_HD Pair pair(int32_t v, int32_t w) const { return v < w ? Pair{v, w} : Pair{w, v}; }
 };
 
 // User queries against a tree of user boxes: spheres (p1 == nullptr), capsules, or boxes

@@ -119,9 +119,9 @@ class CpuBackend final : public Backend {
     fail(Status::kInvalidArgument, what + " is in device memory but the device is " + name());
   }
   std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
-                                               std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
+                                               std::vector<Edge> edges, const MeshTrees& trees) override {
     return std::make_unique<MeshStoreOn<CpuExecutor>>(CpuExecutor::Device{}, vertices, std::move(triangles),
-                                                      std::move(edges), triangle_tree, edge_tree);
+                                                      std::move(edges), trees);
   }
   std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
     return std::make_unique<BoxStoreOn<CpuExecutor>>(CpuExecutor::Device{}, boxes);

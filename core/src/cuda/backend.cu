@@ -216,9 +216,9 @@ class CudaBackend final : public Backend {
   }
 
   std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
-                                               std::vector<Edge> edges, bool triangle_tree, bool edge_tree) override {
+                                               std::vector<Edge> edges, const MeshTrees& trees) override {
     return std::make_unique<MeshStoreOn<CudaExecutor>>(ordinal_, vertices, std::move(triangles), std::move(edges),
-                                                       triangle_tree, edge_tree);
+                                                       trees);
   }
   std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
     return std::make_unique<BoxStoreOn<CudaExecutor>>(ordinal_, boxes);

@@ -135,7 +135,7 @@ struct QueryWorkspace {
   DeviceBuffer<int32_t> pairs;  // host output: pairs are collected here first
   DeviceBuffer<uint64_t> keys, sorted_keys;
   DeviceBuffer<char> temp;
-  std::array<uint64_t, 5> last_count{};  // per QueryKind: the most pairs a query of that kind found
+  std::array<uint64_t, kQueryKinds> last_count{};  // per QueryKind: the most pairs a query of that kind found
 };
 
 inline int bit_width(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }

@@ -127,6 +127,8 @@ pub const MINKQ_SCENE_VT: minkq_scene_flags = 1;
 pub const MINKQ_SCENE_EE: minkq_scene_flags = 2;
 pub const MINKQ_SCENE_DROP_INCIDENT: minkq_scene_flags = 4;
 pub const MINKQ_SCENE_FLOAT64: minkq_scene_flags = 8;
+pub const MINKQ_SCENE_VV: minkq_scene_flags = 16;
+pub const MINKQ_SCENE_EV: minkq_scene_flags = 32;
 pub type minkq_scene_flags = ::std::os::raw::c_uint;
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
@@ -235,6 +237,8 @@ extern "C" {
 }
 pub const MINKQ_QUERY_VT: minkq_query_kind = 0;
 pub const MINKQ_QUERY_EE: minkq_query_kind = 1;
+pub const MINKQ_QUERY_VV: minkq_query_kind = 2;
+pub const MINKQ_QUERY_EV: minkq_query_kind = 3;
 pub type minkq_query_kind = ::std::os::raw::c_uint;
 pub const MINKQ_MODE_BOX: minkq_mode = 0;
 pub const MINKQ_MODE_SPHERE: minkq_mode = 1;
