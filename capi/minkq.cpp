@@ -189,6 +189,9 @@ void require_finite(minkq::Backend& backend, const minkq::Strided& values, int f
                                coords + ")");
 }
 
+// "vertices", or "x1 vertices" for a buffer named otherwise (the swept calls' x0 and x1).
+std::string vertices_named(const std::string& what) { return what == "vertices" ? what : what + " vertices"; }
+
 // A scene's vertex buffer, checked: 3 floats each, or 3 doubles for a MINKQ_SCENE_FLOAT64 scene.
 minkq::Strided checked_vertex_buffer(const minkq_device* device, const minkq_buffer& buffer, uint32_t scene_flags,
                                      const char* what = "vertices") {
@@ -364,8 +367,8 @@ minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices,
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
   const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags, what);
   require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
-          std::string(verb) + " with " + std::to_string(values.count) + " " + what + " but the scene has " +
-              std::to_string(scene->vertex_count));
+          std::string(verb) + " with " + std::to_string(values.count) + " " + vertices_named(what) +
+              " but the scene has " + std::to_string(scene->vertex_count));
   const std::string element = std::string(what) == "vertices" ? "vertex" : std::string(what) + " vertex";
   require_finite(*scene->device->backend, values, 3, element.c_str());
   return values;
@@ -428,8 +431,8 @@ minkq::Strided checked_async_vertices(const minkq_scene* scene, minkq_buffer ver
           std::string(what) + " are host memory but " + call + " on " + scene->device->name +
               " reads device memory (MINKQ_MEMORY_DEVICE)");
   require(size_t(values.count) == scene->vertex_count, Status::kInvalidArgument,
-          std::string(call) + " with " + std::to_string(values.count) + " " + what + " but the scene has " +
-              std::to_string(scene->vertex_count));
+          std::string(call) + " with " + std::to_string(values.count) + " " + vertices_named(what) +
+              " but the scene has " + std::to_string(scene->vertex_count));
   return values;
 }
 

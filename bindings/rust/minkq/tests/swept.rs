@@ -477,14 +477,15 @@ fn positions_of_the_other_precision_are_refused_and_the_scene_keeps_its_state() 
     // Bad counts and NaNs (either buffer): the library's errors; a swept scene stays swept.
     let mut scene = Scene::new(&device, &SceneDesc::new(&x0, &FLYING_TRIANGLES)).unwrap();
     scene.rebuild_swept(&x0, &x1).unwrap();
-    let expected =
-        |call: &str, buffer: &str| Error::InvalidArgument(format!("{call} with 7 {buffer} but the scene has 8"));
+    let expected = |call: &str, buffer: &str| {
+        Error::InvalidArgument(format!("{call} with 7 {buffer} vertices but the scene has 8"))
+    };
     assert_eq!(scene.refit_swept(&x0, &x1[..7]), Err(expected("refit_swept", "x1")));
     assert_eq!(scene.rebuild_swept(&x0[..7], &x1), Err(expected("rebuild_swept", "x0")));
     let mut bad = x1.clone();
     bad[5][2] = f32::NAN;
-    for result in [scene.refit_swept(&x0, &bad), scene.rebuild_swept(&bad, &x1)] {
-        assert!(matches!(result, Err(Error::NonFinite(m)) if m.starts_with("vertex 5 ")));
+    for (result, buffer) in [(scene.refit_swept(&x0, &bad), "x1"), (scene.rebuild_swept(&bad, &x1), "x0")] {
+        assert!(matches!(result, Err(Error::NonFinite(m)) if m.starts_with(&format!("{buffer} vertex 5 "))));
     }
     assert!(scene.is_swept());
     assert_eq!(pairs(&scene, sphere), vec![[3, 0]]);

@@ -321,7 +321,7 @@ fn wrong_buffers_in_either_position_are_refused_at_once_and_the_scene_keeps_its_
             };
             for (x0, x1, name) in [(short(right0), right1, "x0"), (right0, short(right1), "x1")] {
                 let result = step(&mut scene, rebuild, true, x0, x1);
-                let expected = format!("minkq_scene_{call}_swept_async with 7 {name} but the scene has 128");
+                let expected = format!("minkq_scene_{call}_swept_async with 7 {name} vertices but the scene has 128");
                 assert_eq!(result, Err(Error::InvalidArgument(expected)), "{what}");
             }
             // Device memory on a CPU device, in either buffer.

@@ -167,7 +167,7 @@ impl Scene {
     /// assert_eq!(scene.tree_growth()?, 1.0);
     /// assert_eq!(scene.query(&query, &mut pairs)?, &[[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]);
     /// let err = scene.rebuild_swept(&x0, &x1[..5]).unwrap_err();
-    /// assert_eq!(err, Error::InvalidArgument("rebuild_swept with 5 x1 but the scene has 6".into()));
+    /// assert_eq!(err, Error::InvalidArgument("rebuild_swept with 5 x1 vertices but the scene has 6".into()));
     /// assert!(scene.is_swept()); // kept
     /// # Ok::<(), minkq::Error>(())
     /// ```
@@ -210,7 +210,7 @@ impl Scene {
     /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &[[0, 1, 2]]))?;
     /// let x1 = [[0.0f32, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, f32::NAN, 1.0]];
     /// let err = scene.rebuild_swept_buffers(Buffer::from_slice(&x0), Buffer::from_slice(&x1)).unwrap_err();
-    /// assert!(matches!(err, Error::NonFinite(m) if m.starts_with("vertex 2 ")));
+    /// assert!(matches!(err, Error::NonFinite(m) if m.starts_with("x1 vertex 2 ")));
     /// assert!(!scene.is_swept()); // kept its static positions
     /// # Ok::<(), minkq::Error>(())
     /// ```
