@@ -4,8 +4,10 @@
 //! minkq builds a BVH over triangles, edges or boxes and runs batched sphere, capsule and box
 //! queries against it, on the CPU or with CUDA. Cloth and soft-body simulators use it for their
 //! per-step broad phase: **VT** pairs (vertex within r of a triangle) and **EE** pairs (edge
-//! within r of an edge). Every pair within r is reported, in every [`Mode`], for every finite
-//! input; finer modes report subsets of coarser ones.
+//! within r of an edge). Codimensional elements (particles, rods, yarn: [`SceneDesc::codim`])
+//! get **VV** pairs (vertex within r of a vertex) and **EV** pairs (vertex within r of an edge).
+//! Every pair within r is reported, in every [`Mode`], for every finite input; finer modes
+//! report subsets of coarser ones.
 //!
 //! This crate wraps the C ABI (`capi/minkq.h`, bound raw in [`sys`]): every handle is owned by
 //! a type that releases it in `Drop`, every call returns [`Result`] with the library's message,
@@ -48,6 +50,32 @@
 //! folding into new neighbours), and [`Scene::rebuild`] moves the vertices and builds the
 //! trees afresh. Both give the same pairs; [`Bvh`] has the same three
 //! calls.
+//!
+//! # Codimensional elements
+//! A scene need not hold triangles: [`SceneDesc::codim`] takes vertices and explicit edges (a
+//! rod is a polyline, a particle a vertex of no edge) with [`SceneFlags::VV`],
+//! [`SceneFlags::EV`] and [`SceneFlags::DROP_INCIDENT`]. [`Query::vv`] pairs vertices within r,
+//! once each as (v, w) with v < w (neighbours along a rod too: no VV pair is incident);
+//! [`Query::ev`] pairs a vertex with an edge within r, not with its own edges. Every mode
+//! (points are zero-length capsules), [`QueryFlags::LEAF_EXACT`], float64 vertices and swept
+//! steps work as for VT. The flags can join [`SceneFlags::VT`] and [`SceneFlags::EE`] on a
+//! triangle mesh; a query of a kind the scene was built without is
+//! [`Error::InvalidArgument`].
+//!
+//! ```
+//! use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
+//! // Two parallel rods 0.05 apart, 4 vertices each, 0.2 between neighbours.
+//! let vertices: Vec<[f32; 3]> = (0..8).map(|i| [(i % 4) as f32 * 0.2, (i / 4) as f32 * 0.05, 0.0]).collect();
+//! let edges = [[0, 1], [1, 2], [2, 3], [4, 5], [5, 6], [6, 7]];
+//! let scene = Scene::new(&Device::cpu()?, &SceneDesc::codim(&vertices, &edges))?;
+//! let contacts = QueryFlags::LEAF_EXACT | QueryFlags::CANONICAL;
+//! let mut pairs = PairBuffer::new()?;
+//! let vv = scene.query(&Query::vv(Mode::Box, 0.1).with_flags(contacts), &mut pairs)?;
+//! assert_eq!(vv, &[[0, 4], [1, 5], [2, 6], [3, 7]]);
+//! let ev = scene.query(&Query::ev(Mode::Box, 0.1).with_flags(contacts), &mut pairs)?;
+//! assert_eq!(ev.len(), 12); // each vertex against the one or two edges facing it
+//! # Ok::<(), minkq::Error>(())
+//! ```
 //!
 //! # Float64 vertices
 //! A scene built from `[f64; 3]` vertices ([`SceneDesc::new_f64`]; [`SceneFlags::FLOAT64`] on

@@ -5,12 +5,15 @@ use std::str::FromStr;
 use crate::error::Error;
 use crate::sys;
 
-/// What a mesh query pairs up.
+/// What a mesh query pairs up: VT and EE for triangle meshes, VV and EV for codimensional
+/// elements (particles, rods, yarn). Each needs the scene flag of the same name
+/// ([`SceneFlags::VT`], [`SceneFlags::EE`], [`SceneFlags::VV`], [`SceneFlags::EV`]).
 ///
 /// ```
 /// use minkq::QueryKind;
 /// assert_eq!("ee".parse::<QueryKind>()?, QueryKind::Ee);
 /// assert_eq!(QueryKind::Vt.name(), "vt");
+/// assert_eq!(QueryKind::ALL.map(|k| k.name()), ["vt", "ee", "vv", "ev"]);
 /// # Ok::<(), minkq::Error>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -19,13 +22,19 @@ pub enum QueryKind {
     Vt,
     /// Pairs (e, f) with e < f: edge e lies within r of edge f (a capsule query).
     Ee,
+    /// Pairs (v, w) with v < w: vertex v lies within r of vertex w (a sphere query; each pair
+    /// once). Vertices sharing an edge are pairs too: [`SceneFlags::DROP_INCIDENT`] drops none.
+    Vv,
+    /// Pairs (vertex, edge): the vertex lies within r of the edge (a sphere query). With
+    /// [`SceneFlags::DROP_INCIDENT`], a vertex is not paired with its own edges.
+    Ev,
 }
 
 /// The node test, from fast to tight. For every finite input the pairs nest:
 /// true contacts ⊆ `CapsuleExact` ⊆ `CapsuleRay` ⊆ `Box` (EE) and
-/// true contacts ⊆ `Sphere` ⊆ `Box` (VT); [`QueryFlags::LEAF_EXACT`] keeps, of any mode's
-/// pairs, the true contacts (use it with `Box`). Points are zero-length capsules: for
-/// VT, `CapsuleRay` is the box test and `CapsuleExact` the sphere test.
+/// true contacts ⊆ `Sphere` ⊆ `Box` (VT, VV, EV); [`QueryFlags::LEAF_EXACT`] keeps, of any
+/// mode's pairs, the true contacts (use it with `Box`). Points are zero-length capsules: for
+/// VT, VV and EV, `CapsuleRay` is the box test and `CapsuleExact` the sphere test.
 ///
 /// ```
 /// use minkq::Mode;
@@ -37,7 +46,7 @@ pub enum QueryKind {
 pub enum Mode {
     /// The r-padded box of the query element against node boxes.
     Box,
-    /// Point–box distance (point queries only: VT and spheres).
+    /// Point–box distance (point queries only: VT, VV, EV and spheres).
     Sphere,
     /// Segment against the r-inflated box (slab test).
     CapsuleRay,
@@ -46,15 +55,40 @@ pub enum Mode {
 }
 
 impl QueryKind {
-    /// `"vt"` or `"ee"`.
+    /// Every kind, in the C enum's order.
+    ///
+    /// ```
+    /// assert_eq!(minkq::QueryKind::ALL.len(), 4);
+    /// ```
+    pub const ALL: [QueryKind; 4] = [QueryKind::Vt, QueryKind::Ee, QueryKind::Vv, QueryKind::Ev];
+
+    /// `"vt"`, `"ee"`, `"vv"` or `"ev"`.
     ///
     /// ```
     /// assert_eq!(minkq::QueryKind::Ee.name(), "ee");
+    /// assert_eq!(minkq::QueryKind::Ev.to_string(), "ev");
     /// ```
     pub fn name(self) -> &'static str {
         match self {
             QueryKind::Vt => "vt",
             QueryKind::Ee => "ee",
+            QueryKind::Vv => "vv",
+            QueryKind::Ev => "ev",
+        }
+    }
+
+    /// The scene flag a query of this kind needs.
+    ///
+    /// ```
+    /// use minkq::{QueryKind, SceneFlags};
+    /// assert_eq!(QueryKind::Ev.scene_flag(), SceneFlags::EV);
+    /// ```
+    pub fn scene_flag(self) -> SceneFlags {
+        match self {
+            QueryKind::Vt => SceneFlags::VT,
+            QueryKind::Ee => SceneFlags::EE,
+            QueryKind::Vv => SceneFlags::VV,
+            QueryKind::Ev => SceneFlags::EV,
         }
     }
 
@@ -62,6 +96,8 @@ impl QueryKind {
         match self {
             QueryKind::Vt => sys::MINKQ_QUERY_VT,
             QueryKind::Ee => sys::MINKQ_QUERY_EE,
+            QueryKind::Vv => sys::MINKQ_QUERY_VV,
+            QueryKind::Ev => sys::MINKQ_QUERY_EV,
         }
     }
 }
@@ -100,13 +136,11 @@ impl Mode {
 
 impl FromStr for QueryKind {
     type Err = Error;
-    /// Parses `"vt"` or `"ee"`.
+    /// Parses a kind's [`name`](QueryKind::name).
     fn from_str(s: &str) -> Result<Self, Error> {
-        match s {
-            "vt" => Ok(QueryKind::Vt),
-            "ee" => Ok(QueryKind::Ee),
-            _ => Err(Error::InvalidArgument(format!("unknown query kind {s:?} (use \"vt\" or \"ee\")"))),
-        }
+        QueryKind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| {
+            Error::InvalidArgument(format!("unknown query kind {s:?} (use \"vt\", \"ee\", \"vv\" or \"ev\")"))
+        })
     }
 }
 
@@ -196,19 +230,23 @@ macro_rules! flags {
 }
 
 flags! {
-    /// What a scene is built for (`minkq_scene_flags`): at least one of `VT` and `EE`.
+    /// What a scene is built for (`minkq_scene_flags`): at least one of `VT`, `EE`, `VV` and
+    /// `EV`.
     ///
     /// ```
     /// use minkq::SceneFlags;
     /// let flags = SceneFlags::VT | SceneFlags::EE;
     /// assert!(flags.contains(SceneFlags::EE) && !flags.contains(SceneFlags::DROP_INCIDENT));
+    /// let rods = SceneFlags::VV | SceneFlags::EV | SceneFlags::DROP_INCIDENT;
+    /// assert!(rods.contains(SceneFlags::EV) && !rods.contains(SceneFlags::VT));
     /// ```
     SceneFlags {
         /// Build the triangle tree for vertex–triangle queries.
         VT = sys::MINKQ_SCENE_VT;
         /// Build the edge tree for edge–edge queries.
         EE = sys::MINKQ_SCENE_EE;
-        /// Drop (v, t) with v a vertex of t, and pairs of edges sharing a vertex.
+        /// Drop (v, t) with v a vertex of t, pairs of edges sharing a vertex, and (v, e) with
+        /// v a vertex of e. VV pairs are never incident: it drops none of them.
         DROP_INCIDENT = sys::MINKQ_SCENE_DROP_INCIDENT;
         /// Vertices are 3 doubles (`[f64; 3]`, byte stride >= 24) at creation and in every
         /// refit and rebuild, blocking and stream-ordered. The scene rounds them to nearest
@@ -221,6 +259,12 @@ flags! {
         /// ([`SceneDesc::new_f64`](crate::SceneDesc::new_f64)) implies it;
         /// [`SceneBuffers`](crate::SceneBuffers) take it in their flags.
         FLOAT64 = sys::MINKQ_SCENE_FLOAT64;
+        /// Build the vertex tree for vertex–vertex queries (codimensional elements: particles,
+        /// rod and yarn vertices). A scene for VV alone needs vertices only.
+        VV = sys::MINKQ_SCENE_VV;
+        /// Build the edge tree for edge–vertex queries (rods, yarn): from the given edges, or,
+        /// when none are given, those derived from the triangles.
+        EV = sys::MINKQ_SCENE_EV;
     }
 }
 
@@ -284,7 +328,7 @@ flags! {
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Query {
-    /// VT or EE.
+    /// VT, EE, VV or EV.
     pub kind: QueryKind,
     /// The node test.
     pub mode: Mode,
@@ -323,6 +367,45 @@ impl Query {
     /// ```
     pub fn ee(mode: Mode, radius: f32) -> Query {
         Query::new(QueryKind::Ee, mode, radius)
+    }
+
+    /// A vertex–vertex query: pairs (v, w), v < w, of vertices within r, on a scene built with
+    /// [`SceneFlags::VV`]. Points are zero-length capsules: [`Mode::CapsuleRay`] is
+    /// [`Mode::Box`] and [`Mode::CapsuleExact`] is [`Mode::Sphere`].
+    ///
+    /// ```
+    /// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc, SceneFlags};
+    /// // Three loose particles: a scene of vertices only.
+    /// let particles = [[0.0, 0.0, 0.0], [0.05, 0.0, 0.0], [1.0, 1.0, 1.0]];
+    /// let desc = SceneDesc::codim(&particles, &[]).flags(SceneFlags::VV);
+    /// let scene = Scene::new(&Device::cpu()?, &desc)?;
+    /// let q = Query::vv(Mode::Sphere, 0.1).with_flags(QueryFlags::LEAF_EXACT);
+    /// assert_eq!(q.kind, minkq::QueryKind::Vv);
+    /// assert_eq!(scene.query(&q, &mut PairBuffer::new()?)?, &[[0, 1]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn vv(mode: Mode, radius: f32) -> Query {
+        Query::new(QueryKind::Vv, mode, radius)
+    }
+
+    /// An edge–vertex query: pairs (vertex, edge) of a vertex within r of an edge, on a scene
+    /// built with [`SceneFlags::EV`] (without the vertex's own edges when it has
+    /// [`SceneFlags::DROP_INCIDENT`]). Modes as for [`Query::vv`].
+    ///
+    /// ```
+    /// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
+    /// // A rod of two edges along x, and a particle 0.05 above its middle vertex.
+    /// let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.05, 0.0]];
+    /// let edges = [[0, 1], [1, 2]];
+    /// let scene = Scene::new(&Device::cpu()?, &SceneDesc::codim(&vertices, &edges))?;
+    /// let q = Query::ev(Mode::Box, 0.1).with_flags(QueryFlags::LEAF_EXACT | QueryFlags::CANONICAL);
+    /// assert_eq!(q.kind, minkq::QueryKind::Ev);
+    /// // The particle near both edges; vertex 1 is on both, but they are its own (dropped).
+    /// assert_eq!(scene.query(&q, &mut PairBuffer::new()?)?, &[[3, 0], [3, 1]]);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn ev(mode: Mode, radius: f32) -> Query {
+        Query::new(QueryKind::Ev, mode, radius)
     }
 
     /// The same query with `flags` added.

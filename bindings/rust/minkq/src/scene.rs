@@ -19,7 +19,8 @@ mod swept;
 
 pub use desc::{SceneBuffers, SceneDesc};
 
-/// A triangle mesh on a device with the BVHs its flags ask for, answering VT and EE queries
+/// A triangle mesh, or codimensional elements (particles, rods: [`SceneDesc::codim`]), on a
+/// device with the BVHs its flags ask for, answering VT, EE, VV and EV queries
 /// (`minkq_scene`). Released when dropped; keeps its device alive.
 ///
 /// Threads: `Send` but not `Sync`. The C API says one scene must not be used by two threads at

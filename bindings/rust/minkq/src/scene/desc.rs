@@ -18,16 +18,22 @@ use crate::query::SceneFlags;
 /// assert!(desc.edges.is_empty()); // derived from the triangles
 /// let _: &[[f32; 3]] = desc.vertices; // unsuffixed literals: an f32 scene
 /// ```
+///
+/// Codimensional elements (particles, rods, yarn) need no triangles: [`SceneDesc::codim`] takes
+/// vertices and explicit edges, for [`SceneFlags::VV`] and [`SceneFlags::EV`] queries
+/// ([`Query::vv`](crate::Query::vv), [`Query::ev`](crate::Query::ev)). An empty triangle slice
+/// with [`SceneDesc::new`] and those flags is the same scene.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneDesc<'a, V = [f32; 3]> {
     /// Vertex positions: `[f32; 3]`, or `[f64; 3]` for a [`SceneFlags::FLOAT64`] scene.
     pub vertices: &'a [V],
-    /// Vertex indices of each triangle.
+    /// Vertex indices of each triangle; may be empty (a scene of particles or rods).
     pub triangles: &'a [[i32; 3]],
     /// Vertex indices of each edge, or empty to derive them from the triangles: every distinct
     /// undirected triangle edge as (min, max), in lexicographic order.
     pub edges: &'a [[i32; 2]],
-    /// Which trees to build (at least one of VT and EE) and whether to drop incident pairs.
+    /// Which trees to build (at least one of VT, EE, VV and EV) and whether to drop incident
+    /// pairs.
     /// [`SceneFlags::FLOAT64`] follows from the vertex type: `[f64; 3]` vertices add it, and
     /// setting it with `[f32; 3]` vertices is
     /// [`Error::InvalidArgument`](crate::Error::InvalidArgument).
@@ -49,6 +55,56 @@ impl<'a> SceneDesc<'a> {
             triangles,
             edges: &[],
             flags: SceneFlags::VT | SceneFlags::EE | SceneFlags::DROP_INCIDENT,
+        }
+    }
+}
+
+impl<'a, V> SceneDesc<'a, V> {
+    /// A scene of codimensional elements: vertices and explicit edges, no triangles, for VV
+    /// and EV queries with incident pairs dropped (flags
+    /// `VV | EV | DROP_INCIDENT`). `[f32; 3]` or `[f64; 3]` vertices (the latter a
+    /// [`SceneFlags::FLOAT64`] scene). Edges may be empty for loose particles (then ask for
+    /// [`SceneFlags::VV`] alone: an EV scene without edges has nothing to pair); EE queries
+    /// between the edges need [`SceneFlags::EE`] added.
+    ///
+    /// A rod (a polyline of 5 vertices along x) and two particles: one 0.05 above the rod's
+    /// vertex 2, one 0.03 from that particle.
+    ///
+    /// ```
+    /// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc, SceneFlags};
+    /// let mut vertices: Vec<[f32; 3]> = (0..5).map(|i| [i as f32 * 0.1, 0.0, 0.0]).collect();
+    /// vertices.push([0.2, 0.05, 0.0]); // particle 5
+    /// vertices.push([0.2, 0.08, 0.0]); // particle 6
+    /// let edges: Vec<[i32; 2]> = (0..4).map(|i| [i, i + 1]).collect();
+    /// let desc = SceneDesc::codim(&vertices, &edges);
+    /// assert_eq!(desc.flags, SceneFlags::VV | SceneFlags::EV | SceneFlags::DROP_INCIDENT);
+    /// assert!(desc.triangles.is_empty());
+    /// let scene = Scene::new(&Device::cpu()?, &desc)?;
+    /// assert_eq!((scene.vertex_count(), scene.triangle_count(), scene.edge_count()), (7, 0, 4));
+    ///
+    /// let contacts = QueryFlags::LEAF_EXACT | QueryFlags::CANONICAL;
+    /// let mut pairs = PairBuffer::new()?;
+    /// // VV, (v, w) with v < w: the particles with each other and 5 with the rod's vertex 2.
+    /// // Neighbouring rod vertices are 0.1 apart, beyond r; closer ones would pair too.
+    /// assert_eq!(scene.query(&Query::vv(Mode::Sphere, 0.06).with_flags(contacts), &mut pairs)?, &[[2, 5], [5, 6]]);
+    /// // EV, (vertex, edge): particle 5 near edges 1 and 2 (both end at vertex 2); the rod's
+    /// // own vertices are not paired with the edges they end.
+    /// assert_eq!(scene.query(&Query::ev(Mode::Box, 0.06).with_flags(contacts), &mut pairs)?, &[[5, 1], [5, 2]]);
+    ///
+    /// // The same scene from SceneDesc::new with no triangles; a VT query is refused.
+    /// let same = SceneDesc::new(&vertices, &[]).edges(&edges).flags(desc.flags);
+    /// let scene = Scene::new(&Device::cpu()?, &same)?;
+    /// assert_eq!(scene.query(&Query::ev(Mode::Box, 0.06).with_flags(contacts), &mut pairs)?, &[[5, 1], [5, 2]]);
+    /// let err = scene.query(&Query::vt(Mode::Box, 0.06), &mut pairs).unwrap_err();
+    /// assert_eq!(err, minkq::Error::InvalidArgument("VT query on a scene created without MINKQ_SCENE_VT".into()));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn codim(vertices: &'a [V], edges: &'a [[i32; 2]]) -> SceneDesc<'a, V> {
+        SceneDesc {
+            vertices,
+            triangles: &[],
+            edges,
+            flags: SceneFlags::VV | SceneFlags::EV | SceneFlags::DROP_INCIDENT,
         }
     }
 }
@@ -143,12 +199,12 @@ pub struct SceneBuffers<'a> {
     /// [`SceneFlags::FLOAT64`] 3 doubles (byte stride >= 24). A buffer made from a slice of
     /// the other precision is refused; a raw buffer is read as the flag says.
     pub vertices: Buffer<'a>,
-    /// Triangles: 3 int32 vertex indices per record (byte stride >= 12).
+    /// Triangles: 3 int32 vertex indices per record (byte stride >= 12); may be empty.
     pub triangles: Buffer<'a>,
     /// Edges: 2 int32 vertex indices per record (byte stride >= 8), or empty to derive them.
     pub edges: Buffer<'a>,
-    /// Which trees to build (at least one of VT and EE), whether to drop incident pairs, and
-    /// whether the vertices are doubles ([`SceneFlags::FLOAT64`]).
+    /// Which trees to build (at least one of VT, EE, VV and EV), whether to drop incident
+    /// pairs, and whether the vertices are doubles ([`SceneFlags::FLOAT64`]).
     pub flags: SceneFlags,
 }
 

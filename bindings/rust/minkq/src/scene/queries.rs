@@ -11,10 +11,12 @@ use crate::sys;
 
 impl Scene {
     /// Runs a query into a library-owned buffer that grows as needed; returns its pairs,
-    /// (vertex, triangle) for VT and (e, f) with e < f for EE.
+    /// (vertex, triangle) for VT, (e, f) with e < f for EE, (v, w) with v < w for VV and
+    /// (vertex, edge) for EV.
     ///
-    /// Errors: [`Error::InvalidArgument`] (a VT query on a scene built without VT, sphere
-    /// mode for EE, a negative radius), [`Error::NonFinite`] (radius).
+    /// Errors: [`Error::InvalidArgument`] (a query of a kind the scene was built without, e.g.
+    /// `"VV query on a scene created without MINKQ_SCENE_VV"`, sphere mode for EE, a negative
+    /// radius), [`Error::NonFinite`] (radius).
     ///
     /// ```
     /// # use minkq::*;

@@ -24,13 +24,16 @@ impl Scene {
     ///   around the path), and [`Mode::Sphere`], the same as [`Mode::CapsuleExact`] (the sphere
     ///   swept along the path);
     /// - EE: [`Mode::Box`] only (each edge's swept box grown by r); the other modes are
-    ///   [`Error::Unsupported`].
+    ///   [`Error::Unsupported`];
+    /// - VV and EV: as VT, the vertex (for VV, each of the two) is its path against the other
+    ///   element's swept box; every mode runs, [`Mode::Sphere`] the same as
+    ///   [`Mode::CapsuleExact`].
     ///
     /// [`QueryFlags::LEAF_EXACT`] is [`Error::Unsupported`] on swept positions (it would need
     /// the time of closest approach, which the narrow phase finds);
     /// [`SceneFlags::DROP_INCIDENT`] and the once-per-pair EE rule apply as for static queries.
-    /// At `x0 == x1` the pairs are the static queries' (VT [`Mode::CapsuleExact`] and
-    /// [`Mode::Sphere`]: the static [`Mode::Sphere`] pairs).
+    /// At `x0 == x1` the pairs are the static queries' (VT, VV and EV [`Mode::CapsuleExact`]
+    /// and [`Mode::Sphere`]: the static [`Mode::Sphere`] pairs).
     ///
     /// Errors: those of [`Scene::refit`] for either slice (a vertex count other than the
     /// scene's, [`Error::NonFinite`]; on a [`SceneFlags::FLOAT64`] scene, which takes
@@ -65,6 +68,31 @@ impl Scene {
     /// assert!(matches!(err, Error::Unsupported(m) if m.contains("box mode only")));
     /// let leaf_exact = query.with_flags(QueryFlags::LEAF_EXACT);
     /// assert!(matches!(scene.query(&leaf_exact, &mut pairs), Err(Error::Unsupported(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    ///
+    /// Two particles crossing a rod and each other's path: VV and EV swept queries.
+    ///
+    /// ```
+    /// use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
+    /// // A rod (vertices 0, 1, 2) along x; particle 3 flies through it in y, particle 4 in x
+    /// // passes where particle 3 has been.
+    /// let x0 = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.5, -1.0, 0.0], [-1.0, 0.5, 0.0]];
+    /// let mut x1 = x0;
+    /// x1[3] = [0.5, 1.0, 0.0];
+    /// x1[4] = [2.0, 0.5, 0.0];
+    /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::codim(&x0, &[[0, 1], [1, 2]]))?;
+    /// let mut pairs = PairBuffer::new()?;
+    /// let canonical = QueryFlags::CANONICAL;
+    /// assert!(scene.query(&Query::ev(Mode::Sphere, 0.01), &mut pairs)?.is_empty());
+    /// scene.refit_swept(&x0, &x1)?;
+    /// // Particle 3 crosses edge 0 at t = 0.5.
+    /// assert_eq!(scene.query(&Query::ev(Mode::CapsuleExact, 0.01).with_flags(canonical), &mut pairs)?, &[[3, 0]]);
+    /// // Particles 3 and 4 pass (0.5, 0.5) at t = 0.75 and t = 0.5: never together (0.42 apart
+    /// // at their closest), but each path meets the other's box: a candidate for the narrow
+    /// // phase, which decides.
+    /// let vv = scene.query(&Query::vv(Mode::CapsuleExact, 0.01).with_flags(canonical), &mut pairs)?;
+    /// assert_eq!(vv, &[[3, 4]]);
     /// # Ok::<(), minkq::Error>(())
     /// ```
     ///
