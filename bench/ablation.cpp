@@ -683,7 +683,7 @@ std::string compare_contacts(const SceneFrames& sc, int repeats, bool& ok) {
   const EdgeEdgeQueries ee{v, e, trees.edges.sorted_prims().data(), r, filters};
   // VT behind the study's screen; EE with the full distance alone (before the library's screen).
   const WithLeafTest vt_screened(vt, [&vt](int32_t q, int32_t t) {
-    const Triangle tri = vt.triangles[t];
+    const Triangle tri = vt.prims[t];
     const Vec3 *x = vt.vertices, p = x[q], a = x[tri.v[0]], b = x[tri.v[1]], c = x[tri.v[2]];
     return !point_triangle_apart(p, a, b, c, vt.r) && point_triangle_within(p, a, b, c, vt.r);
   });
