@@ -3,7 +3,8 @@
 #
 #   bench/run.sh            full run (about 20 min on 2 cores): scenes, real meshes, radius
 #                           sweep, 1M/2M twisted sheets, stability report, h/r study, plots,
-#                           Warp/Newton CPU baselines; writes bench/results/
+#                           Warp/Newton CPU baselines, float64 and swept queries; writes
+#                           bench/results/
 #   bench/run.sh --quick    smoke run (seconds): reference scenes (2 frames, 1 repeat), quick
 #                           stability and h/r runs; writes build-bench/quick-results/ and exits
 #                           non-zero on any false negative or bound violation
@@ -40,7 +41,8 @@ if [ $install = 1 ]; then
 fi
 
 cmake -S "$root/bench" -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA="${MINKQ_WITH_CUDA:-AUTO}" >/dev/null
-cmake --build "$build" -j "$(nproc)" --target minkq_bench minkq_stability minkq_hr_study minkq_ablation >/dev/null
+cmake --build "$build" -j "$(nproc)" --target minkq_bench minkq_stability minkq_hr_study minkq_ablation \
+  minkq_float64_swept >/dev/null
 bin=$build/bin
 mkdir -p "$out"
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-), $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -51,6 +53,7 @@ if [ $quick = 1 ]; then
   "$bin/minkq_stability" --quick --out "$out" || status=$?
   "$bin/minkq_hr_study" --quick --out "$out" || status=$?
   "$bin/minkq_ablation" --quick --out "$out" || status=$?
+  "$bin/minkq_float64_swept" --quick --out "$out" || status=$?
   [ $status = 0 ] && echo "bench quick run: 1 passed, 0 failed (no false negatives; results in $out)" \
                   || echo "bench quick run: 0 passed, 1 failed (status $status; see $out)"
   exit $status
@@ -62,6 +65,7 @@ fi
 "$bin/minkq_stability" --out "$out" || status=$?
 "$bin/minkq_hr_study" --out "$out" || status=$?
 "$bin/minkq_ablation" --out "$out" || status=$?
+"$bin/minkq_float64_swept" --out "$out" || status=$?
 
 venv=$build/venv
 if [ $install = 1 ] && [ ! -x "$venv/bin/python" ]; then python3 -m venv "$venv"; fi
