@@ -503,8 +503,9 @@ class Session {
       st_.scenes[slot] = {};
     }
     uint32_t flags = uint32_t(gen_.choice(8));
-    // Unknown bits only (8 is MINKQ_SCENE_FLOAT64, whose double vertices this model does not make).
-    if (gen_.rarely()) flags |= gen_.choice(2) ? 16u : 0x80000000u;
+    // Unknown bits only: 8 is MINKQ_SCENE_FLOAT64 (double vertices, which this model does not
+    // make), 16 and 32 MINKQ_SCENE_VV and MINKQ_SCENE_EV (not modelled either).
+    if (gen_.rarely()) flags |= gen_.choice(2) ? 64u : 0x80000000u;
     Buffer v = gen_.buffer(12, Fill::kCoordinates, "vertices", SIZE_MAX, 0, 32);
     const int32_t nv = int32_t(std::min<size_t>(v.count, 64));
     Buffer t = gen_.buffer(12, Fill::kIndices, "triangles", SIZE_MAX, nv, 32);
@@ -517,7 +518,7 @@ class Session {
     m.add(null_desc, MINKQ_ERROR_INVALID_ARGUMENT, "desc NULL");
     m.add(null_out, MINKQ_ERROR_INVALID_ARGUMENT, "out_scene NULL");
     if (!null_desc) {
-      m.add(flags & ~15u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flag bits");
+      m.add(flags & ~63u, MINKQ_ERROR_INVALID_ARGUMENT, "unknown flag bits");
       m.add(!(flags & 3u), MINKQ_ERROR_INVALID_ARGUMENT, "no query kind");
       m.merge(v.misuse);
       m.merge(t.misuse);
@@ -655,7 +656,7 @@ class Session {
   QueryArgs query_args(const SceneSlot* s, bool null_scene, int want_kind = -1, bool async = false) {
     QueryArgs a;
     const int k = gen_.choice(12);
-    a.kind = k < 5 ? MINKQ_QUERY_VT : k < 10 ? MINKQ_QUERY_EE : (k == 10 ? 2 : -1);
+    a.kind = k < 5 ? MINKQ_QUERY_VT : k < 10 ? MINKQ_QUERY_EE : (k == 10 ? 4 : -1);  // (2, 3: VV, EV, not modelled)
     if (want_kind >= 0 && gen_.choice(6) != 0) a.kind = want_kind;
     const int md = gen_.choice(14);
     a.mode = md < 12 ? md % 4 : (md == 12 ? 4 : 99);
