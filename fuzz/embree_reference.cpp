@@ -265,6 +265,44 @@ MeshSets EmbreeReference::mesh_sets(const MeshGeometry& g, float r, uint32_t fil
   return sets;
 }
 
+SweptSets EmbreeReference::swept_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) {
+  SweptSets sets;
+  const VertexTriangleQueries vt = g.vt(r, filters);
+  const EdgeEdgeQueries ee = g.ee(r, filters);
+  const TriangleBoxes triangle_boxes = g.triangle_boxes();  // swept: over both positions
+  const EdgeBoxes edge_boxes = g.edge_boxes();
+
+  prepare(device_, triangles_, primitive_boxes(triangle_boxes, g.nt()), moved);
+  prepare(device_, edges_, primitive_boxes(edge_boxes, g.ne()), moved);
+  prepare(device_, vertex_queries_, padded_query_boxes(vt, g.nv()), moved);  // the paths' padded boxes
+  prepare(device_, edge_queries_, padded_query_boxes(ee, g.ne()), moved);
+
+  // VT, every mode a segment shape (the vertex's path): rtcCollide of the paths' padded boxes
+  // with the triangles' swept boxes; every shape includes the padded-box overlap.
+  Collector vt_all;
+  vt_all.decide = [&](int32_t v, int32_t t) {
+    const Box tb = triangle_boxes(t);
+    const QueryGeometry q = vt.geometry(v);
+    for (int mode = 0; mode < 4; ++mode)
+      swept_vt_shape_of_mode(mode, [&](auto shape) {
+        if (decltype(shape)::from(q).overlaps(tb) && vt.accept<decltype(shape)>(v, t)) sets.vt[mode].push_back({v, t});
+      });
+  };
+  collide(device_, vertex_queries_.get(), triangles_.get(), vt_all);
+
+  // EE box: the edges' padded swept boxes with their swept boxes, pairs e < f.
+  Collector ee_box;
+  ee_box.decide = [&](int32_t e, int32_t f) {
+    if (f <= e) return;
+    if (BoxShape::from(ee.geometry(e)).overlaps(edge_boxes(f)) && ee.accept<BoxShape>(e, f)) sets.ee_box.push_back({e, f});
+  };
+  collide(device_, edge_queries_.get(), edges_.get(), ee_box);
+
+  for (Pairs& p : sets.vt) finish(p);
+  finish(sets.ee_box);
+  return sets;
+}
+
 BoxSets EmbreeReference::box_sets(const BoxGeometry& g, minkq_shape shape, float r, bool moved) {
   BoxSets sets;
   const UserQueries queries = g.queries(r);

@@ -25,6 +25,7 @@ class EmbreeReference final : public IndependentSets {
   bool accepts(const std::vector<float>& coordinates, float r) const override;
   MeshSets mesh_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) override;
   BoxSets box_sets(const BoxGeometry& g, minkq_shape shape, float r, bool moved) override;
+  SweptSets swept_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) override;
   void reset() override;
 
   // The radius Embree prunes with: r padded well past the float error of its sphere-box test.

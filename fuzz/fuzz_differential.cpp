@@ -1,8 +1,8 @@
 // Differential fuzzer: decodes the input into a structured scene (scene_decoder.h), runs every
 // mode through the C API on the CPU backend (and every CUDA device, where one exists), and
 // checks it against the brute-force definition, the Embree reference and the long-double
-// oracle (scene_checks.h). A mismatch prints the scene as C++ and aborts, so libFuzzer keeps
-// (and with -minimize_crash=1 shrinks) the input.
+// oracle (scene_checks.h), float64 input and swept steps included. A mismatch prints the scene
+// as C++ and aborts, so libFuzzer keeps (and with -minimize_crash=1 shrinks) the input.
 //
 // Environment: MINKQ_FUZZ_THREADS (TBB threads, default 1: the campaign machine is shared),
 // MINKQ_FUZZ_VERBOSE=1 (print every scene), MINKQ_FUZZ_STATS_EVERY=N (progress line every N),
@@ -35,13 +35,15 @@ Harness* harness = nullptr;
 void print_stats(const char* when) {
   const Stats& s = harness->stats;
   std::fprintf(stderr,
-               "minkq_fuzz_differential %s: inputs %llu, scenes checked %llu (mesh %llu, of which refit %llu; "
-               "user-box %llu), queries %llu, Embree sets compared %llu, pairs compared %llu, oracle contacts %llu, "
-               "mismatches 0\n",
+               "minkq_fuzz_differential %s: inputs %llu, scenes checked %llu (mesh %llu, of which refit %llu, "
+               "float64 %llu, swept %llu (still %llu); user-box %llu), queries %llu, Embree sets compared %llu, pairs "
+               "compared %llu, oracle contacts %llu (swept steps: %llu at sampled times), mismatches 0\n",
                when, (unsigned long long)harness->inputs, (unsigned long long)(s.mesh_scenes + s.box_scenes),
-               (unsigned long long)s.mesh_scenes, (unsigned long long)s.refit_scenes, (unsigned long long)s.box_scenes,
-               (unsigned long long)s.queries, (unsigned long long)s.independent, (unsigned long long)s.pairs,
-               (unsigned long long)s.true_contacts);
+               (unsigned long long)s.mesh_scenes, (unsigned long long)s.refit_scenes,
+               (unsigned long long)s.float64_scenes, (unsigned long long)s.swept_scenes,
+               (unsigned long long)s.still_steps, (unsigned long long)s.box_scenes, (unsigned long long)s.queries,
+               (unsigned long long)s.independent, (unsigned long long)s.pairs, (unsigned long long)s.true_contacts,
+               (unsigned long long)s.sampled_contacts);
 }
 
 void at_exit() { print_stats("at exit"); }

@@ -11,7 +11,11 @@
 //   - radii from 1e-9 to 1e3 of the scene size, 0, multiples of the mean edge, and exactly a
 //     gap or a vertex distance in float, a few ulps either side;
 //   - optionally moved positions, for a refit;
-//   - rarely, coordinates near FLT_MAX (no Embree comparison there: Embree drops them).
+//   - rarely, coordinates near FLT_MAX (no Embree comparison there: Embree drops them);
+//   - a quarter of the mesh scenes float64 input (MINKQ_SCENE_FLOAT64): the doubles the float
+//     scene was rounded from, those plus sub-ulp noise, halfway ties, or doubles that are floats;
+//   - a third of them a swept step: zero motion, jitter, a part still and the rest flying through
+//     it (up to 1000 scene sizes), the whole scene translated, a part still and the rest stretched.
 // Sizes stay small (<= 96 vertices, <= 64 triangles) so that a campaign checks many scenes.
 #pragma once
 
@@ -40,6 +44,12 @@ class SceneDecoder {
 
   MeshScene mesh() {
     MeshScene s;
+    // The extensions (float64 input, a swept step) are chosen by the parameter block's first
+    // bytes: ConsumeBytes takes them from its front, where the other parameters (read from its
+    // back) reach only in a scene that uses all 32. So an input decodes to the same float
+    // scene as before they existed; these bytes then make a quarter of the scenes float64 and
+    // a third swept (see extend()).
+    const std::vector<uint8_t> ext = p_.ConsumeBytes<uint8_t>(3);
     const int kind = p_.ConsumeIntegralInRange<int>(0, 7);
     switch (kind) {
       case 0: soup(); break;
@@ -56,6 +66,7 @@ class SceneDecoder {
     snaps();
     transform();  // fills xyz_ (float) from unit_
     s.xyz = xyz_;
+    s.xyz64 = xyz64_;  // kept for float64 scenes only (extend)
     s.tris = tris_;
     s.edges = edges();
     s.label = label_;
@@ -64,8 +75,9 @@ class SceneDecoder {
     // triangles say as much as 64 would, at a fraction of the checking cost.
     if (!(s.r <= 0.25 * scale_) && s.tris.size() > 36) shrink(s, 12);
     s.drop_incident = p_.ConsumeBool();
-    s.moved = moved(s.xyz);
+    s.moved = moved(s.xyz, s.xyz64, s.moved64);
     s.variant = p_.ConsumeIntegral<uint32_t>();
+    extend(s, ext);
     s.label += " r=" + fmt_g(s.r);
     return s;
   }
@@ -278,10 +290,13 @@ class SceneDecoder {
     s.tris.resize(3 * keep);
     std::vector<int32_t> map(s.xyz.size() / 3, -1);
     std::vector<float> xyz;
+    std::vector<double> xyz64;
     auto use = [&](int32_t& v) {
       if (map[v] < 0) {
         map[v] = int32_t(xyz.size() / 3);
         xyz.insert(xyz.end(), s.xyz.begin() + 3 * size_t(v), s.xyz.begin() + 3 * size_t(v) + 3);
+        if (!s.xyz64.empty())
+          xyz64.insert(xyz64.end(), s.xyz64.begin() + 3 * size_t(v), s.xyz64.begin() + 3 * size_t(v) + 3);
       }
       v = map[v];
     };
@@ -294,6 +309,7 @@ class SceneDecoder {
       edges.insert(edges.end(), {a, b});
     }
     s.xyz = std::move(xyz);
+    s.xyz64 = std::move(xyz64);
     s.edges = std::move(edges);
     s.label += "(shrunk) ";
   }
@@ -344,12 +360,18 @@ class SceneDecoder {
       }
     }
     xyz_.clear();
+    xyz64_.clear();
     for (const V& p : unit_)
-      for (int k = 0; k < 3; ++k) xyz_.push_back(to_float(p[k] * scale_ + offset[k]));
+      for (int k = 0; k < 3; ++k) {
+        xyz_.push_back(to_float(p[k] * scale_ + offset[k]));
+        xyz64_.push_back(clamp(p[k] * scale_ + offset[k]));  // the same before rounding
+      }
   }
 
+  // Clamps to the finite float range (a double beyond it is NON_FINITE as float64 input).
+  static double clamp(double x) { return std::min(std::max(x, -double(FLT_MAX)), double(FLT_MAX)); }
   // Rounds to float, clamping to the finite range (a double beyond it has no float value).
-  static float to_float(double x) { return float(std::min(std::max(x, -double(FLT_MAX)), double(FLT_MAX))); }
+  static float to_float(double x) { return float(clamp(x)); }
 
   std::vector<int32_t> edges() {
     const int how = p_.ConsumeIntegralInRange<int>(0, 5);
@@ -403,20 +425,133 @@ class SceneDecoder {
     return to_float(scale_ * pick(p_, {0.01, 0.05, 0.1, 0.3}));
   }
 
-  std::vector<float> moved(const std::vector<float>& xyz) {
+  // New positions for a refit (or none): the float ones from `xyz`, and in `out64` the same
+  // moves of the doubles `xyz64` (before rounding), for a float64 scene.
+  std::vector<float> moved(const std::vector<float>& xyz, const std::vector<double>& xyz64, std::vector<double>& out64) {
+    out64.clear();
     if (p_.ConsumeIntegralInRange<int>(0, 2) != 0) return {};
     std::vector<float> out = xyz;
+    out64 = xyz64;
     const int how = p_.ConsumeIntegralInRange<int>(0, 3);
     if (how == 3) {  // the whole scene translated: same shape, new boxes everywhere
       const double shift[3] = {unit() * scale_, unit() * scale_, unit() * scale_};
-      for (size_t i = 0; i < out.size(); ++i) out[i] = to_float(double(out[i]) + shift[i % 3]);
+      for (size_t i = 0; i < out.size(); ++i) {
+        out[i] = to_float(double(out[i]) + shift[i % 3]);
+        if (i < out64.size()) out64[i] = clamp(out64[i] + shift[i % 3]);
+      }
       return out;
     }
     const double amount = scale_ * (how == 0 ? 1e-6 : how == 1 ? 0.01 : 0.3);
-    for (float& x : out) x = to_float(double(x) + (unit() - 0.5) * amount);
+    for (size_t i = 0; i < out.size(); ++i) {
+      const double shift = (unit() - 0.5) * amount;
+      out[i] = to_float(double(out[i]) + shift);
+      if (i < out64.size()) out64[i] = clamp(out64[i] + shift);
+    }
     for (float x : out)
-      if (!std::isfinite(x)) return {};
+      if (!std::isfinite(x)) {
+        out64.clear();
+        return {};
+      }
     return out;
+  }
+
+  // ---- Extensions: float64 input and a swept step ---------------------------------------------
+
+  // The float spacing at |x| (below it at the top of the float range).
+  static double spacing(float x) {
+    const float a = std::fabs(x);
+    return a == FLT_MAX ? double(a) - double(std::nextafter(a, 0.0f)) : double(std::nextafter(a, INFINITY)) - double(a);
+  }
+  static std::vector<float> rounded(const std::vector<double>& d) { return std::vector<float>(d.begin(), d.end()); }
+
+  // Makes the scene float64 input (ext[0] % 4 == 3) and gives it a swept step (ext[1] % 3 == 2).
+  // Float64 input, by ext[0] / 4 % 4: the doubles the float scene was rounded from (the same
+  // float geometry, sub-ulp detail wherever the offset or scale leave it); those plus a random
+  // part of the float spacing on every coordinate; every coordinate halfway between two floats
+  // (a tie, rounded to even) or a hair either side; or doubles that are floats (rho 0: the float
+  // scene's sets). The refit positions get the same treatment.
+  void extend(MeshScene& s, const std::vector<uint8_t>& ext) {
+    const int e0 = ext.size() > 0 ? ext[0] : 0, e1 = ext.size() > 1 ? ext[1] : 0, e2 = ext.size() > 2 ? ext[2] : 0;
+    const bool float64 = e0 % 4 == 3;
+    const int detail = e0 / 4 % 4;
+    if (float64) {
+      auto detailed = [&](std::vector<double>& d) {
+        for (double& x : d) {
+          const float f = float(x);
+          if (detail == 1) x = clamp(x + (unit() - 0.5) * spacing(f));
+          if (detail == 2) {
+            const double nudge = pick({0.0, 0.0, 0x1p-30, -0x1p-30});
+            x = clamp(double(f) + (in_.ConsumeBool() ? 0.5 : -0.5) * spacing(f) * (1 + nudge));
+          }
+          if (detail == 3) x = double(f);
+        }
+      };
+      detailed(s.xyz64);
+      detailed(s.moved64);
+      s.xyz = rounded(s.xyz64);
+      if (!s.moved64.empty()) s.moved = rounded(s.moved64);
+      static const char* details[] = {"float64 ", "float64-noise ", "float64-ties ", "float64-floats "};
+      s.label += details[detail];
+    } else {
+      s.xyz64.clear();
+      s.moved64.clear();
+    }
+    if (e1 % 3 == 2) step(s, e1 / 3, e2, float64 && detail == 3);
+  }
+
+  // A swept step from the scene's positions, by `how` % 5: none (zero motion); every coordinate
+  // moved by a random part of 1e-6, 0.01, 0.3 or 3 scene sizes; a part of the vertices (by
+  // index) still and the rest flying through it, from -T to +T about their place (|T| 0.1 to 1000
+  // scene sizes, along an axis, a diagonal, a skew direction or a random one); the whole scene
+  // translated by T, plus a little jitter; a part still and the rest moved by up to 3 scene
+  // sizes each (elements stretched far past their size). `floats`: the float64 step's
+  // positions stay floats (as the scene's).
+  void step(MeshScene& s, int how, int e2, bool floats) {
+    const size_t n = s.xyz.size();
+    std::vector<double> shift0(n, 0.0), shift1(n, 0.0);
+    const int motion = how % 5;
+    const double amount = scale_ * std::initializer_list<double>{1e-6, 0.01, 0.3, 3.0}.begin()[how / 5 % 4];
+    const double length = scale_ * std::initializer_list<double>{0.1, 1.0, 10.0, 1000.0}.begin()[how / 5 % 4];
+    V dir = {1.0, 0.0, 0.0};
+    switch (e2 % 4) {
+      case 1: dir = {1.0, 1.0, 1.0}; break;
+      case 2: dir = {0.3, -1.0, 0.55}; break;
+      case 3: dir = {unit() - 0.5, unit() - 0.5, unit() - 0.5}; break;
+      default: break;
+    }
+    const double norm = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (double& d : dir) d = norm > 0 ? d / norm : 1.0;
+    const size_t still = (n / 3) * size_t(1 + (e2 / 4) % 8) / 9;  // vertices [0, still) stay
+    static const char* names[] = {"still", "jitter", "fly-through", "translated", "part-still"};
+    for (size_t i = 0; i < n; ++i) {
+      const bool moving = i / 3 >= still;
+      switch (motion) {
+        case 1: shift1[i] = (unit() - 0.5) * amount; break;
+        case 2:
+          if (moving) shift0[i] = -length * dir[i % 3], shift1[i] = length * dir[i % 3];
+          break;
+        case 3: shift1[i] = length * dir[i % 3] + (unit() - 0.5) * 0.01 * scale_; break;
+        case 4:
+          if (moving) shift1[i] = (unit() - 0.5) * 6.0 * scale_;
+          break;
+        default: break;
+      }
+    }
+    if (!s.xyz64.empty()) {
+      s.swept0_64 = s.swept1_64 = s.xyz64;
+      for (size_t i = 0; i < n; ++i) {
+        s.swept0_64[i] = clamp(s.xyz64[i] + shift0[i]);
+        s.swept1_64[i] = clamp(s.xyz64[i] + shift1[i]);
+        if (floats) s.swept0_64[i] = double(float(s.swept0_64[i])), s.swept1_64[i] = double(float(s.swept1_64[i]));
+      }
+    } else {
+      s.swept0 = s.swept1 = s.xyz;
+      for (size_t i = 0; i < n; ++i) {
+        s.swept0[i] = to_float(double(s.xyz[i]) + shift0[i]);
+        s.swept1[i] = to_float(double(s.xyz[i]) + shift1[i]);
+      }
+    }
+    s.label += std::string("swept-") + names[motion] + " ";
   }
 
   FuzzedDataProvider& in_;  // geometry
@@ -424,6 +559,7 @@ class SceneDecoder {
   std::vector<V> unit_;
   std::vector<int32_t> tris_;
   std::vector<float> xyz_;
+  std::vector<double> xyz64_;  // xyz_ before rounding
   std::array<int32_t, 2> gap_ = {-1, -1};
   int max_vertices_ = kMaxVertices, max_triangles_ = kMaxTriangles;
   double scale_ = 1.0;

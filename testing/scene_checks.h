@@ -6,12 +6,15 @@
 //     extras within r + 2^-19 * S),
 //   - the containment chain, the pair-buffer contract (canonical order, digest, no duplicates,
 //     nothing written past the count) and refit == fresh build,
+//   - float64 input: the sets of the rounded positions at r + 2 rho, the oracle on the doubles,
+//   - a swept step (swept_checks.h), and static sets again after it,
 //   - every further device (CUDA, where one exists) giving the same sets.
 // Failures are collected in a Report, never thrown, so a caller can print the scene first.
 //
 // The parts: scene_types.h (scenes, reports, printing, set comparisons), scene_definitions.h
 // (each mode's definition by brute force), scene_runs.h (the C API runs and the pair-buffer
-// contract), scene_oracle.h (the oracle's bounds); this file holds the checks themselves.
+// contract), scene_oracle.h (the oracle's bounds and its sampled swept contacts),
+// swept_checks.h (a swept step's checks); this file holds the rest of the checks.
 #pragma once
 
 #include <algorithm>
@@ -29,6 +32,7 @@
 #include "scene_oracle.h"
 #include "scene_runs.h"
 #include "scene_types.h"
+#include "swept_checks.h"
 
 namespace minkq::fuzz {
 
@@ -69,27 +73,35 @@ inline void compare_sets(Report& report, const MeshSets& got, const MeshSets& wa
     }
 }
 
-// Every check of one set of positions of a mesh scene whose minkq handle is `scene`.
-inline MeshSets check_mesh_positions(minkq_scene* scene, const MeshScene& s, const std::vector<float>& xyz,
+// Every check of one set of positions of a mesh scene whose minkq handle is `scene`. For float64
+// input the sets are those of the rounded positions at the widened radius (r + 2 rho), the
+// oracle's contacts those of the doubles at r, and leaf-exact extras lie within the widened
+// radius plus the float slack on the rounded positions.
+inline MeshSets check_mesh_positions(minkq_scene* scene, const MeshScene& s, const Positions& x,
                                      const std::vector<int32_t>& edges, IndependentSets* independent, bool moved,
                                      Report& report, Stats& stats, const std::string& tag, minkq_result* result) {
+  const std::vector<float>& xyz = x.xyz;
   const MeshGeometry g(xyz, s.tris, edges);
   const uint32_t filters = s.drop_incident ? kDropIncident : 0u;
+  const float radius = scene_radius(s.r, rounding_rho(x));  // s.r for float input
+  if (x.float64()) check_widened_radius(report, s.r, radius, x, tag + " float64");
   MeshSets got = minkq_mesh_sets(scene, g, s.r, s.variant, report, stats, tag, result);
   if (inject_fault() && !got.vt[MINKQ_MODE_SPHERE][1].empty()) got.vt[MINKQ_MODE_SPHERE][1].pop_back();
 
   // Traversal finds exactly the definition, computed by brute force...
-  compare_sets(report, got, definition_sets(g, s.r, filters), tag + " minkq vs definition", &stats);
+  compare_sets(report, got, definition_sets(g, radius, filters), tag + " minkq vs definition", &stats);
   // ...and by the independent traversal.
-  if (independent && independent->accepts(xyz, s.r)) {
-    compare_sets(report, got, independent->mesh_sets(g, s.r, filters, moved), tag + " minkq vs Embree", nullptr);
+  if (independent && independent->accepts(xyz, radius)) {
+    compare_sets(report, got, independent->mesh_sets(g, radius, filters, moved), tag + " minkq vs Embree", nullptr);
     stats.independent += 14;
   }
   check_chain(report, got, tag);
 
-  // Zero false negatives against the long-double oracle; leaf-exact extras within the bound.
+  // Zero false negatives against the long-double oracle (on the double input, if any);
+  // leaf-exact extras within the bound.
   reference::Mesh mesh;
   mesh.xyz = xyz;
+  mesh.xyz64 = x.xyz64;
   mesh.tris = s.tris;
   mesh.edges = edges;
   // The oracle's grid-accelerated sets (its prefilter is conservative: padded double boxes),
@@ -107,22 +119,25 @@ inline MeshSets check_mesh_positions(minkq_scene* scene, const MeshScene& s, con
       expect_subset(report, vt_true, got.vt[mode][leaf], tag + " VT false negatives in " + suffix);
       if (ee_mode(mode)) expect_subset(report, ee_true, got.ee[mode][leaf], tag + " EE false negatives in " + suffix);
     }
-  check_vt_extras(report, minus(got.vt[MINKQ_MODE_SPHERE][1], vt_true), xyz, s.tris, s.r, tag + " VT");
-  check_vt_extras(report, minus(got.vt[MINKQ_MODE_BOX][1], vt_true), xyz, s.tris, s.r, tag + " VT box");
-  check_ee_extras(report, minus(got.ee[MINKQ_MODE_CAPSULE_EXACT][1], ee_true), xyz, edges, s.r, tag + " EE");
-  check_ee_extras(report, minus(got.ee[MINKQ_MODE_BOX][1], ee_true), xyz, edges, s.r, tag + " EE box");
+  check_vt_extras(report, minus(got.vt[MINKQ_MODE_SPHERE][1], vt_true), xyz, s.tris, radius, tag + " VT");
+  check_vt_extras(report, minus(got.vt[MINKQ_MODE_BOX][1], vt_true), xyz, s.tris, radius, tag + " VT box");
+  check_ee_extras(report, minus(got.ee[MINKQ_MODE_CAPSULE_EXACT][1], ee_true), xyz, edges, radius, tag + " EE");
+  check_ee_extras(report, minus(got.ee[MINKQ_MODE_BOX][1], ee_true), xyz, edges, radius, tag + " EE box");
   return got;
 }
 
-// The whole mesh-scene check on devices[0] (the CPU), then the same sets on every further device.
+// The whole mesh-scene check on devices[0] (the CPU): the positions, the refit (if any), the
+// swept step (if any) and back to static positions; then the same sets on every further device.
 inline void check_mesh_scene(const std::vector<cxx::Device>& devices, const MeshScene& s,
                              IndependentSets* independent, Report& report, Stats& stats) {
-  const uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | (s.drop_incident ? uint32_t(MINKQ_SCENE_DROP_INCIDENT) : 0u);
+  const uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | (s.drop_incident ? uint32_t(MINKQ_SCENE_DROP_INCIDENT) : 0u) |
+                         (s.float64() ? uint32_t(MINKQ_SCENE_FLOAT64) : 0u);
+  const Positions start = s.start(), moved = s.refit(), x0 = s.step_start(), x1 = s.step_end();
   // A scene of the given positions on a device; empty (and reported) where creation fails.
-  auto create = [&](const cxx::Device& device, const std::vector<float>& xyz) {
+  auto create = [&](const cxx::Device& device, const Positions& x) {
     minkq_scene_desc desc{};
     desc.flags = flags;
-    desc.vertices = {xyz.empty() ? nullptr : xyz.data(), 0, xyz.size() / 3, MINKQ_MEMORY_HOST};
+    desc.vertices = x.buffer();
     desc.triangles = {s.tris.empty() ? nullptr : s.tris.data(), 0, s.tris.size() / 3, MINKQ_MEMORY_HOST};
     desc.edges = {s.edges.empty() ? nullptr : s.edges.data(), 0, s.edges.size() / 2, MINKQ_MEMORY_HOST};
     minkq_scene* out = nullptr;
@@ -131,7 +146,7 @@ inline void check_mesh_scene(const std::vector<cxx::Device>& devices, const Mesh
       report.fail(std::string("minkq_scene_create on ") + minkq_device_name(device.get()) + ": " + status_text(status));
     return cxx::Scene(out);
   };
-  const cxx::Scene scene = create(devices[0], s.xyz);
+  const cxx::Scene scene = create(devices[0], start);
   if (!scene) return;
   minkq_result* raw_result = nullptr;
   if (minkq_result_create(&raw_result) != MINKQ_SUCCESS) report.fail("minkq_result_create");
@@ -144,16 +159,15 @@ inline void check_mesh_scene(const std::vector<cxx::Device>& devices, const Mesh
     report.fail("minkq_scene_edges: not the documented edge list");
 
   const MeshSets before =
-      check_mesh_positions(scene.get(), s, s.xyz, edges, independent, false, report, stats, "", result.get());
+      check_mesh_positions(scene.get(), s, start, edges, independent, false, report, stats, "", result.get());
   MeshSets after;
-  const bool refit = !s.moved.empty();
+  const bool refit = !moved.empty();
   if (refit) {
-    const minkq_status status =
-        minkq_scene_refit(scene.get(), {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
+    const minkq_status status = minkq_scene_refit(scene.get(), moved.buffer());
     if (status != MINKQ_SUCCESS) {
       report.fail("minkq_scene_refit: " + status_text(status));
     } else {
-      after = check_mesh_positions(scene.get(), s, s.moved, edges, independent, true, report, stats, "[refit]",
+      after = check_mesh_positions(scene.get(), s, moved, edges, independent, true, report, stats, "[refit]",
                                    result.get());
       double growth = -1.0;
       if (minkq_scene_tree_growth(scene.get(), &growth) != MINKQ_SUCCESS || !(growth >= 0.0))
@@ -162,39 +176,70 @@ inline void check_mesh_scene(const std::vector<cxx::Device>& devices, const Mesh
       // must a scene built at the old positions and rebuilt at the new (all are compared with
       // the definition above, so this runs on one refit in four for each).
       const uint32_t twin = (s.variant >> 27) % 4;
-      const cxx::Scene fresh = twin < 2 ? create(devices[0], twin == 0 ? s.moved : s.xyz) : cxx::Scene();
+      const cxx::Scene fresh = twin < 2 ? create(devices[0], twin == 0 ? moved : start) : cxx::Scene();
       if (fresh) {
         const char* label = twin == 0 ? "[refit] vs fresh build" : "[refit] vs rebuild";
         if (twin == 1) {
-          const minkq_status rebuilt =
-              minkq_scene_rebuild(fresh.get(), {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST});
+          const minkq_status rebuilt = minkq_scene_rebuild(fresh.get(), moved.buffer());
           if (rebuilt != MINKQ_SUCCESS) report.fail("minkq_scene_rebuild: " + status_text(rebuilt));
           if (minkq_scene_tree_growth(fresh.get(), &growth) != MINKQ_SUCCESS || growth != 1.0)
             report.fail("minkq_scene_tree_growth after a rebuild: " + std::to_string(growth) + ", not 1");
         }
         Stats scratch;
-        const MeshGeometry g(s.moved, s.tris, edges);
+        const MeshGeometry g(moved.xyz, s.tris, edges);
         compare_sets(report, after, minkq_mesh_sets(fresh.get(), g, s.r, ~s.variant, report, scratch, label, nullptr),
                      label, nullptr);
       }
       stats.refit_scenes++;
     }
   }
+  // The swept step, on the scene as the refit left it (refit_swept keeps that tree's grouping;
+  // rebuild_swept, on one step in two, builds afresh); a step of zero motion from the start
+  // positions gives the static sets; then a plain refit to the start makes the scene static
+  // again, with the static sets.
+  SweptSets swept;
+  const bool step = s.swept();
+  const bool rebuild_step = ((s.variant >> 26) & 1) != 0;
+  if (step) {
+    swept = check_swept_step(scene.get(), s, x0, x1, edges, independent, rebuild_step, report, stats, "[swept]",
+                             result.get());
+    if (x0 == start && x1 == start) {
+      compare_still_step(report, swept, before, "[swept]");
+      stats.still_steps++;
+    }
+    const minkq_status status = minkq_scene_refit(scene.get(), start.buffer());
+    if (status != MINKQ_SUCCESS) {
+      report.fail("minkq_scene_refit after a swept step: " + status_text(status));
+    } else {
+      if (minkq_scene_is_swept(scene.get()) != 0) report.fail("minkq_scene_is_swept is not 0 after a plain refit");
+      Stats scratch;
+      compare_sets(report, minkq_mesh_sets(scene.get(), MeshGeometry(start.xyz, s.tris, edges), s.r, s.variant >> 1,
+                                           report, scratch, "[after swept]", result.get()),
+                   before, "[refit after swept] vs static", nullptr);
+    }
+    stats.swept_scenes++;
+  }
   // Every further device gives exactly the CPU's sets (the backends are bit-identical).
   for (size_t d = 1; d < devices.size(); ++d) {
     const std::string name = minkq_device_name(devices[d].get());
-    const cxx::Scene other = create(devices[d], s.xyz);
+    const cxx::Scene other = create(devices[d], start);
     if (!other) continue;
     Stats scratch;
-    compare_sets(report, minkq_mesh_sets(other.get(), MeshGeometry(s.xyz, s.tris, edges), s.r, s.variant, report,
+    compare_sets(report, minkq_mesh_sets(other.get(), MeshGeometry(start.xyz, s.tris, edges), s.r, s.variant, report,
                                          scratch, name, nullptr),
                  before, name + " vs cpu", nullptr);
-    if (refit &&
-        minkq_scene_refit(other.get(), {s.moved.data(), 0, s.moved.size() / 3, MINKQ_MEMORY_HOST}) == MINKQ_SUCCESS)
-      compare_sets(report, minkq_mesh_sets(other.get(), MeshGeometry(s.moved, s.tris, edges), s.r, s.variant, report,
+    if (refit && minkq_scene_refit(other.get(), moved.buffer()) == MINKQ_SUCCESS)
+      compare_sets(report, minkq_mesh_sets(other.get(), MeshGeometry(moved.xyz, s.tris, edges), s.r, s.variant, report,
                                            scratch, name + " [refit]", nullptr),
                    after, name + " [refit] vs cpu", nullptr);
+    if (step && sweep(other.get(), x0, x1, rebuild_step, report, name + " [swept]")) {
+      MeshGeometry g(x0.xyz, s.tris, edges);
+      g.set_end(x1.xyz);
+      compare_swept_sets(report, minkq_swept_sets(other.get(), g, s.r, s.variant, report, scratch, name + " [swept]", nullptr),
+                         swept, name + " [swept] vs cpu", nullptr);
+    }
   }
+  if (s.float64()) stats.float64_scenes++;
   stats.mesh_scenes++;
 }
 

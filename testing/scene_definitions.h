@@ -7,6 +7,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "minkq/float64.h"
 #include "minkq/queries.h"
 #include "scene_types.h"
 
@@ -49,11 +50,13 @@ Pairs definition_set(const Queries& queries, int32_t num_queries, const Boxes& b
   return out;
 }
 
-// The geometry of a mesh scene in the core's types.
+// The geometry of a mesh scene in the core's types; swept (after set_end), the vertices move
+// from `vertices` to `vertices1` and the queries and boxes are the swept ones (queries.h).
 struct MeshGeometry {
   std::vector<Vec3> vertices;
   std::vector<Triangle> triangles;
   std::vector<Edge> edges;
+  std::vector<Vec3> vertices1;  // swept: the positions at t = 1; empty for static positions
   MeshGeometry(const std::vector<float>& xyz, const std::vector<int32_t>& tris, const std::vector<int32_t>& edge_ids)
       : vertices(xyz.size() / 3), triangles(tris.size() / 3), edges(edge_ids.size() / 2) {
     if (!xyz.empty()) std::memcpy(vertices.data(), xyz.data(), vertices.size() * sizeof(Vec3));
@@ -63,12 +66,57 @@ struct MeshGeometry {
   int32_t nv() const { return int32_t(vertices.size()); }
   int32_t nt() const { return int32_t(triangles.size()); }
   int32_t ne() const { return int32_t(edges.size()); }
-  VertexTriangleQueries vt(float r, uint32_t filters) const {
-    return {vertices.data(), triangles.data(), nullptr, r, filters};
+  // Makes the geometry swept: the vertices move to `xyz1` (3 floats per vertex) over the step.
+  void set_end(const std::vector<float>& xyz1) {
+    vertices1.resize(xyz1.size() / 3);
+    if (!xyz1.empty()) std::memcpy(vertices1.data(), xyz1.data(), vertices1.size() * sizeof(Vec3));
   }
-  EdgeEdgeQueries ee(float r, uint32_t filters) const { return {vertices.data(), edges.data(), nullptr, r, filters}; }
-  TriangleBoxes triangle_boxes() const { return {vertices.data(), triangles.data()}; }
-  EdgeBoxes edge_boxes() const { return {vertices.data(), edges.data()}; }
+  bool swept() const { return !vertices1.empty(); }
+  const Vec3* end() const { return swept() ? vertices1.data() : nullptr; }
+  VertexTriangleQueries vt(float r, uint32_t filters) const {
+    return {vertices.data(), triangles.data(), nullptr, r, filters, nullptr, end()};
+  }
+  EdgeEdgeQueries ee(float r, uint32_t filters) const {
+    return {vertices.data(), edges.data(), nullptr, r, filters, nullptr, end()};
+  }
+  TriangleBoxes triangle_boxes() const { return {vertices.data(), triangles.data(), end()}; }
+  EdgeBoxes edge_boxes() const { return {vertices.data(), edges.data(), end()}; }
+};
+
+// ---- Float64 input: the radius the scene queries with ----------------------------------------
+
+// rho of float64 positions: the farthest rounding to nearest float moved a vertex, as the
+// library computes it (float64.h, rounding_distance: the exact distance rounded up); 0 for float
+// input. A swept step's rho is the larger of its two position sets'.
+inline float rounding_rho(const Positions& p) {
+  float rho = 0.0f;
+  for (size_t v = 0; p.float64() && v < p.count(); ++v) {
+    const double* x = &p.xyz64[3 * v];
+    rho = std::max(rho, rounding_distance(x, round_to_float(x)));
+  }
+  return rho;
+}
+// The radius a query of radius r runs with on a scene whose rounding moved vertices by rho:
+// r + 2 rho rounded up (minkq.h, MINKQ_SCENE_FLOAT64; float64.h, widen_radius); r for float input.
+inline float scene_radius(float r, float rho) { return widen_radius(r, rho); }
+
+// ---- Swept steps ---------------------------------------------------------------------------
+
+// The shape minkq.h defines for a VT mode on swept positions: the vertex is its path, a
+// segment, so every mode is a segment shape, and sphere is capsule_exact. EE runs box mode only.
+template <class Fn>
+void swept_vt_shape_of_mode(int mode, Fn&& fn) {
+  switch (mode) {
+    case MINKQ_MODE_BOX: fn(BoxShape{}); return;
+    case MINKQ_MODE_CAPSULE_RAY: fn(CapsuleRayShape{}); return;
+    default: fn(CapsuleExactShape{}); return;  // sphere and capsule_exact
+  }
+}
+
+// Candidate sets of a swept step: VT [mode], EE box (the only EE mode swept queries run).
+struct SweptSets {
+  Pairs vt[4];
+  Pairs ee_box;
 };
 
 // Candidate sets of a mesh scene: [mode][leaf_exact]; EE has no sphere mode (index 1 unused).
@@ -113,6 +161,8 @@ class IndependentSets {
   virtual bool accepts(const std::vector<float>& coordinates, float r) const = 0;
   virtual MeshSets mesh_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) = 0;
   virtual BoxSets box_sets(const BoxGeometry& g, minkq_shape shape, float r, bool moved) = 0;
+  // The swept sets of a swept geometry (g.swept()); `moved`: as for mesh_sets.
+  virtual SweptSets swept_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) = 0;
   virtual void reset() = 0;  // release what the previous scene left
 };
 
@@ -131,6 +181,64 @@ inline MeshSets definition_sets(const MeshGeometry& g, float r, uint32_t filters
     }
   }
   return sets;
+}
+
+// The swept step's sets by brute force: each mode's shape of the vertex's path against every
+// triangle's swept box, and the edges' swept boxes against each other, with the leaf filter.
+inline SweptSets swept_definition_sets(const MeshGeometry& g, float r, uint32_t filters) {
+  SweptSets sets;
+  for (int mode = 0; mode < 4; ++mode)
+    swept_vt_shape_of_mode(mode, [&](auto shape) {
+      sets.vt[mode] = definition_set<decltype(shape)>(g.vt(r, filters), g.nv(), g.triangle_boxes(), g.nt());
+    });
+  sets.ee_box = definition_set<BoxShape>(g.ee(r, filters), g.ne(), g.edge_boxes(), g.ne());
+  return sets;
+}
+
+// The box mode of a swept step written out plainly, sharing nothing with the core but the
+// positions (minkq.h: "the elements' swept boxes"; tests/test_swept.cpp): each element's box
+// over its vertices' two positions, a pair when the two boxes' gap (float subtraction) is at most
+// r on every axis; incident pairs dropped when asked, EE pairs once (e < f).
+struct PlainSweptBoxes {
+  std::vector<float> lo, hi;  // 3 per element
+  void add(const std::vector<const float*>& points) {
+    for (int a = 0; a < 3; ++a) {
+      float l = points[0][a], h = points[0][a];
+      for (const float* p : points) l = std::min(l, p[a]), h = std::max(h, p[a]);
+      lo.push_back(l);
+      hi.push_back(h);
+    }
+  }
+  bool within(size_t i, const PlainSweptBoxes& other, size_t j, float r) const {
+    for (int a = 0; a < 3; ++a)
+      if (!(other.lo[3 * j + a] - hi[3 * i + a] <= r) || !(lo[3 * i + a] - other.hi[3 * j + a] <= r)) return false;
+    return true;
+  }
+};
+inline std::pair<Pairs, Pairs> plain_swept_box_sets(const std::vector<float>& x0, const std::vector<float>& x1,
+                                                    const std::vector<int32_t>& tris, const std::vector<int32_t>& edges,
+                                                    float r, bool drop_incident) {
+  auto p0 = [&](int32_t v) { return x0.data() + 3 * size_t(v); };
+  auto p1 = [&](int32_t v) { return x1.data() + 3 * size_t(v); };
+  const size_t nv = x0.size() / 3, nt = tris.size() / 3, ne = edges.size() / 2;
+  PlainSweptBoxes paths, triangles, edge_boxes;
+  for (size_t v = 0; v < nv; ++v) paths.add({p0(int32_t(v)), p1(int32_t(v))});
+  for (size_t t = 0; t < 3 * nt; t += 3)
+    triangles.add({p0(tris[t]), p0(tris[t + 1]), p0(tris[t + 2]), p1(tris[t]), p1(tris[t + 1]), p1(tris[t + 2])});
+  for (size_t e = 0; e < 2 * ne; e += 2) edge_boxes.add({p0(edges[e]), p0(edges[e + 1]), p1(edges[e]), p1(edges[e + 1])});
+  Pairs vt, ee;
+  for (size_t v = 0; v < nv; ++v)
+    for (size_t t = 0; t < nt; ++t) {
+      const bool incident = tris[3 * t] == int32_t(v) || tris[3 * t + 1] == int32_t(v) || tris[3 * t + 2] == int32_t(v);
+      if (!(drop_incident && incident) && paths.within(v, triangles, t, r)) vt.push_back({int32_t(v), int32_t(t)});
+    }
+  for (size_t e = 0; e < ne; ++e)
+    for (size_t f = e + 1; f < ne; ++f) {
+      const int32_t a0 = edges[2 * e], a1 = edges[2 * e + 1], b0 = edges[2 * f], b1 = edges[2 * f + 1];
+      const bool incident = a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1;
+      if (!(drop_incident && incident) && edge_boxes.within(e, edge_boxes, f, r)) ee.push_back({int32_t(e), int32_t(f)});
+    }
+  return {vt, ee};
 }
 
 inline BoxSets definition_sets(const BoxGeometry& g, minkq_shape shape, float r) {

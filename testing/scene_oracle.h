@@ -4,7 +4,13 @@
 // includes every part).
 #pragma once
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <cstdio>
+#include <iterator>
+#include <utility>
+#include <vector>
 
 #include "minkq/queries.h"
 #include "minkq_reference.h"
@@ -64,6 +70,94 @@ inline void check_ee_extras(Report& report, const Pairs& extras, const std::vect
     if (!extra_within_bound(report, e, f, reference::segment_segment_distance(p[0], p[1], p[2], p[3]), p, r, what))
       return;
   }
+}
+
+// ---- Float64 input ---------------------------------------------------------------------------
+
+// The radius a float64 scene queries with must cover r + 2 rho, rho the exact farthest rounding
+// distance (long double, from the doubles and their rounding), and stay close to it:
+// widen_radius rounds up twice and rounding_distance once (relative 2^-21 in all), plus a
+// float step where rho or r is subnormal (and infinity where r + 2 rho passes FLT_MAX).
+inline void check_widened_radius(Report& report, float r, float radius, const Positions& p, const std::string& what) {
+  LD rho = 0;
+  for (size_t i = 0; p.float64() && i < p.count(); ++i) {
+    LD d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const LD d = LD(p.xyz64[3 * i + k]) - LD(p.xyz[3 * i + k]);
+      d2 += d * d;
+    }
+    rho = std::max(rho, std::sqrt(d2));
+  }
+  const LD want = LD(r) + 2 * rho;
+  LD most = want * (1 + std::ldexp(LD(1), -20)) + std::ldexp(LD(1), -140);
+  if (most > LD(FLT_MAX)) most = INFINITY;  // rounded up past the float range: infinity
+  if (!(LD(radius) >= want) || !(LD(radius) <= most)) {
+    char text[200];
+    std::snprintf(text, sizeof text, ": the widened radius %.9g is not r + 2 rho = %.12Lg (r %.9g, rho %.9Lg)",
+                  double(radius), want, double(r), rho);
+    report.fail(what + text);
+  }
+}
+
+// ---- Swept steps: the static oracle at sampled times -------------------------------------------
+
+// A coordinate at time t of a step from a to b, a + t (b - a) in double, and whether that is
+// its exact value (error-free transforms: TwoSum for the difference and the sum, an FMA for the
+// product's residual).
+inline double lerp_coordinate(double a, double b, double t, bool& exact) {
+  auto two_sum_error = [](double x, double y, double s) {
+    const double y1 = s - x, x1 = s - y1;
+    return (x - x1) + (y - y1);
+  };
+  const double d = b - a;
+  const double p = t * d;
+  const double s = a + p;
+  exact = exact && two_sum_error(b, -a, d) == 0 && std::fma(t, d, -p) == 0 && two_sum_error(a, p, s) == 0;
+  return s;
+}
+
+// The oracle's contacts of a swept step sampled at the times t = k / samples (k = 0..samples),
+// united: each is a pair whose elements come within r during the step (in double: the float64
+// input's motion, or the float input's exact values), so every swept mode must report it. Where
+// the positions at a time are not exact in double, the contacts there are taken at r less the
+// bound of that rounding (none when it is below 0): a sampled contact is one of the exact motion,
+// never an artefact of rounding the positions between.
+struct SampledContacts {
+  Pairs vt, ee;
+  int rounded_times = 0;  // times whose positions were rounded (their radius shrunk)
+};
+inline SampledContacts sampled_contacts(const Positions& x0, const Positions& x1, const std::vector<int32_t>& tris,
+                                        const std::vector<int32_t>& edges, float r, bool drop_incident, int samples) {
+  const size_t n = 3 * x0.count();
+  auto at = [](const Positions& p, size_t i) { return p.float64() ? p.xyz64[i] : double(p.xyz[i]); };
+  double magnitude = 0;  // max |a| + |b| over every coordinate
+  for (size_t i = 0; i < n; ++i) magnitude = std::max(magnitude, std::fabs(at(x0, i)) + std::fabs(at(x1, i)));
+  SampledContacts out;
+  for (int k = 0; k <= samples; ++k) {
+    const double t = double(k) / samples;
+    std::vector<double> xyz(n);
+    bool exact = true;
+    for (size_t i = 0; i < n; ++i) xyz[i] = lerp_coordinate(at(x0, i), at(x1, i), t, exact);
+    // Each coordinate is off by at most 3 * 2^-53 * (|a| + |b|); a pair's distance by twice the
+    // Euclidean norm of that: below 2^-48 * magnitude.
+    double radius = r;
+    if (!exact) {
+      out.rounded_times++;
+      radius = std::nextafter(double(r) - std::ldexp(magnitude, -48), 0.0);
+      if (!(radius >= 0)) continue;
+    }
+    reference::Mesh mesh;
+    reference::set_float64(mesh, std::move(xyz));
+    mesh.tris = tris;
+    mesh.edges = edges;
+    for (auto [all, found] : {std::pair{&out.vt, reference::vt_contacts(mesh, radius, drop_incident)},
+                              std::pair{&out.ee, reference::ee_contacts(mesh, radius, drop_incident)}}) {
+      Pairs merged;
+      std::set_union(all->begin(), all->end(), found.begin(), found.end(), std::back_inserter(merged));
+      *all = std::move(merged);
+    }
+  }
+  return out;
 }
 
 // Point-box and segment-box distances in long double, for user-box queries. The segment case

@@ -107,6 +107,51 @@ inline MeshSets minkq_mesh_sets(minkq_scene* scene, const MeshGeometry& g, float
   return sets;
 }
 
+// The queries a swept scene runs (every VT mode, EE box; minkq.h, "Swept positions"), checked
+// like every other query's output.
+inline SweptSets minkq_swept_sets(minkq_scene* scene, const MeshGeometry& g, float r, uint32_t variant, Report& report,
+                                  Stats& stats, const std::string& tag, minkq_result* result) {
+  SweptSets sets;
+  for (int k = 0; k < 5; ++k) {
+    const bool vt = k < 4;
+    const int mode = vt ? k : int(MINKQ_MODE_BOX);
+    auto call = [&](uint32_t flags, int32_t* out, size_t capacity, minkq_query_info* info, minkq_result* res) {
+      const minkq_query_desc desc{vt ? MINKQ_QUERY_VT : MINKQ_QUERY_EE, minkq_mode(mode), flags, r};
+      return res ? minkq_scene_query_result(scene, &desc, res)
+                 : minkq_scene_query(scene, &desc, out, capacity, MINKQ_MEMORY_HOST, info);
+    };
+    const std::string what = tag + (vt ? " VT " : " EE ") + mode_name(mode);
+    const uint32_t v = (variant >> (5 * k + 1)) ^ (variant << (31 - k)) ^ uint32_t(k * 3);  // a variant per query
+    Pairs pairs = checked_pairs(call, 0u, v, vt ? g.nv() : g.ne(), vt ? g.nt() : g.ne(), !vt, report, what, result);
+    stats.queries++;
+    (vt ? sets.vt[mode] : sets.ee_box) = std::move(pairs);
+  }
+  return sets;
+}
+
+// What a swept scene refuses (minkq.h): MINKQ_QUERY_LEAF_EXACT in every mode, and EE modes other
+// than box; each must answer MINKQ_ERROR_UNSUPPORTED.
+inline void check_swept_refusals(minkq_scene* scene, float r, Report& report, const std::string& tag) {
+  struct Refused {
+    minkq_query_kind kind;
+    minkq_mode mode;
+    uint32_t flags;
+  };
+  const uint32_t leaf = MINKQ_QUERY_LEAF_EXACT;
+  const Refused refused[] = {{MINKQ_QUERY_VT, MINKQ_MODE_BOX, leaf},          {MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, leaf},
+                             {MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_RAY, leaf},  {MINKQ_QUERY_VT, MINKQ_MODE_CAPSULE_EXACT, leaf},
+                             {MINKQ_QUERY_EE, MINKQ_MODE_BOX, leaf},          {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, 0},
+                             {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, 0},   {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, leaf}};
+  for (const Refused& q : refused) {
+    const minkq_query_desc desc{q.kind, q.mode, q.flags | uint32_t(MINKQ_QUERY_CANONICAL), r};
+    minkq_query_info info{};
+    const minkq_status status = minkq_scene_query(scene, &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info);
+    if (status != MINKQ_ERROR_UNSUPPORTED)
+      report.fail(tag + " swept " + (q.kind == MINKQ_QUERY_VT ? "VT " : "EE ") + mode_name(q.mode) +
+                  (q.flags ? "+leaf_exact" : "") + ": " + status_text(status) + ", not MINKQ_ERROR_UNSUPPORTED");
+  }
+}
+
 inline BoxSets minkq_box_sets(minkq_bvh* bvh, const BoxScene& s, uint32_t variant, Report& report, Stats& stats,
                               const std::string& tag, int32_t num_boxes) {
   BoxSets sets;

@@ -1,10 +1,12 @@
 // Every failure the fuzzers (fuzz/) found, as a regression test, plus a replay of scenes in the
 // format the differential fuzzer prints ("paste into tests/test_fuzz_regressions.cpp"). The
 // scene checks are the fuzzer's own (testing/scene_checks.h: definition, chain, oracle, refit,
-// buffers, and every CUDA device against the CPU where one exists), without the Embree part.
+// buffers, float64 input and swept steps, and every CUDA device against the CPU where one
+// exists), without the Embree part.
 // fuzz/RESULTS.md lists each bug with the test that covers it.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "capi_util.h"
@@ -13,15 +15,22 @@
 namespace minkq {
 namespace {
 
-// Runs the differential fuzzer's checks on a scene; fails the test with its report.
-void replay(const fuzz::MeshScene& s) {
+// Runs the differential fuzzer's checks on a scene; fails the test with its report. Returns
+// what the checks counted.
+fuzz::Stats replay(const fuzz::MeshScene& s) {
   const std::vector<cxx::Device> devices = fuzz::open_devices();
-  ASSERT_FALSE(devices.empty()) << minkq_last_error_message();
   fuzz::Report report;
   fuzz::Stats stats;
+  if (devices.empty()) {
+    ADD_FAILURE() << minkq_last_error_message();
+    return stats;
+  }
   fuzz::check_mesh_scene(devices, s, nullptr, report, stats);
   EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
   EXPECT_EQ(stats.mesh_scenes, 1u);
+  EXPECT_EQ(stats.float64_scenes, s.float64() ? 1u : 0u);
+  EXPECT_EQ(stats.swept_scenes, s.swept() ? 1u : 0u);
+  return stats;
 }
 
 void replay(const fuzz::BoxScene& s) {
@@ -309,6 +318,100 @@ TEST(FuzzRegressions, replay_user_box_capsules_with_refit) {
   for (float& x : s.moved) x += 0.125f;
   s.variant = 0x1234567u;
   replay(s);
+}
+
+// ---- Float64 and swept scenes in the differential fuzzer's format ----------------------------
+
+// The float spacing at x (x > 0).
+double spacing(float x) { return double(std::nextafter(x, INFINITY)) - double(x); }
+
+// Float64 input that rounding to float pulls apart: a vertex 0.95 r in front of a triangle, and
+// an edge 0.95 r from two of its edges, near 2e4 where the float spacing (2^-9) exceeds r = 1e-3.
+// Rounded to nearest, plane and point lie a whole spacing (> r) apart, so a float scene of the
+// rounding loses both pairs; the float64 scene (radius widened by 2 rho) must find them in every
+// mode, and its refit to other doubles too.
+TEST(FuzzRegressions, replay_float64_pairs_that_rounding_pulls_apart) {
+  const double u = spacing(2e4f), r = 1e-3;
+  const double plane = 2e4 + 0.49 * u, point = plane + 0.95 * r;
+  ASSERT_GT(double(float(point)) - double(float(plane)), r);  // the rounding pulls them apart
+  fuzz::MeshScene s;
+  s.xyz64 = {plane, -1, -1, plane, 2, -1, plane, -1, 2,  // triangle 0, in the plane x = plane
+             point, 0, 0,                                // vertex 3, 0.95 r in front of it
+             point, 0.5, -1, point, 0.5, 1};             // edge 4-5, 0.95 r from edges 0-1 and 1-2
+  s.tris = {0, 1, 2};
+  s.edges = {0, 1, 0, 2, 1, 2, 4, 5};
+  s.r = float(r);
+  s.drop_incident = true;
+  // The refit moves everything by -0.2 u: still 0.95 r apart, and still pulled apart by rounding.
+  ASSERT_GT(double(float(point - 0.2 * u)) - double(float(plane - 0.2 * u)), r);
+  s.moved64 = s.xyz64;
+  for (size_t i = 0; i < s.moved64.size(); i += 3) s.moved64[i] -= 0.2 * u;
+  for (uint32_t variant : {0u, 0x2468aceu, 0xffffffffu}) {
+    s.variant = variant;
+    // VT (3, 0), (4, 0) and EE (0, 3), (2, 3) (vertex 4 and edge 4-5 touch the triangle's edge
+    // 0-1 too), before and after the refit.
+    EXPECT_EQ(replay(s).true_contacts, 8u);
+  }
+}
+
+// A vertex and an edge fly through a triangle and an edge that stay still, far past them
+// (motions up to 10^4 times the elements' size), apart at t = 0 and t = 1: the swept step must
+// find both pairs (the static oracle sees them at t = 1/2), in every VT mode and in EE box mode.
+TEST(FuzzRegressions, replay_swept_step_flying_far_past_still_elements) {
+  for (float length : {1.0f, 100.0f, 1e4f}) {
+    fuzz::MeshScene s;
+    s.xyz = {0, -1, -1, 0, 2, -1, 0, -1, 2,                           // triangle 0 in the plane x = 0 (still)
+             -length, 0.1f, 0.1f,                                     // vertex 3: crosses the triangle
+             0, 0, -5, 0, 0, -4,                                      // edge 4-5 along z (still)
+             -length, 0.5f, -4.5f, -length, -0.5f, -4.5f};            // edge 6-7 along y: sweeps through it
+    s.tris = {0, 1, 2};
+    s.edges = {0, 1, 0, 2, 1, 2, 4, 5, 6, 7};
+    s.r = 0.01f;
+    s.drop_incident = true;
+    s.swept0 = s.xyz;
+    s.swept1 = s.xyz;
+    s.swept1[9] = s.swept1[18] = s.swept1[21] = length;
+    for (uint32_t variant : {0u, 1u << 26, 0x5a5a5a5au}) {  // bit 26: rebuild_swept, else refit_swept
+      s.variant = variant;
+      EXPECT_EQ(replay(s).sampled_contacts, 2u) << "the oracle sees (3, 0) and EE (3, 4) at t = 1/2";
+    }
+  }
+}
+
+// A step of zero motion (two layers at a gap equal to r in float) gives the static sets; so
+// does a float64 step of zero motion far from the origin, with sub-ulp detail, whose refit and
+// swept step then move one layer through the other.
+TEST(FuzzRegressions, replay_swept_steps_of_zero_motion_and_float64_steps) {
+  fuzz::MeshScene s;
+  s.xyz = {0x0p+0f, 0x0p+0f, 0x0p+0f,  0x1p+0f, 0x0p+0f, 0x0p+0f,  0x0p+0f, 0x1p+0f, 0x0p+0f,
+           0x1p+0f, 0x1p+0f, 0x0p+0f,  0x0p+0f, 0x0p+0f, 0x1.99999ap-4f, 0x1p+0f, 0x0p+0f, 0x1.99999ap-4f,
+           0x0p+0f, 0x1p+0f, 0x1.99999ap-4f, 0x1p+0f, 0x1p+0f, 0x1.99999ap-4f};
+  s.tris = {0, 1, 3, 0, 3, 2, 4, 5, 7, 4, 7, 6};
+  s.r = 0x1.99999ap-4f;  // the gap
+  s.swept0 = s.swept1 = s.xyz;
+  for (bool drop : {false, true}) {
+    s.drop_incident = drop;
+    s.variant = drop ? 0x4000001u : 6u;
+    EXPECT_EQ(replay(s).still_steps, 1u);
+  }
+  // The same layers as doubles at 3e6 + detail below the float spacing (0.25 there).
+  fuzz::MeshScene d;
+  d.tris = s.tris;
+  d.r = 0.125f;
+  for (size_t i = 0; i < s.xyz.size(); ++i) d.xyz64.push_back(3e6 + double(s.xyz[i]) + 0.01 * double(i % 5));
+  d.swept0_64 = d.swept1_64 = d.xyz64;
+  EXPECT_EQ(replay(d).still_steps, 1u);
+  d.moved64 = d.xyz64;
+  d.swept1_64 = d.xyz64;
+  for (size_t i = 14; i < d.xyz64.size(); i += 3) {  // the upper layer (vertices 4-7): z
+    d.moved64[i] += 0.03;                           // a refit a fraction of the spacing up
+    d.swept0_64[i] += 2.0;                          // and a step from above, through the other layer, to below
+    d.swept1_64[i] -= 3.0;
+  }
+  for (uint32_t variant : {0u, 1u << 26}) {
+    d.variant = variant;
+    EXPECT_GT(replay(d).sampled_contacts, 0u);
+  }
 }
 
 }  // namespace
