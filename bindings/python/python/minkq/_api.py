@@ -2,7 +2,8 @@
 argument checks with messages naming the argument (minkq._args); numpy arrays, and arrays of
 other libraries read in place through DLPack or the CUDA array interface (minkq._interop), in
 and out; output arrays sized from the exact counts (minkq._results); devices (minkq._device),
-mesh scenes (minkq._scene) and box BVHs (minkq._bvh)."""
+mesh scenes (minkq._scene, their stream-ordered calls in minkq._stream_ordered) and box BVHs
+(minkq._bvh)."""
 
 from ._args import KINDS, MODES
 from ._bvh import BVH
