@@ -220,7 +220,7 @@ fn stream(address: usize) -> Stream {
 }
 
 fn parse_kind(kind: &str) -> PyResult<QueryKind> {
-    kind.parse().map_err(|_| PyValueError::new_err(format!("kind: expected 'vt' or 'ee', got {kind:?}")))
+    kind.parse().map_err(|_| PyValueError::new_err(format!("kind: expected 'vt', 'ee', 'vv' or 'ev', got {kind:?}")))
 }
 
 fn parse_mode(mode: &str) -> PyResult<Mode> {
@@ -267,7 +267,8 @@ impl PyDevice {
     }
 }
 
-/// A mesh scene: VT and EE queries; float32 vertices, or float64 ones with `float64`.
+/// A mesh scene: VT and EE queries over triangles, VV and EV over vertices and edges (which
+/// need no triangles); float32 vertices, or float64 ones with `float64`.
 #[pyclass(module = "minkq._native", name = "Scene")]
 struct PyScene {
     inner: Mutex<Scene>,
@@ -294,6 +295,8 @@ impl PyScene {
         edges: Option<&PyAny>,
         vt: bool,
         ee: bool,
+        vv: bool,
+        ev: bool,
         drop_incident: bool,
         float64: bool,
     ) -> PyResult<Self> {
@@ -301,17 +304,17 @@ impl PyScene {
         let triangles = Array::<i32>::get(triangles, "triangles", &[3], false)?;
         let edges = edges.map(|e| Array::<i32>::get(e, "edges", &[2], false)).transpose()?;
         let mut flags = SceneFlags::empty();
-        if vt {
-            flags |= SceneFlags::VT;
-        }
-        if ee {
-            flags |= SceneFlags::EE;
-        }
-        if drop_incident {
-            flags |= SceneFlags::DROP_INCIDENT;
-        }
-        if float64 {
-            flags |= SceneFlags::FLOAT64;
+        for (wanted, flag) in [
+            (vt, SceneFlags::VT),
+            (ee, SceneFlags::EE),
+            (vv, SceneFlags::VV),
+            (ev, SceneFlags::EV),
+            (drop_incident, SceneFlags::DROP_INCIDENT),
+            (float64, SceneFlags::FLOAT64),
+        ] {
+            if wanted {
+                flags |= flag;
+            }
         }
         // SAFETY: shapes checked: rows of 3 floats (doubles with FLOAT64), 3 and 2 int32; the
         // arrays live in this frame.

@@ -1,5 +1,6 @@
 """A brute-force numpy oracle in double precision, independent of minkq: every (vertex,
-triangle) and (edge, edge) distance by formulas written here, and small test meshes."""
+triangle), (edge, edge), (vertex, vertex) and (vertex, edge) distance by formulas written here,
+and small test meshes."""
 
 from __future__ import annotations
 
@@ -88,6 +89,36 @@ def ee_contacts(xyz: np.ndarray, edges: np.ndarray, r: float, drop_incident: boo
         shared = (a[..., 0] == b[..., 0]) | (a[..., 0] == b[..., 1]) | (a[..., 1] == b[..., 0]) | (a[..., 1] == b[..., 1])
         close &= ~shared
     return set(zip(*map(np.ndarray.tolist, np.nonzero(close))))
+
+
+def vv_contacts(xyz: np.ndarray, r: float) -> set:
+    """Every (v, w), v < w, within r."""
+    x = xyz.astype(np.float64)
+    d = x[:, None, :] - x[None, :, :]
+    close = _dot(d, d) <= r * r
+    close &= np.triu(np.ones((len(x), len(x)), dtype=bool), k=1)
+    return set(zip(*map(np.ndarray.tolist, np.nonzero(close))))
+
+
+def ev_contacts(xyz: np.ndarray, edges: np.ndarray, r: float, drop_incident: bool = True) -> set:
+    """Every (vertex, edge) within r, without a vertex's own edges when ``drop_incident``."""
+    x = xyz.astype(np.float64)
+    close = point_segment_sq(x[:, None, :], x[edges[:, 0]][None, :, :], x[edges[:, 1]][None, :, :]) <= r * r
+    if drop_incident:
+        v = np.arange(len(x))[:, None]
+        close &= (edges[None, :, 0] != v) & (edges[None, :, 1] != v)
+    return set(zip(*map(np.ndarray.tolist, np.nonzero(close))))
+
+
+def rods_and_particles(seed: int, rods: int, per_rod: int, loose: int, scale: float = 1.0, offset: float = 0.0):
+    """``rods`` random-walk polylines of ``per_rod`` vertices (consecutive vertices joined by an
+    edge) and ``loose`` particles in [offset, offset + scale]^3, in float64; and the edges."""
+    rng = np.random.default_rng(seed)
+    starts = rng.random((rods, 1, 3))
+    walks = starts + np.cumsum(0.08 * (rng.random((rods, per_rod, 3)) - 0.5), axis=1)
+    xyz = np.concatenate([walks.reshape(-1, 3), rng.random((loose, 3))]) * scale + offset
+    first = (np.arange(rods)[:, None] * per_rod + np.arange(per_rod - 1)[None, :]).ravel()
+    return xyz, np.stack([first, first + 1], axis=1).astype(np.int32)
 
 
 def rolled_sheet(n: int, seed: int) -> Tuple[np.ndarray, np.ndarray]:

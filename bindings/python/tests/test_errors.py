@@ -61,7 +61,7 @@ def test_wrong_edges_device_and_out_arguments(device, mesh):
 
 
 def test_wrong_kind_mode_and_radius_name_the_argument(scene):
-    with pytest.raises(ValueError, match="kind: expected one of 'vt', 'ee', got 'tv'"):
+    with pytest.raises(ValueError, match="kind: expected one of 'vt', 'ee', 'vv', 'ev', got 'tv'"):
         scene.query("tv", "box", 0.1)
     with pytest.raises(ValueError, match="mode: expected one of 'box', 'sphere', 'capsule_ray', 'capsule_exact', got 'exact'"):
         scene.query("vt", "exact", 0.1)
@@ -83,9 +83,9 @@ def test_byte_swapped_vertices_are_refused_by_the_native_layer(device, mesh):
     swapped = xyz.astype(xyz.dtype.newbyteorder())
     assert np.array_equal(swapped, xyz)  # the same values, the other byte order
     with pytest.raises(TypeError, match="vertices: expected native byte order"):
-        _native.Scene(device._native, swapped, tris, None, True, True, True, False)
+        _native.Scene(device._native, swapped, tris, None, True, True, False, False, True, False)
     with pytest.raises(TypeError, match="vertices: expected native byte order"):
-        _native.Scene(device._native, swapped.astype(">f8"), tris, None, True, True, True, True)
+        _native.Scene(device._native, swapped.astype(">f8"), tris, None, True, True, False, False, True, True)
     # The package converts it (one copy in native order) before the native layer sees it.
     scene = minkq.Scene(device, swapped, tris)
     assert np.array_equal(scene.query("vt", "box", 0.1, canonical=True), minkq.Scene(device, xyz, tris).query("vt", "box", 0.1, canonical=True))

@@ -12,6 +12,10 @@ use it for their per-step vertex-triangle (VT) and edge-edge (EE) broad phase::
     if scene.tree_growth() > 1.5:                                   # after large motions:
         scene.rebuild(new_vertices)                                 # fresh trees, same pairs
 
+Particles, rods and yarn get vertex-vertex (VV) and edge-vertex (EV) queries, with no triangles:
+``minkq.Scene(device, vertices, None, edges, vt=False, ee=False, vv=True, ev=True)``, then
+``scene.query("vv", ...)`` and ``scene.query("ev", ...)``.
+
 Arrays of other libraries (``__dlpack__``, ``__cuda_array_interface__``: Warp, PyTorch, CuPy)
 are read in place, on the GPU for a CUDA device, and results come back in their kind.
 :mod:`minkq.newton` (import it explicitly; it needs warp and newton) is a drop-in for Newton's

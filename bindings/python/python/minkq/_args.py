@@ -19,12 +19,12 @@ if TYPE_CHECKING:
 
     from ._device import Device
 
-    Kind = Literal["vt", "ee"]
+    Kind = Literal["vt", "ee", "vv", "ev"]
     Mode = Literal["box", "sphere", "capsule_ray", "capsule_exact"]
     Shape = Literal["sphere", "capsule", "box"]
     Pairs = npt.NDArray[np.int32]
 
-KINDS = ("vt", "ee")
+KINDS = ("vt", "ee", "vv", "ev")
 MODES = ("box", "sphere", "capsule_ray", "capsule_exact")
 FLOAT32, FLOAT64 = np.dtype(np.float32), np.dtype(np.float64)
 

@@ -36,6 +36,8 @@ class Scene:
         edges: Optional[Union[npt.NDArray[np.int32], Raw]],
         vt: bool,
         ee: bool,
+        vv: bool,
+        ev: bool,
         drop_incident: bool,
         float64: bool,
     ) -> None: ...

@@ -1,5 +1,5 @@
-"""Mesh scenes: VT and EE queries over a triangle mesh, blocking (the stream-ordered calls are
-in minkq._stream_ordered)."""
+"""Mesh scenes: VT and EE queries over a triangle mesh, VV and EV over vertices and edges,
+blocking (the stream-ordered calls are in minkq._stream_ordered)."""
 
 from __future__ import annotations
 
@@ -19,14 +19,18 @@ if TYPE_CHECKING:
 
 _BLOCKING = object()
 """The ``stream`` of :meth:`Scene._move` for the blocking calls."""
+_NO_TRIANGLES = np.zeros((0, 3), np.int32)
+"""``triangles=None``: a scene of vertices and edges only."""
 
 
 class Scene(_StreamOrdered, _SizedQueries):
-    """A triangle mesh on a device with the BVHs for VT and/or EE queries.
+    """A triangle mesh, or codimensional elements (particles, rods), on a device with the BVHs
+    for its queries: VT and EE over triangles, VV and EV over vertices and edges.
 
-    ``vertices``: (n, 3) float32 or float64; ``triangles``: (m, 3) int32; ``edges``: (e, 2)
-    int32, or None (or an empty array) to derive them from the triangles (every distinct
-    undirected edge as (min, max), sorted).
+    ``vertices``: (n, 3) float32 or float64; ``triangles``: (m, 3) int32, or None (the same
+    as an empty (0, 3) array: no triangles); ``edges``: (e, 2) int32, or None (or an empty
+    array) to derive them from the triangles (every distinct undirected edge as (min, max),
+    sorted).
     C-contiguous numpy arrays of exactly these dtypes are used without a copy; other host
     arrays (int64 indices, strided or byte-swapped arrays, lists, ...) are converted once: a
     copy is made (an index that does not fit in int32 raises IndexOutOfRangeError naming it).
@@ -45,8 +49,30 @@ class Scene(_StreamOrdered, _SizedQueries):
     round them to float32 (create it from float64 vertices to have the guarantee in double).
     Floats wider than float64 (``np.longdouble``) raise TypeError: minkq rounds none itself.
 
-    ``vt`` / ``ee`` say which queries the scene answers; ``drop_incident`` drops (v, t) with v
-    a vertex of t and pairs of edges sharing a vertex (the cloth self-collision set-up).
+    ``vt`` / ``ee`` / ``vv`` / ``ev`` say which queries the scene answers (at least one);
+    ``drop_incident`` drops (v, t) with v a vertex of t, pairs of edges sharing a vertex (the
+    cloth self-collision set-up) and (v, e) with v an end of e; VV pairs are never incident.
+
+    Codimensional elements (``MINKQ_SCENE_VV`` / ``MINKQ_SCENE_EV``): ``vv=True`` builds a
+    vertex tree for ``"vv"`` queries, pairs (v, w), v < w, of vertices within r (each pair
+    once; neighbours along a rod too); ``ev=True`` the edge tree for ``"ev"`` queries, pairs
+    (vertex, edge) of a vertex within r of an edge (without its own edges under
+    ``drop_incident``). Rods and yarn are vertices and explicit edges with ``triangles=None``;
+    loose particles need vertices only (``vv=True``, every other kind off). The flags may also
+    join VT and EE on a triangle mesh (then EV uses the derived edges). Every mode (for these
+    point queries ``"capsule_ray"`` is ``"box"`` and ``"capsule_exact"`` is ``"sphere"``),
+    ``leaf_exact``, float64 vertices and swept steps work as for VT. A query of a kind the
+    scene was created without raises :class:`InvalidArgumentError` ("VV query on a scene
+    created without MINKQ_SCENE_VV").
+
+    >>> import numpy as np, minkq
+    >>> rod = np.array([[0, 0, 0], [.1, 0, 0], [.2, 0, 0], [.3, 0, 0], [.2, .05, 0]], np.float32)
+    >>> edges = np.array([[0, 1], [1, 2], [2, 3]], np.int32)  # vertex 4: a particle
+    >>> rods = minkq.Scene(minkq.Device("cpu"), rod, None, edges, vt=False, ee=False, vv=True, ev=True)
+    >>> rods.query("vv", "sphere", 0.06, leaf_exact=True, canonical=True).tolist()
+    [[2, 4]]
+    >>> rods.query("ev", "box", 0.06, leaf_exact=True, canonical=True).tolist()
+    [[4, 1], [4, 2]]
 
     Arrays of other libraries (Warp arrays, PyTorch and CuPy tensors: anything with
     ``__dlpack__`` or ``__cuda_array_interface__``) are read in place, in host memory or, on a
@@ -86,6 +112,8 @@ class Scene(_StreamOrdered, _SizedQueries):
         *,
         vt: bool = True,
         ee: bool = True,
+        vv: bool = False,
+        ev: bool = False,
         drop_incident: bool = True,
     ) -> None:
         super().__init__()
@@ -95,10 +123,10 @@ class Scene(_StreamOrdered, _SizedQueries):
         args = _Args(device)
         vertices, self._dtype = args.vertices(vertices, "vertices", None)
         self._like = _like(args.last)
-        triangles = args.rows(triangles, "triangles", np.int32, (3,))
+        triangles = args.rows(_NO_TRIANGLES if triangles is None else triangles, "triangles", np.int32, (3,))
         if edges is not None:
             edges = args.rows(edges, "edges", np.int32, (2,))
-        flags = (bool(vt), bool(ee), bool(drop_incident), self._dtype == FLOAT64)
+        flags = (bool(vt), bool(ee), bool(vv), bool(ev), bool(drop_incident), self._dtype == FLOAT64)
         self._native = _native.Scene(device._native, vertices, triangles, edges, *flags)
         self._stream = 0  # the stream of the last stream-ordered call, for async_status
 
@@ -121,12 +149,12 @@ class Scene(_StreamOrdered, _SizedQueries):
 
     @property
     def edge_count(self) -> int:
-        """The number of edges (given, or derived for an EE scene)."""
+        """The number of edges (given, or derived for an EE or EV scene)."""
         return self._native.edge_count
 
     def edges(self) -> "Pairs":
-        """The scene's edges as an (edge_count, 2) int32 numpy array, numbered as EE pairs number
-        them."""
+        """The scene's edges as an (edge_count, 2) int32 numpy array, numbered as EE and EV pairs
+        number them."""
         out = np.empty((self.edge_count, 2), dtype=np.int32)
         self._native.edges_into(out)
         return out
@@ -172,14 +200,15 @@ class Scene(_StreamOrdered, _SizedQueries):
         The modes test the elements' swept boxes. VT takes the vertex as its path, the segment
         x0 -> x1: ``"box"`` (its box grown by r), ``"capsule_ray"`` and ``"capsule_exact"`` (the
         capsule of radius r around it), and ``"sphere"``, the same as ``"capsule_exact"`` (the
-        sphere swept along the path). EE runs ``"box"`` only (each edge's swept box grown by r):
-        its other modes, and ``leaf_exact=True`` in every query (it needs the time of closest
-        approach, which the narrow phase finds), raise :class:`UnsupportedError`.
-        ``drop_incident`` and the once-per-pair EE rule apply as for static queries. At
-        ``x0 == x1`` the pairs are the static ones (VT ``"capsule_exact"`` and ``"sphere"``:
-        the static ``"sphere"`` pairs). A float64 scene reports every pair within r in double at
-        some time of the step. Results are like the vertices last given (``x1``, else ``x0``,
-        when of another library).
+        sphere swept along the path). VV and EV test paths as VT does (VV each vertex's path
+        against the other's box), in every mode. EE runs ``"box"`` only (each edge's swept box
+        grown by r): its other modes, and ``leaf_exact=True`` in every query (it needs the time
+        of closest approach, which the narrow phase finds), raise :class:`UnsupportedError`.
+        ``drop_incident`` and the once-per-pair EE and VV rule apply as for static queries. At
+        ``x0 == x1`` the pairs are the static ones (VT, VV and EV ``"capsule_exact"`` and
+        ``"sphere"``: the static ``"sphere"`` pairs). A float64 scene reports every pair within
+        r in double at some time of the step. Results are like the vertices last given (``x1``,
+        else ``x0``, when of another library).
 
         Errors: those of :meth:`refit` for either array (a wrong dtype or shape names ``x0`` or
         ``x1``); on error the scene keeps its positions, trees and swept state.
@@ -270,12 +299,13 @@ class Scene(_StreamOrdered, _SizedQueries):
         like: Any = None,
     ) -> "Pairs":
         """Pairs within ``radius`` as a (k, 2) int32 array: (vertex, triangle) for ``kind="vt"``,
-        (e, f) with e < f for ``"ee"``.
+        (e, f) with e < f for ``"ee"``, (v, w) with v < w for ``"vv"``, (vertex, edge) for
+        ``"ev"`` (each needs the scene's flag of the same name).
 
-        ``mode`` is the node test, from fast to tight: ``"box"``, ``"sphere"`` (VT only),
-        ``"capsule_ray"``, ``"capsule_exact"``. ``leaf_exact=True`` tests the primitives at the
-        leaves, so that the pairs are the true contacts (plus, at most, pairs within
-        r + 2**-19 S). ``canonical=True`` sorts the pairs.
+        ``mode`` is the node test, from fast to tight: ``"box"``, ``"sphere"`` (point queries:
+        VT, VV, EV), ``"capsule_ray"``, ``"capsule_exact"``. ``leaf_exact=True`` tests the
+        primitives at the leaves, so that the pairs are the true contacts (plus, at most, pairs
+        within r + 2**-19 S). ``canonical=True`` sorts the pairs.
 
         The result is a numpy array, or an array of the library and device of the vertices last
         given (a Warp array on ``cuda:0`` gives a Warp array on ``cuda:0``, written there in
@@ -324,8 +354,9 @@ class Scene(_StreamOrdered, _SizedQueries):
     ) -> Tuple["Pairs", "Pairs"]:
         """The VT and the EE pairs within ``radius`` from one pass (one parallel loop on the CPU,
         one kernel launch and one count readback on CUDA): exactly what ``query("vt", vt_mode,
-        ...)`` and ``query("ee", ee_mode, ...)`` return. ``leaf_exact=True`` gives the contacts
-        (meant for the default box modes: bench/README.md). Results as :meth:`query`.
+        ...)`` and ``query("ee", ee_mode, ...)`` return (VV and EV queries run through
+        :meth:`query`). ``leaf_exact=True`` gives the contacts (meant for the default box modes:
+        bench/README.md). Results as :meth:`query`.
 
         >>> import numpy as np, minkq
         >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]], np.float32)
