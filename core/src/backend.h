@@ -218,18 +218,21 @@ inline int64_t first_non_finite_host(const Strided& values, int floats) {
   return -1;
 }
 
-// Host float64 vertices rounded to nearest float into `out`; returns rho, the farthest the
-// rounding moved one (minkq/float64.h).
+// Float64 vertex i of host `values` rounded to nearest float into `out`; returns how far the
+// rounding moved it (minkq/float64.h).
+inline float round_float64_record(const Strided& values, int64_t i, Vec3& out) {
+  double p[3];
+  std::memcpy(p, static_cast<const char*>(values.data) + size_t(i) * values.stride, sizeof p);
+  out = round_to_float(p);
+  return rounding_distance(p, out);
+}
+
+// Host float64 vertices rounded into `out` (sized to them); returns rho, the farthest the
+// rounding moved one. One thread: the CPU backend runs the same records in parallel.
 inline float gather_float64_host(const Strided& values, std::vector<Vec3>& out) {
   out.resize(size_t(values.count));
-  const char* base = static_cast<const char*>(values.data);
   float rho = 0.0f;
-  for (int64_t i = 0; i < values.count; ++i) {
-    double p[3];
-    std::memcpy(p, base + size_t(i) * values.stride, sizeof p);
-    out[size_t(i)] = round_to_float(p);
-    rho = std::max(rho, rounding_distance(p, out[size_t(i)]));
-  }
+  for (int64_t i = 0; i < values.count; ++i) rho = std::max(rho, round_float64_record(values, i, out[size_t(i)]));
   return rho;
 }
 

@@ -1,5 +1,7 @@
 // The CPU backend: the stores of store.h over the CPU executor (host vectors, CpuTree, the
 // TBB pass runner), and the backend's own input checks.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -13,6 +15,20 @@
 
 namespace minkq {
 namespace {
+
+// gather_float64_host in parallel: the records rounded into `out`, rho reduced (max is exact,
+// so the result does not depend on the split).
+float gather_float64(const Strided& values, std::vector<Vec3>& out) {
+  out.resize(size_t(values.count));
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int64_t>(0, values.count, 1024), 0.0f,
+      [&](const tbb::blocked_range<int64_t>& range, float rho) {
+        for (int64_t i = range.begin(); i != range.end(); ++i)
+          rho = std::max(rho, round_float64_record(values, i, out[size_t(i)]));
+        return rho;
+      },
+      [](float a, float b) { return std::max(a, b); });
+}
 
 // store.h's executor on the host: every call completes before it returns.
 class CpuExecutor {
@@ -37,7 +53,7 @@ class CpuExecutor {
     dst = gather_host<T>(values);
   }
   void gather_float64(const Strided& values, std::vector<Vec3>& dst, std::vector<float>& rho, bool accumulate) {
-    const float moved = gather_float64_host(values, dst);
+    const float moved = minkq::gather_float64(values, dst);
     rho.resize(1, 0.0f);
     rho[0] = accumulate ? std::max(rho[0], moved) : moved;
   }
@@ -82,7 +98,7 @@ class CpuExecutor {
       if (pending_.call == PendingError::kNone) pending_ = {call, bad};
       return;
     }
-    if (values.scalar == Scalar::kFloat64) *rho = gather_float64_host(values, dst); else gather(values, dst);
+    if (values.scalar == Scalar::kFloat64) *rho = minkq::gather_float64(values, dst); else gather(values, dst);
   }
   void commit_finite_swept(const Strided& x0, const Strided& x1, std::vector<Vec3>&, std::vector<Vec3>&,
                            std::vector<Vec3>& dst0, std::vector<Vec3>& dst1, float* rho, PendingError::Call call) {
@@ -93,7 +109,7 @@ class CpuExecutor {
       return;
     }
     if (x0.scalar == Scalar::kFloat64) {
-      *rho = std::max(gather_float64_host(x0, dst0), gather_float64_host(x1, dst1));
+      *rho = std::max(minkq::gather_float64(x0, dst0), minkq::gather_float64(x1, dst1));
     } else {
       gather(x0, dst0);
       gather(x1, dst1);
