@@ -153,6 +153,97 @@ TEST(FuzzRegressions, capsule_exact_keeps_contacts_of_segments_longer_than_2_to_
   EXPECT_NEAR(d2, 0x1p+80f, 0x1p+62f);
 }
 
+// fuzz_differential, bug 6 (fuzz/RESULTS.md), not fixed: capsule_ray and capsule_exact lose true
+// contacts of a segment whose extent along an axis exceeds FLT_MAX. CapsuleRayShape::from takes
+// d = p1 - p0 in float, which overflows to infinity; every slab's t-interval (bound - o) / d is
+// then about 0, so the slab test sees only the segment's start and rejects the box the segment
+// passes through. capsule_exact applies the slab test first and loses the pair too. Found by
+// the 10-minute campaign of 2026-12-02 as a swept step (the minimised scene below: a vertex
+// flying from -P to P through a point triangle at the origin, |P.y| ~ 2^127, r ~ 2.1e28), and it
+// is the same for a static EE edge (the second scene). The checks tolerate such pairs by default
+// (fuzz::known_bugs_tolerated(), counted in Stats::tolerated); this test requires them and is
+// disabled until the fix (--gtest_also_run_disabled_tests shows it failing).
+fuzz::MeshScene segments_longer_than_flt_max(bool swept) {
+  fuzz::MeshScene s;
+  if (swept) {
+    s.xyz = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    s.tris = {0, 0, 0};
+    s.r = 0x1.12e0bep+94f;  // 2.12676473e+28
+    s.moved = std::vector<float>(9, -0x1.0c6f7ap+103f);
+    s.swept0 = {0, 0, 0, 0, 0, 0, -0x1.45697cp+125f, 0x1.0f2d3cp+127f, -0x1.2a4b5cp+126f};
+    s.swept1 = {0, 0, 0, 0, 0, 0, 0x1.45697cp+125f, -0x1.0f2d3cp+127f, 0x1.2a4b5cp+126f};
+  } else {  // edge 0-1 through the origin, where the zero-length edge 2-3 lies
+    s.xyz = {-0x1.45697cp+125f, 0x1.0f2d3cp+127f, -0x1.2a4b5cp+126f, 0x1.45697cp+125f, -0x1.0f2d3cp+127f,
+             0x1.2a4b5cp+126f, 0, 0, 0, 0, 0, 0};
+    s.tris = {2, 2, 3};
+    s.edges = {0, 1, 2, 3};
+    s.r = 1.0f;
+  }
+  return s;
+}
+
+TEST(FuzzRegressions, DISABLED_segment_modes_keep_contacts_of_segments_longer_than_flt_max) {
+  struct Strict {
+    Strict() { fuzz::known_bugs_tolerated() = false; }
+    ~Strict() { fuzz::known_bugs_tolerated() = true; }
+  } strict;
+  for (bool swept : {true, false}) replay(segments_longer_than_flt_max(swept));
+}
+
+// Until bug 6 is fixed the checks pass these scenes by not requiring the overflowing segments'
+// pairs of the segment modes (and count them); every other check still applies.
+TEST(FuzzRegressions, bug_6_pairs_are_tolerated_and_counted) {
+  for (bool swept : {true, false}) EXPECT_GT(replay(segments_longer_than_flt_max(swept)).tolerated, 0u) << swept;
+}
+
+// fuzz_differential, bug 7 (fuzz/RESULTS.md), not fixed: minkq.h says a swept step of zero
+// motion gives the static pairs (VT sphere and capsule_exact: the static sphere mode's). Swept,
+// a still vertex is a zero-length segment under CapsuleExactShape, whose threshold has more
+// slack than SphereShape's: on this sheet at offset 1e3 (r = 0.5593088) six pairs at point-box
+// distance r (1 + 3.6e-6) are kept by the still step's sphere and capsule_exact modes and
+// dropped by the static sphere mode. Found by the campaign of 2026-12-02 (the scene as it
+// printed it). Strict equality is disabled until the fix; the checks accept differing pairs
+// within the tests' slack (compare_still_step), as the second test shows.
+fuzz::MeshScene still_sheet_at_the_sphere_tests_boundary() {
+  fuzz::MeshScene s;
+  s.xyz = {0x1.f4p+9f, 0x1.f4p+9f, 0x1.f4p+9f,
+    0x1.f42p+9f, 0x1.f4p+9f, 0x1.f3fdbp+9f,
+    0x1.f42p+9f, 0x1.f44p+9f, 0x1.f3fdbp+9f,
+    0x1.f4p+9f, 0x1.f44p+9f, 0x1.f4p+9f,
+    0x1.f44p+9f, 0x1.f4p+9f, 0x1.f3fb5ep+9f,
+    0x1.f4p+9f, 0x1.f4p+9f, 0x1.f4p+9f,
+    0x1.f46p+9f, 0x1.f4p+9f, 0x1.f3f90ep+9f,
+    0x1.f46p+9f, 0x1.f44p+9f, 0x1.f3f90ep+9f,
+    0x1.f48p+9f, 0x1.f4p+9f, 0x1.f3f6bcp+9f,
+    0x1.f4p+9f, 0x1.f4p+9f, 0x1.f4p+9f,
+    0x1.f42p+9f, 0x1.f48p+9f, 0x1.f3fdbp+9f,
+    0x1.f4p+9f, 0x1.f48p+9f, 0x1.f4p+9f,
+    0x1.f44p+9f, 0x1.f48p+9f, 0x1.f3fb5ep+9f};
+  s.tris = {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 2, 4, 6, 7, 4, 7, 5, 6, 8, 9, 6, 9, 7,
+    3, 2, 10, 3, 10, 11, 2, 5, 12, 2, 12, 10};
+  s.r = 0x1.1e5dbap-1f;  // 0.559308827
+  s.drop_incident = false;
+  s.moved = s.xyz;
+  s.swept0 = s.xyz;
+  s.swept1 = s.xyz;
+  s.variant = 1682314176;
+  return s;
+}
+
+TEST(FuzzRegressions, DISABLED_still_swept_step_gives_exactly_the_static_sphere_pairs) {
+  struct Strict {
+    Strict() { fuzz::known_bugs_tolerated() = false; }
+    ~Strict() { fuzz::known_bugs_tolerated() = true; }
+  } strict;
+  replay(still_sheet_at_the_sphere_tests_boundary());
+}
+
+TEST(FuzzRegressions, bug_7_pairs_differ_only_at_the_boundary) {
+  const fuzz::Stats stats = replay(still_sheet_at_the_sphere_tests_boundary());
+  EXPECT_EQ(stats.still_steps, 1u);
+  EXPECT_EQ(stats.tolerated, 12u);  // six pairs, in sphere and in capsule_exact
+}
+
 // ---- Scenes in the differential fuzzer's format --------------------------------------------
 
 // Two layers at a gap equal to r in float (the fuzzer's "stacked" kind at its boundary case),
