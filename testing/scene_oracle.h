@@ -74,34 +74,13 @@ inline void check_ee_extras(Report& report, const Pairs& extras, const std::vect
 
 // ---- Known library bugs the checks tolerate until they are fixed (fuzz/RESULTS.md) -------------
 
-// Bug 6: the segment shapes (capsule_ray, and capsule_exact through it) lose true contacts of a
-// segment whose extent along an axis exceeds FLT_MAX: d = p1 - p0 overflows to infinity and the
-// slab test then sees the segment's start only. This hits static EE edges and swept VT paths.
-// While tolerated (the default; MINKQ_FUZZ_STRICT=1 in the fuzzer, or false here, reports them),
-// such pairs are not required of those modes, and counted.
+// Bug 6 (fixed): the segment shapes lost true contacts of a segment longer than FLT_MAX along
+// an axis; tests/test_fuzz_regressions.cpp keeps its scenes. Bug 7 is still tolerated: while
+// known_bugs_tolerated() (the default; MINKQ_FUZZ_STRICT=1 in the fuzzer, or false here,
+// reports it) the checks accept what it explains, and count it.
 inline bool& known_bugs_tolerated() {
   static bool tolerated = true;
   return tolerated;
-}
-inline bool segment_overflows(const float* a, const float* b) {
-  for (int k = 0; k < 3; ++k)
-    if (std::isinf(b[k] - a[k])) return true;
-  return false;
-}
-// The contacts a segment-shape mode must report: `truth`, less (while bug 6 is tolerated) the
-// pairs `overflows` says have a segment longer than FLT_MAX on an axis, counted in `tolerated`.
-template <class Overflows>
-Pairs required_of_segment_mode(const Pairs& truth, Overflows&& overflows, uint64_t& tolerated) {
-  if (!known_bugs_tolerated()) return truth;
-  Pairs out;
-  for (const auto& pair : truth) {
-    if (overflows(pair)) {
-      tolerated++;
-      continue;
-    }
-    out.push_back(pair);
-  }
-  return out;
 }
 
 // Bug 7 (not a false negative): at zero motion the swept VT sphere, capsule_ray and

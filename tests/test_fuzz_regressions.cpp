@@ -153,16 +153,15 @@ TEST(FuzzRegressions, capsule_exact_keeps_contacts_of_segments_longer_than_2_to_
   EXPECT_NEAR(d2, 0x1p+80f, 0x1p+62f);
 }
 
-// fuzz_differential, bug 6 (fuzz/RESULTS.md), not fixed: capsule_ray and capsule_exact lose true
+// fuzz_differential, bug 6 (fuzz/RESULTS.md), fixed: capsule_ray and capsule_exact lost true
 // contacts of a segment whose extent along an axis exceeds FLT_MAX. CapsuleRayShape::from takes
 // d = p1 - p0 in float, which overflows to infinity; every slab's t-interval (bound - o) / d is
 // then about 0, so the slab test sees only the segment's start and rejects the box the segment
 // passes through. capsule_exact applies the slab test first and loses the pair too. Found by
 // the 10-minute campaign of 2026-12-02 as a swept step (the minimised scene below: a vertex
 // flying from -P to P through a point triangle at the origin, |P.y| ~ 2^127, r ~ 2.1e28), and it
-// is the same for a static EE edge (the second scene). The checks tolerate such pairs by default
-// (fuzz::known_bugs_tolerated(), counted in Stats::tolerated); this test requires them and is
-// disabled until the fix (--gtest_also_run_disabled_tests shows it failing).
+// is the same for a static EE edge (the second scene). Fixed: such a segment's shape leaves the
+// decision to its box test (CapsuleRayShape::unbounded).
 fuzz::MeshScene segments_longer_than_flt_max(bool swept) {
   fuzz::MeshScene s;
   if (swept) {
@@ -182,18 +181,8 @@ fuzz::MeshScene segments_longer_than_flt_max(bool swept) {
   return s;
 }
 
-TEST(FuzzRegressions, DISABLED_segment_modes_keep_contacts_of_segments_longer_than_flt_max) {
-  struct Strict {
-    Strict() { fuzz::known_bugs_tolerated() = false; }
-    ~Strict() { fuzz::known_bugs_tolerated() = true; }
-  } strict;
-  for (bool swept : {true, false}) replay(segments_longer_than_flt_max(swept));
-}
-
-// Until bug 6 is fixed the checks pass these scenes by not requiring the overflowing segments'
-// pairs of the segment modes (and count them); every other check still applies.
-TEST(FuzzRegressions, bug_6_pairs_are_tolerated_and_counted) {
-  for (bool swept : {true, false}) EXPECT_GT(replay(segments_longer_than_flt_max(swept)).tolerated, 0u) << swept;
+TEST(FuzzRegressions, segment_modes_keep_contacts_of_segments_longer_than_flt_max) {
+  for (bool swept : {true, false}) EXPECT_EQ(replay(segments_longer_than_flt_max(swept)).tolerated, 0u) << swept;
 }
 
 // fuzz_differential, bug 7 (fuzz/RESULTS.md), not fixed: minkq.h says a swept step of zero

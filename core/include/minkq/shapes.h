@@ -163,9 +163,16 @@ struct SphereShape : BoxThenFiner<SphereShape> {  // p0 is the centre; p1 is ign
 struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
   BoxShape box;
   Vec3 p0, d;
-  MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) { return {{}, BoxShape::from(q), q.p0, q.p1 - q.p0}; }
+  // d overflowed (the segment spans more than FLT_MAX along an axis): the slab test cannot run,
+  // and the box test alone decides (fuzz/RESULTS.md, bug 6).
+  bool unbounded;
+  MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) {
+    const Vec3 d = q.p1 - q.p0;
+    const bool unbounded = !(fabsf(d.x) <= FLT_MAX && fabsf(d.y) <= FLT_MAX && fabsf(d.z) <= FLT_MAX);
+    return {{}, BoxShape::from(q), q.p0, d, unbounded};
+  }
   MINKQ_HD const BoxShape& box_test() const { return box; }
-  MINKQ_HD bool finer(const Box& b) const { return capsule_ray_overlaps_box(p0, d, box.r, b); }
+  MINKQ_HD bool finer(const Box& b) const { return unbounded || capsule_ray_overlaps_box(p0, d, box.r, b); }
 #if !defined(__CUDACC__)
   // capsule_ray_overlaps_box on the lanes asked for. The swap of the slab's ends is the
   // scalar test's (t0 > t1), a NaN end (inf - inf in the widening) is dropped by
@@ -173,7 +180,7 @@ struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
   unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
     using simd4::F4;
     using simd4::M4;
-    if (lanes == 0) return 0;
+    if (lanes == 0 || unbounded) return lanes;
     const float r = box.r;
     F4 t_near = simd4::splat(0.0f), t_far = simd4::splat(1.0f);
     M4 inside = t_near == t_near;  // every lane
