@@ -3,14 +3,16 @@
 #
 #   bench/run.sh            full run (about 20 min on 2 cores): scenes, real meshes, radius
 #                           sweep, 1M/2M twisted sheets, stability report, h/r study, plots,
-#                           Warp/Newton CPU baselines, float64 and swept queries; writes
+#                           Warp/Newton CPU baselines, float64 and swept queries, ipctk CCD
+#                           broad phases (when the Scalable CCD sample data is found); writes
 #                           bench/results/
 #   bench/run.sh --quick    smoke run (seconds): reference scenes (2 frames, 1 repeat), quick
 #                           stability and h/r runs; writes build-bench/quick-results/ and exits
 #                           non-zero on any false negative or bound violation
 #   options: --out DIR (results folder), --no-warp (skip the Python/Warp stage),
 #            --no-install (do not apt-get/pip anything)
-# Environment: MINKQ_BENCH_BUILD (build folder, default build-bench), MINKQ_WITH_CUDA (AUTO|ON|OFF).
+# Environment: MINKQ_BENCH_BUILD (build folder, default build-bench), MINKQ_WITH_CUDA (AUTO|ON|OFF),
+#   MINKQ_CCD_DATA (the Scalable CCD sample data), MINKQ_LIB_DIR (libminkq.so for ccd_peers.py).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${MINKQ_BENCH_BUILD:-$root/build-bench}
@@ -21,7 +23,7 @@ while [ $# -gt 0 ]; do
     --no-warp) warp=0 ;;
     --no-install) install=0 ;;
     --out) out=$2; shift ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -93,6 +95,23 @@ if [ $warp = 1 ] && [ -x "$venv/bin/python" ]; then
   "$bin/minkq_bench" --suites scale --scale-scenes twist_target --scale-triangles 1e6 --export-only "$build/export1M"
   "$venv/bin/python" "$root/bench/warp_baseline.py" "$build/export1M" "$out/rows.csv" "$out/warp_1M.md" --minkq-threads all ||
     echo "warp_baseline.py (1M) failed"
+fi
+
+# Swept queries beside ipctk's CCD broad phases on the Scalable CCD sample data, when a copy of it
+# is found (MINKQ_CCD_DATA, else ../shared/data/Sample-Scalable-CCD-Data, ...: see ccd_peers.py)
+# and minkq's Python module is built (bindings/test.sh); skipped by name otherwise. ipctk in a venv
+# of its own (it brings scipy and its own TBB, statically linked).
+ccd_venv=$build/ccd-venv
+if [ $install = 1 ] && [ ! -x "$ccd_venv/bin/python" ]; then python3 -m venv "$ccd_venv" || true; fi
+if [ -x "$ccd_venv/bin/python" ] && [ $install = 1 ]; then
+  "$ccd_venv/bin/pip" install -q numpy "ipctk==1.6.1" || echo "pip: ipctk failed; ccd_peers skipped"
+fi
+ccd_env=(env PYTHONPATH="$root/bindings/python/python${PYTHONPATH:+:$PYTHONPATH}"
+         LD_LIBRARY_PATH="${MINKQ_LIB_DIR:-$build/minkq/capi}${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}")
+if [ ! -x "$ccd_venv/bin/python" ] || ! "${ccd_env[@]}" "$ccd_venv/bin/python" -c 'import minkq, ipctk' 2>/dev/null; then
+  echo "ccd_peers: skipped (needs ipctk in $ccd_venv and minkq's Python module: bindings/test.sh builds it)" >&2
+else
+  "${ccd_env[@]}" "$ccd_venv/bin/python" "$root/bench/ccd_peers.py" --out "$out/ccd_peers.md" || status=$?
 fi
 echo "results in $out (status $status)"
 exit $status
