@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "capi_util.h"
+#include "scene_definitions.h"
 #include "swept_steps.h"
 #include "minkq_reference.h"
 #include "test_util.h"
@@ -41,53 +42,6 @@ test::Scene swept_scene(minkq_device* device, const Step& step, bool rebuild) {
   return scene;
 }
 
-// The box mode's definition on every pair, in float as the scene holds the positions: each
-// element's box over its vertices' two positions, and a pair when the boxes' gap is <= r on
-// every axis; incident pairs dropped, EE pairs once (e < f).
-struct SweptBoxes {
-  std::vector<float> lo, hi;  // 3 per element
-  void add(const std::vector<const float*>& points) {
-    for (int a = 0; a < 3; ++a) {
-      float l = points[0][a], h = points[0][a];
-      for (const float* p : points) l = std::min(l, p[a]), h = std::max(h, p[a]);
-      lo.push_back(l);
-      hi.push_back(h);
-    }
-  }
-  bool within(size_t i, const SweptBoxes& other, size_t j, float r) const {
-    for (int a = 0; a < 3; ++a)
-      if (other.lo[3 * j + a] - hi[3 * i + a] > r || lo[3 * i + a] - other.hi[3 * j + a] > r) return false;
-    return true;
-  }
-};
-std::pair<Pairs, Pairs> box_definition(const Step& step, float r) {
-  const float* x0 = step.from.xyz.data();
-  const float* x1 = step.to.xyz.data();
-  auto p0 = [&](int32_t v) { return x0 + 3 * size_t(v); };
-  auto p1 = [&](int32_t v) { return x1 + 3 * size_t(v); };
-  const std::vector<int32_t>& tris = step.from.tris;
-  const std::vector<int32_t> edges = reference::derive_edges(tris);
-  SweptBoxes paths, triangles, edge_boxes;
-  for (size_t v = 0; v < step.from.vertex_count(); ++v) paths.add({p0(int32_t(v)), p1(int32_t(v))});
-  for (size_t t = 0; t < tris.size(); t += 3)
-    triangles.add({p0(tris[t]), p0(tris[t + 1]), p0(tris[t + 2]), p1(tris[t]), p1(tris[t + 1]), p1(tris[t + 2])});
-  for (size_t e = 0; e < edges.size(); e += 2)
-    edge_boxes.add({p0(edges[e]), p0(edges[e + 1]), p1(edges[e]), p1(edges[e + 1])});
-  Pairs vt, ee;
-  for (size_t v = 0; v < step.from.vertex_count(); ++v)
-    for (size_t t = 0; t < tris.size() / 3; ++t) {
-      const bool incident = tris[3 * t] == int32_t(v) || tris[3 * t + 1] == int32_t(v) || tris[3 * t + 2] == int32_t(v);
-      if (!incident && paths.within(v, triangles, t, r)) vt.push_back({int32_t(v), int32_t(t)});
-    }
-  for (size_t e = 0; e < edges.size() / 2; ++e)
-    for (size_t f = e + 1; f < edges.size() / 2; ++f) {
-      const int32_t a0 = edges[2 * e], a1 = edges[2 * e + 1], b0 = edges[2 * f], b1 = edges[2 * f + 1];
-      const bool incident = a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1;
-      if (!incident && edge_boxes.within(e, edge_boxes, f, r)) ee.push_back({int32_t(e), int32_t(f)});
-    }
-  return {vt, ee};
-}
-
 // Every mode of a swept scene contains the sampled contacts; box mode equals its definition;
 // the finer VT modes nest inside it.
 void check_step(minkq_device* device, const Step& step, double r, const std::string& what) {
@@ -100,7 +54,10 @@ void check_step(minkq_device* device, const Step& step, double r, const std::str
     const Pairs ee_box = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, rf);
     EXPECT_TRUE(test::is_subset(ee_truth, ee_box)) << "EE lost " << test::describe(test::difference(ee_truth, ee_box));
     if (!step.float64()) {  // float64 scenes widen r by 2 rho: more than the definition's r
-      const auto [vt_def, ee_def] = box_definition(step, rf);
+      // The box mode's definition on every pair (elements boxed over both positions, per-axis
+      // gap <= r in float), written plainly in testing/scene_definitions.h.
+      const auto [vt_def, ee_def] = fuzz::plain_swept_box_sets(step.from.xyz, step.to.xyz, step.from.tris,
+                                                               reference::derive_edges(step.from.tris), rf, true);
       EXPECT_EQ(vt_box, vt_def) << "VT box mode";
       EXPECT_EQ(ee_box, ee_def) << "EE box mode";
     }
