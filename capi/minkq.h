@@ -196,10 +196,9 @@ minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
  *   EE  box (the edge's swept box grown by r); the segment modes are UNSUPPORTED.
  * MINKQ_QUERY_LEAF_EXACT is UNSUPPORTED (it would need the time of closest approach); the
  * scene's DROP_INCIDENT and the once-per-pair EE rule apply as for static queries. At x0 == x1
- * box and capsule_ray give the static queries' pairs; VT capsule_exact and sphere give the static
- * sphere mode's, except that a still vertex is tested as a zero-length capsule, whose test
- * keeps a little more slack: it may also keep pairs a hair beyond the sphere test's bound
- * (fuzz/RESULTS.md, bug 7).
+ * the pairs are exactly the static queries' (box and capsule_ray the static box mode's; VT
+ * capsule_exact and sphere the static sphere mode's): a vertex that does not move is tested as
+ * the point it is, whatever the others do.
  * Errors: those of minkq_scene_refit for either buffer (the message names the call); on error
  * the scene keeps its positions and trees. minkq_scene_is_swept returns 1 while the scene's
  * positions are swept ones, else 0 (also for NULL). */

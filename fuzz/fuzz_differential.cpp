@@ -38,14 +38,14 @@ void print_stats(const char* when) {
   std::fprintf(stderr,
                "minkq_fuzz_differential %s: inputs %llu, scenes checked %llu (mesh %llu, of which refit %llu, "
                "float64 %llu, swept %llu (still %llu); user-box %llu), queries %llu, Embree sets compared %llu, pairs "
-               "compared %llu, oracle contacts %llu (swept steps: %llu at sampled times), known-bug contacts "
-               "tolerated %llu, mismatches 0\n",
+               "compared %llu, oracle contacts %llu (swept steps: %llu at sampled times), "
+               "mismatches 0\n",
                when, (unsigned long long)harness->inputs, (unsigned long long)(s.mesh_scenes + s.box_scenes),
                (unsigned long long)s.mesh_scenes, (unsigned long long)s.refit_scenes,
                (unsigned long long)s.float64_scenes, (unsigned long long)s.swept_scenes,
                (unsigned long long)s.still_steps, (unsigned long long)s.box_scenes, (unsigned long long)s.queries,
                (unsigned long long)s.independent, (unsigned long long)s.pairs, (unsigned long long)s.true_contacts,
-               (unsigned long long)s.sampled_contacts, (unsigned long long)s.tolerated);
+               (unsigned long long)s.sampled_contacts);
 }
 
 void at_exit() { print_stats("at exit"); }
@@ -65,7 +65,6 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   harness->embree = std::make_unique<EmbreeReference>();
   harness->verbose = std::getenv("MINKQ_FUZZ_VERBOSE") != nullptr;
   inject_fault() = std::getenv("MINKQ_FUZZ_INJECT") != nullptr;
-  known_bugs_tolerated() = std::getenv("MINKQ_FUZZ_STRICT") == nullptr;
   if (const char* every = std::getenv("MINKQ_FUZZ_STATS_EVERY")) harness->every = std::strtoull(every, nullptr, 10);
   std::fprintf(stderr, "minkq_fuzz_differential: devices:");
   for (const auto& d : harness->devices) std::fprintf(stderr, " [%s]", minkq_device_name(d.get()));

@@ -72,21 +72,6 @@ inline void check_ee_extras(Report& report, const Pairs& extras, const std::vect
   }
 }
 
-// ---- Known library bugs the checks tolerate until they are fixed (fuzz/RESULTS.md) -------------
-
-// Bug 6 (fixed): the segment shapes lost true contacts of a segment longer than FLT_MAX along
-// an axis; tests/test_fuzz_regressions.cpp keeps its scenes. Bug 7 is still tolerated: while
-// known_bugs_tolerated() (the default; MINKQ_FUZZ_STRICT=1 in the fuzzer, or false here,
-// reports it) the checks accept what it explains, and count it.
-inline bool& known_bugs_tolerated() {
-  static bool tolerated = true;
-  return tolerated;
-}
-
-// Bug 7 (not a false negative): at zero motion the swept VT sphere, capsule_ray and
-// capsule_exact modes may differ from the static modes minkq.h equates them with, at the
-// boundary; compare_still_step (swept_checks.h) tolerates pairs within the tests' slack.
-
 // ---- Float64 input ---------------------------------------------------------------------------
 
 // The radius a float64 scene queries with must cover r + 2 rho, rho the exact farthest rounding

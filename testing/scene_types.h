@@ -117,7 +117,6 @@ struct Stats {
   uint64_t swept_scenes = 0;    // of which also checked in a swept step
   uint64_t still_steps = 0;     // of those, steps of zero motion (compared with the static sets)
   uint64_t sampled_contacts = 0;  // swept steps: the oracle's contacts at the sampled times
-  uint64_t tolerated = 0;       // contacts a known library bug loses, not required (scene_oracle.h)
   uint64_t box_scenes = 0;      // user-box BVH scenes checked
   uint64_t queries = 0;         // minkq queries run
   uint64_t independent = 0;     // candidate sets compared with the independent traversal

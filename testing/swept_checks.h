@@ -102,47 +102,17 @@ inline SweptSets check_swept_step(minkq_scene* scene, const MeshScene& s, const 
 }
 
 // A step of zero motion from the positions the static sets were taken at gives the static
-// sets (minkq.h): VT box and capsule_ray the static box mode's (capsule_ray is the box test for
-// points), sphere and capsule_exact the static sphere mode's, EE box the static EE box. Known
-// bug 7 (fuzz/RESULTS.md): swept, a still vertex is a zero-length segment under the segment
-// shapes, whose rounding slack differs from the point tests' (capsule_exact accepts boxes up to
-// r + 2^-16 r away, the sphere test up to r (1 + 2^-17); the slab test widens the box by a float
-// step per axis), so pairs at the boundary may differ. While tolerated, each pair in which the two
-// sets differ must lie there: beyond r, and within the looser test's slack (`g`: the static
-// positions, `radius` the scene's query radius); counted in stats.tolerated.
-inline void compare_still_step(Report& report, const SweptSets& swept, const MeshSets& fixed, const MeshGeometry& g,
-                               float radius, Stats& stats, const std::string& tag) {
-  const LD r = radius;
-  auto at_boundary = [&](const std::pair<int32_t, int32_t>& vt, bool sphere_like) {
-    const Vec3 p = g.vertices[size_t(vt.first)];
-    const Box b = g.triangle_boxes()(vt.second);
-    const float point[3] = {p.x, p.y, p.z}, lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
-    LD magnitude = r, gap = 0;
-    for (int k = 0; k < 3; ++k) {
-      magnitude = std::max({magnitude, std::fabs(LD(point[k])), std::fabs(LD(lo[k])), std::fabs(LD(hi[k]))});
-      gap = std::max(gap, excess_ld(point[k], lo[k], hi[k]));
-    }
-    if (sphere_like) {
-      const LD d = point_box_distance_ld(point, b);
-      // The bound holds where the tests' float squares are finite (as for user-box capsules).
-      return d > r && (magnitude >= std::ldexp(LD(1), 62) || d <= r * (1 + std::ldexp(LD(1), -16)) + 1e-21L);
-    }
-    return gap > r && gap <= r + std::ldexp(magnitude, -21) + std::ldexp(LD(1), -149);
-  };
-  auto compare = [&](const Pairs& got, const Pairs& want, bool sphere_like, const std::string& what) {
-    if (!known_bugs_tolerated()) return expect_equal(report, got, want, what);
-    Pairs differ;
-    std::set_symmetric_difference(got.begin(), got.end(), want.begin(), want.end(), std::back_inserter(differ));
-    for (const auto& pair : differ)
-      if (!at_boundary(pair, sphere_like)) return expect_equal(report, got, want, what + " (beyond the boundary slack)");
-    stats.tolerated += differ.size();
-  };
+// sets exactly (minkq.h): VT box and capsule_ray the static box mode's (capsule_ray is the box
+// test for points), sphere and capsule_exact the static sphere mode's (a still vertex takes the
+// point tests; fuzz/RESULTS.md, bug 7), EE box the static EE box.
+inline void compare_still_step(Report& report, const SweptSets& swept, const MeshSets& fixed, const std::string& tag) {
   expect_equal(report, swept.vt[MINKQ_MODE_BOX], fixed.vt[MINKQ_MODE_BOX][0], tag + " still step VT box vs static");
-  compare(swept.vt[MINKQ_MODE_CAPSULE_RAY], fixed.vt[MINKQ_MODE_BOX][0], false,
-          tag + " still step VT capsule_ray vs static box");
-  compare(swept.vt[MINKQ_MODE_SPHERE], fixed.vt[MINKQ_MODE_SPHERE][0], true, tag + " still step VT sphere vs static sphere");
-  compare(swept.vt[MINKQ_MODE_CAPSULE_EXACT], fixed.vt[MINKQ_MODE_SPHERE][0], true,
-          tag + " still step VT capsule_exact vs static sphere");
+  expect_equal(report, swept.vt[MINKQ_MODE_CAPSULE_RAY], fixed.vt[MINKQ_MODE_BOX][0],
+               tag + " still step VT capsule_ray vs static box");
+  expect_equal(report, swept.vt[MINKQ_MODE_SPHERE], fixed.vt[MINKQ_MODE_SPHERE][0],
+               tag + " still step VT sphere vs static sphere");
+  expect_equal(report, swept.vt[MINKQ_MODE_CAPSULE_EXACT], fixed.vt[MINKQ_MODE_SPHERE][0],
+               tag + " still step VT capsule_exact vs static sphere");
   expect_equal(report, swept.ee_box, fixed.ee[MINKQ_MODE_BOX][0], tag + " still step EE box vs static");
 }
 

@@ -280,5 +280,39 @@ TEST(Bvh, group_tests_of_every_shape_match_the_scalar_tests) {
   expect_group_test_matches_scalar<CapsuleExactShape>(rng);
 }
 
+// A point (p0 == p1) under the segment shapes gets the point shapes' verdicts exactly:
+// capsule_ray the box mode's, capsule_exact the sphere mode's (a still vertex of a swept scene
+// then gives the static pairs; fuzz/RESULTS.md, bug 7), scalar and four lanes at once, on boxes
+// at gaps from just inside r to just past the sphere test's slack.
+TEST(Bvh, segment_shapes_of_a_point_are_the_point_shapes) {
+  test::Random rng(test::fresh_seed());
+  for (int trial = 0; trial < 2000; ++trial) {
+    const float scale = rng.log_uniform(1e-20f, 1e20f);
+    const Vec3 p = (rng.integer(0, 1) ? rng.vec3(-1e4f, 1e4f) : Vec3{0, 0, 0}) + scale * rng.vec3(-1.0f, 1.0f);
+    const float r = scale * rng.uniform(0.0f, 1.0f);
+    const QueryGeometry q{p, p, r};
+    const BoxShape box = BoxShape::from(q);
+    const SphereShape sphere = SphereShape::from(q);
+    const CapsuleRayShape ray = CapsuleRayShape::from(q);
+    const CapsuleExactShape exact = CapsuleExactShape::from(q);
+    BoxGroup group;
+    for (int k = 0; k < 4; ++k) {
+      // A box beside p along one or two axes, its near faces at r (1 + j 1e-6) from p.
+      const float gap = r * (1.0f + float(rng.integer(-2, 20)) * 1e-6f);
+      const float side = rng.uniform(0.0f, 1.0f) * gap;
+      Box b = rng.box(p, scale);
+      b.lo.x = p.x + gap, b.hi.x = std::max(b.hi.x, b.lo.x);
+      if (rng.integer(0, 1)) b.hi.y = p.y - side, b.lo.y = std::min(b.lo.y, b.hi.y);
+      set_group_box(group, k, b);
+      EXPECT_EQ(ray.overlaps(b), box.overlaps(b)) << "trial " << trial << " box " << k;
+      EXPECT_EQ(exact.overlaps(b), sphere.overlaps(b)) << "trial " << trial << " box " << k;
+    }
+    for (unsigned lanes = 0; lanes < 16; ++lanes) {
+      ASSERT_EQ(ray.overlaps_group(group, lanes), box.overlaps_group(group, lanes)) << "trial " << trial;
+      ASSERT_EQ(exact.overlaps_group(group, lanes), sphere.overlaps_group(group, lanes)) << "trial " << trial;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace minkq

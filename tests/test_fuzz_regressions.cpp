@@ -161,7 +161,7 @@ TEST(FuzzRegressions, capsule_exact_keeps_contacts_of_segments_longer_than_2_to_
 // the 10-minute campaign of 2026-12-02 as a swept step (the minimised scene below: a vertex
 // flying from -P to P through a point triangle at the origin, |P.y| ~ 2^127, r ~ 2.1e28), and it
 // is the same for a static EE edge (the second scene). Fixed: such a segment's shape leaves the
-// decision to its box test (CapsuleRayShape::unbounded).
+// decision to its box test (CapsuleRayShape::box_decides).
 fuzz::MeshScene segments_longer_than_flt_max(bool swept) {
   fuzz::MeshScene s;
   if (swept) {
@@ -182,17 +182,17 @@ fuzz::MeshScene segments_longer_than_flt_max(bool swept) {
 }
 
 TEST(FuzzRegressions, segment_modes_keep_contacts_of_segments_longer_than_flt_max) {
-  for (bool swept : {true, false}) EXPECT_EQ(replay(segments_longer_than_flt_max(swept)).tolerated, 0u) << swept;
+  for (bool swept : {true, false}) replay(segments_longer_than_flt_max(swept));
 }
 
-// fuzz_differential, bug 7 (fuzz/RESULTS.md), not fixed: minkq.h says a swept step of zero
-// motion gives the static pairs (VT sphere and capsule_exact: the static sphere mode's). Swept,
-// a still vertex is a zero-length segment under CapsuleExactShape, whose threshold has more
+// fuzz_differential, bug 7 (fuzz/RESULTS.md), fixed: minkq.h says a swept step of zero motion
+// gives the static pairs (VT sphere and capsule_exact: the static sphere mode's). Swept, a
+// still vertex was a zero-length segment under CapsuleExactShape, whose threshold has more
 // slack than SphereShape's: on this sheet at offset 1e3 (r = 0.5593088) six pairs at point-box
-// distance r (1 + 3.6e-6) are kept by the still step's sphere and capsule_exact modes and
+// distance r (1 + 3.6e-6) were kept by the still step's sphere and capsule_exact modes and
 // dropped by the static sphere mode. Found by the campaign of 2026-12-02 (the scene as it
-// printed it). Strict equality is disabled until the fix; the checks accept differing pairs
-// within the tests' slack (compare_still_step), as the second test shows.
+// printed it). Fixed: a point (p0 == p1) takes the point tests in the segment shapes
+// (compare_still_step requires the sets equal).
 fuzz::MeshScene still_sheet_at_the_sphere_tests_boundary() {
   fuzz::MeshScene s;
   s.xyz = {0x1.f4p+9f, 0x1.f4p+9f, 0x1.f4p+9f,
@@ -219,18 +219,8 @@ fuzz::MeshScene still_sheet_at_the_sphere_tests_boundary() {
   return s;
 }
 
-TEST(FuzzRegressions, DISABLED_still_swept_step_gives_exactly_the_static_sphere_pairs) {
-  struct Strict {
-    Strict() { fuzz::known_bugs_tolerated() = false; }
-    ~Strict() { fuzz::known_bugs_tolerated() = true; }
-  } strict;
-  replay(still_sheet_at_the_sphere_tests_boundary());
-}
-
-TEST(FuzzRegressions, bug_7_pairs_differ_only_at_the_boundary) {
-  const fuzz::Stats stats = replay(still_sheet_at_the_sphere_tests_boundary());
-  EXPECT_EQ(stats.still_steps, 1u);
-  EXPECT_EQ(stats.tolerated, 12u);  // six pairs, in sphere and in capsule_exact
+TEST(FuzzRegressions, still_swept_step_gives_exactly_the_static_sphere_pairs) {
+  EXPECT_EQ(replay(still_sheet_at_the_sphere_tests_boundary()).still_steps, 1u);
 }
 
 // ---- Scenes in the differential fuzzer's format --------------------------------------------

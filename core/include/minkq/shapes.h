@@ -136,6 +136,22 @@ struct BoxThenFiner {
   MINKQ_HD const Shape& shape() const { return static_cast<const Shape&>(*this); }
 };
 
+#if !defined(__CUDACC__)
+// sphere_overlaps_box(p, r2_upper, .) on the lanes asked for: point_box_distance2 <= r2_upper,
+// lane by lane.
+inline unsigned sphere_finer_group(Vec3 p, float r2_upper, const BoxGroup& g, unsigned lanes) {
+  if (lanes == 0) return 0;
+  simd4::F4 d2 = simd4::splat(0.0f);
+  for (int axis = 0; axis < 3; ++axis) {
+    const float pk = component(p, axis);
+    const simd4::F4 gap =
+        simd4::max_num(simd4::max_num(simd4::load(g.lo[axis]) - pk, pk - simd4::load(g.hi[axis])), simd4::splat(0.0f));
+    d2 = axis == 0 ? gap * gap : d2 + gap * gap;
+  }
+  return lanes & simd4::mask_bits(d2 <= r2_upper);
+}
+#endif
+
 struct SphereShape : BoxThenFiner<SphereShape> {  // p0 is the centre; p1 is ignored
   BoxShape box;                                   // of the centre: lo == hi == centre
   float r2_upper;
@@ -145,34 +161,26 @@ struct SphereShape : BoxThenFiner<SphereShape> {  // p0 is the centre; p1 is ign
   MINKQ_HD const BoxShape& box_test() const { return box; }
   MINKQ_HD bool finer(const Box& b) const { return sphere_overlaps_box(box.lo, r2_upper, b); }
 #if !defined(__CUDACC__)
-  // finer on the lanes asked for: point_box_distance2 <= r2_upper, lane by lane.
-  unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
-    if (lanes == 0) return 0;
-    simd4::F4 d2 = simd4::splat(0.0f);
-    for (int axis = 0; axis < 3; ++axis) {
-      const float p = component(box.lo, axis);
-      const simd4::F4 gap = simd4::max_num(simd4::max_num(simd4::load(g.lo[axis]) - p, p - simd4::load(g.hi[axis])),
-                                           simd4::splat(0.0f));
-      d2 = axis == 0 ? gap * gap : d2 + gap * gap;
-    }
-    return lanes & simd4::mask_bits(d2 <= r2_upper);
-  }
+  unsigned finer_group(const BoxGroup& g, unsigned lanes) const { return sphere_finer_group(box.lo, r2_upper, g, lanes); }
 #endif
 };
 
 struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
   BoxShape box;
   Vec3 p0, d;
-  // d overflowed (the segment spans more than FLT_MAX along an axis): the slab test cannot run,
-  // and the box test alone decides (fuzz/RESULTS.md, bug 6).
-  bool unbounded;
+  // The box test alone decides: where d overflowed (the segment spans more than FLT_MAX along an
+  // axis) the slab test cannot run (fuzz/RESULTS.md, bug 6), and for a point (p0 == p1) the
+  // capsule is the box mode's grown point, so a point gets BoxShape's verdicts exactly (a still
+  // vertex of a swept scene gives the static pairs; bug 7).
+  bool box_decides;
   MINKQ_HD static CapsuleRayShape from(const QueryGeometry& q) {
     const Vec3 d = q.p1 - q.p0;
     const bool unbounded = !(fabsf(d.x) <= FLT_MAX && fabsf(d.y) <= FLT_MAX && fabsf(d.z) <= FLT_MAX);
-    return {{}, BoxShape::from(q), q.p0, d, unbounded};
+    const bool point = q.p0.x == q.p1.x && q.p0.y == q.p1.y && q.p0.z == q.p1.z;
+    return {{}, BoxShape::from(q), q.p0, d, unbounded || point};
   }
   MINKQ_HD const BoxShape& box_test() const { return box; }
-  MINKQ_HD bool finer(const Box& b) const { return unbounded || capsule_ray_overlaps_box(p0, d, box.r, b); }
+  MINKQ_HD bool finer(const Box& b) const { return box_decides || capsule_ray_overlaps_box(p0, d, box.r, b); }
 #if !defined(__CUDACC__)
   // capsule_ray_overlaps_box on the lanes asked for. The swap of the slab's ends is the
   // scalar test's (t0 > t1), a NaN end (inf - inf in the widening) is dropped by
@@ -180,7 +188,7 @@ struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
   unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
     using simd4::F4;
     using simd4::M4;
-    if (lanes == 0 || unbounded) return lanes;
+    if (lanes == 0 || box_decides) return lanes;
     const float r = box.r;
     F4 t_near = simd4::splat(0.0f), t_far = simd4::splat(1.0f);
     M4 inside = t_near == t_near;  // every lane
@@ -205,20 +213,28 @@ struct CapsuleRayShape : BoxThenFiner<CapsuleRayShape> {
 #endif
 };
 
+// A point (p0 == p1) takes SphereShape's test, threshold and all, so that its verdicts are the
+// sphere mode's exactly (a still vertex of a swept scene gives the static sphere pairs; the
+// segment distance's threshold keeps more slack; fuzz/RESULTS.md, bug 7).
 struct CapsuleExactShape : BoxThenFiner<CapsuleExactShape> {
   CapsuleRayShape ray;
   Vec3 p1;
-  float threshold2;
+  float threshold2;  // for segment_box_distance2, or a point's r2_upper
+  bool point;
   MINKQ_HD static CapsuleExactShape from(const QueryGeometry& q) {
-    return {{}, CapsuleRayShape::from(q), q.p1, capsule_exact_threshold2(q.p0, q.p1, q.r)};
+    const bool point = q.p0.x == q.p1.x && q.p0.y == q.p1.y && q.p0.z == q.p1.z;
+    return {{}, CapsuleRayShape::from(q), q.p1,
+            point ? square_upper_bound(q.r) : capsule_exact_threshold2(q.p0, q.p1, q.r), point};
   }
   MINKQ_HD const BoxShape& box_test() const { return ray.box; }
   MINKQ_HD bool finer(const Box& b) const {
+    if (point) return sphere_overlaps_box(ray.p0, threshold2, b);
     return ray.finer(b) && segment_box_distance2(ray.p0, p1, b) <= threshold2;
   }
 #if !defined(__CUDACC__)
   // The ray test on four lanes, then the segment-box distance lane by lane (it branches).
   unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
+    if (point) return sphere_finer_group(ray.p0, threshold2, g, lanes);
     unsigned bits = ray.finer_group(g, lanes);
     for (unsigned rest = bits; rest != 0; rest &= rest - 1u) {
       const int k = lowest_bit(rest);
