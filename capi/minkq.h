@@ -254,8 +254,13 @@ typedef enum minkq_query_flags {
                                  bench/README.md) */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
   MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
-  MINKQ_QUERY_STATS = 8       /* count the traversal's work into info->stats (a separately compiled
+  MINKQ_QUERY_STATS = 8,      /* count the traversal's work into info->stats (a separately compiled
                                  traversal; the uncounted one carries no counters) */
+  MINKQ_QUERY_COUNT = 16      /* count the pairs only: info->count (async: *out_count) gets the
+                                 exact number, no pair is written or kept, out_pairs may be NULL
+                                 and capacity is ignored; never CAPACITY. For callers that size
+                                 their buffers first; cheaper than a query that stores the
+                                 pairs (bench/README.md). Not with CANONICAL or DIGEST */
 } minkq_query_flags;
 
 typedef struct minkq_query_desc {
@@ -292,7 +297,8 @@ typedef struct minkq_query_info {
  * (minkq_scene_flags). Errors: INVALID_ARGUMENT (NULL scene, query or info;
  * unknown kind, mode or flag bits; a kind the scene was created without; sphere mode for EE;
  * a negative radius; a NULL out_pairs with a non-zero capacity; device memory on a CPU
- * device), NON_FINITE (radius), SIZE_OVERFLOW (capacity), CAPACITY, OUT_OF_MEMORY, DEVICE. */
+ * device; COUNT with CANONICAL or DIGEST), NON_FINITE (radius), SIZE_OVERFLOW (capacity),
+ * CAPACITY, OUT_OF_MEMORY, DEVICE. With MINKQ_QUERY_COUNT only info is written. */
 minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
                                size_t capacity, minkq_memory out_memory, minkq_query_info* info);
 
@@ -434,7 +440,7 @@ minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_quer
 /* Returns the number of pairs of the result's last query (0 after a failed one, or for NULL). */
 uint64_t minkq_result_count(const minkq_result* result);
 /* Returns the result's pairs, 2 * count int32, valid until the result is reused or released
- * (may be NULL when count is 0). */
+ * (may be NULL when count is 0; NULL after a MINKQ_QUERY_COUNT query, which keeps no pairs). */
 const int32_t* minkq_result_pairs(const minkq_result* result);
 /* Returns the last query's digest, with MINKQ_QUERY_DIGEST (else 0). */
 uint64_t minkq_result_digest(const minkq_result* result);
@@ -472,7 +478,7 @@ typedef enum minkq_shape {
 typedef struct minkq_bvh_query_desc {
   minkq_shape shape;
   minkq_mode mode;
-  uint32_t flags;     /* CANONICAL, DIGEST, STATS (LEAF_EXACT does not apply to boxes) */
+  uint32_t flags;     /* CANONICAL, DIGEST, STATS, COUNT (LEAF_EXACT does not apply to boxes) */
   float radius;       /* the same r for every query */
   minkq_buffer first;
   minkq_buffer second; /* count 0 for spheres */

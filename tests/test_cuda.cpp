@@ -376,6 +376,41 @@ minkq_buffer device_buffer(const void* data, size_t count, size_t stride) {
   return minkq_buffer{data, stride, count, MINKQ_MEMORY_DEVICE};
 }
 
+// MINKQ_QUERY_COUNT on CUDA: the CPU's exact count in every mode, blocking (host info) and
+// stream-ordered (a device count), with the sentinel-filled pair buffer left alone.
+TEST_F(Cuda, count_only_queries_match_cpu_counts_blocking_and_async) {
+  test::Device cpu("cpu"), cuda("cuda");
+  const Mesh mesh = reference::random_soup(3000, seed, 0.08);
+  cxx::Scene a = make_scene(cpu.get(), mesh, kBoth), b = make_scene(cuda.get(), mesh, kBoth);
+  ASSERT_TRUE(a && b);
+  const float r = float(reference::mean_edge_length(mesh));
+  const int32_t sentinel = -7;
+  DeviceMemory pairs(64 * sizeof(int32_t)), count(sizeof(uint64_t));
+  const std::vector<int32_t> fill(64, sentinel);
+  ASSERT_EQ(cudaMemcpy(pairs.ptr, fill.data(), 64 * sizeof(int32_t), cudaMemcpyHostToDevice), cudaSuccess);
+  for (const ModeCase& m : kModes)
+    for (uint32_t leaf : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)}) {
+      const std::string what = std::string(m.name) + (leaf ? " leaf_exact" : "");
+      const Outcome expected = scene_query(a.get(), m.kind, m.mode, r, leaf | MINKQ_QUERY_STATS);
+      const minkq_query_desc desc{m.kind, m.mode, leaf | MINKQ_QUERY_COUNT | MINKQ_QUERY_STATS, r};
+      minkq_query_info info{};
+      ASSERT_EQ(minkq_scene_query(b.get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS)
+          << what << ": " << minkq_last_error_message();
+      EXPECT_EQ(info.count, expected.count) << what;
+      EXPECT_EQ(info.stats.nodes_visited, expected.stats.nodes_visited) << what;
+      const minkq_query_desc async{m.kind, m.mode, leaf | MINKQ_QUERY_COUNT, r};
+      ASSERT_EQ(minkq_scene_query_async(b.get(), &async, pairs.as<int32_t>(), 32, count.as<uint64_t>(), nullptr),
+                MINKQ_SUCCESS)
+          << what << ": " << minkq_last_error_message();
+      uint64_t counted = 0;
+      ASSERT_EQ(cudaMemcpy(&counted, count.ptr, sizeof counted, cudaMemcpyDeviceToHost), cudaSuccess);
+      EXPECT_EQ(counted, expected.count) << what << " (async)";
+    }
+  std::vector<int32_t> after(64);
+  ASSERT_EQ(cudaMemcpy(after.data(), pairs.ptr, 64 * sizeof(int32_t), cudaMemcpyDeviceToHost), cudaSuccess);
+  EXPECT_EQ(after, fill) << "a count-only query wrote pairs";
+}
+
 TEST_F(Cuda, device_memory_vertices_with_any_stride_match_host_input) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::twisted_sheet(40, 3.0);

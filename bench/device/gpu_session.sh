@@ -33,7 +33,8 @@
 #   fuzz       fuzz_campaign (fuzz/campaign): the differential checks on the corpus and
 #              $MINKQ_FUZZ_INPUTS (default 3000) random inputs, CPU == CUDA == Embree == oracle
 #   bench      minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale),
-#              frames exported for Warp, and minkq_ablation --only fused --backend cuda;
+#              frames exported for Warp, minkq_ablation --only fused --backend cuda and
+#              minkq_count --backend cuda --large;
 #              $OUT/results.tar.gz holds bench/results-style tables
 #   warp       bench/warp_baseline.py --device cuda:0 on the exported frames ($OUT/warp_gpu.md)
 #   profile    Nsight Compute on the 1M-triangle twisted sheet's query and refit kernels
@@ -178,6 +179,11 @@ stage_bench() {
   [ $smoke = 1 ] && fused=(--only fused --backend auto --quick --out "$results")  # no GPU there
   "$build/bin/minkq_ablation" "${fused[@]}" > "$logs/fused.log" 2>&1 || status=1
   tail -3 "$logs/fused.log"
+  # Count-only queries against stored ones on the GPU (count_cuda.md), beside the CPU's count.md.
+  local count=(--backend cuda --large --out "$results")
+  [ $smoke = 1 ] && count=(--backend auto --quick --out "$results")
+  "$build/bin/minkq_count" "${count[@]}" > "$logs/count.log" 2>&1 || status=1
+  tail -2 "$logs/count.log"
   nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv > "$results/device.txt" 2>&1 || true
   tar czf "$out/results.tar.gz" -C "$results" .
   return $status

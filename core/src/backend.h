@@ -1,4 +1,4 @@
-// Internal interface between the C API front end (capi/minkq.cpp: validation, topology,
+// Internal interface between the C API front end (capi/: validation, topology,
 // digests) and a backend (cpu/, cuda/) that owns the arrays and runs build, refit and queries.
 // Both backends serve it with the same two stores (store.h) over their own executor.
 #pragma once

@@ -24,7 +24,7 @@ MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
   return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
 }
 
-// Filter bits of a query (capi/minkq.cpp sets them from the C flags one by one).
+// Filter bits of a query (capi/query.cpp sets them from the C flags one by one).
 constexpr uint32_t kDropIncident = 1u;  // VT: vertex of the triangle; EE: edges sharing a vertex
 constexpr uint32_t kLeafExact = 2u;     // primitive distance test at the leaves
 

@@ -19,28 +19,40 @@ namespace minkq::cpu {
 // Queries per block: each block runs its queries in order into its own buffer.
 constexpr int32_t kBlock = 256;
 
+// One block's output: its pairs in query order, or only their number where the output has no
+// room for any (capacity 0: a count-only query, or a count to size the caller's buffer).
+struct BlockOut {
+  std::vector<int32_t> pairs;
+  uint64_t counted = 0;
+};
+
 template <class Work, class Pass>
-void run_block(const Pass& pass, int32_t block, std::vector<int32_t>& part, Work& work) {
-  auto emit = [&part](int32_t first, int32_t second) {
-    part.push_back(first);
-    part.push_back(second);
-  };
+void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
   const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
+  if (pass.out.capacity == 0) {
+    auto count = [&part](int32_t, int32_t) { ++part.counted; };
+    for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, count, work);
+    return;
+  }
+  auto emit = [&part](int32_t first, int32_t second) {
+    part.pairs.push_back(first);
+    part.pairs.push_back(second);
+  };
   for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, emit, work);
 }
 
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
 // total. If it exceeds the capacity, a blocking query's output gets nothing and an asynchronous
 // one's (out.count set) the first `capacity` pairs, unsorted.
-inline uint64_t write_pass(const std::vector<int32_t>* parts, int32_t blocks, const PairOutput& out) {
+inline uint64_t write_pass(const BlockOut* parts, int32_t blocks, const PairOutput& out) {
   uint64_t total = 0;
-  for (int32_t b = 0; b < blocks; ++b) total += parts[b].size() / 2;
+  for (int32_t b = 0; b < blocks; ++b) total += parts[b].pairs.size() / 2 + parts[b].counted;
   if (total > out.capacity && !out.count) return total;
   int32_t* cursor = out.pairs;
   size_t room = 2 * size_t(std::min<uint64_t>(total, out.capacity));  // int32 words
   for (int32_t b = 0; b < blocks && room > 0; ++b) {
-    const size_t words = std::min(parts[b].size(), room);
-    if (words) std::memcpy(cursor, parts[b].data(), words * sizeof(int32_t));
+    const size_t words = std::min(parts[b].pairs.size(), room);
+    if (words) std::memcpy(cursor, parts[b].pairs.data(), words * sizeof(int32_t));
     cursor += words;
     room -= words;
   }
@@ -69,7 +81,7 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, s
   std::array<int32_t, kPasses + 1> first_block{};
   for (size_t k = 0; k < kPasses; ++k) first_block[k + 1] = first_block[k] + (num_queries[k] + kBlock - 1) / kBlock;
   const int32_t blocks = first_block[kPasses];
-  std::vector<std::vector<int32_t>> parts(static_cast<size_t>(blocks));
+  std::vector<BlockOut> parts(static_cast<size_t>(blocks));
   std::vector<Work> block_work(static_cast<size_t>(blocks));
   tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
     size_t k = 0;

@@ -39,19 +39,20 @@ __device__ inline unsigned long long reserve_slots(unsigned long long* count, un
 }
 
 // emit() of one query's thread: buffers up to kFlush pairs and reserves their slots in one
-// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair.
+// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair. With capacity 0
+// (a count-only query, or a count to size the caller's buffer) it only counts them.
 class PairBuffer {
  public:
   static constexpr int kFlush = 16;
   __device__ explicit PairBuffer(const PairSlots& slots) : slots_(slots) {}
   __device__ void operator()(int32_t first, int32_t second) {
-    pairs_[n_++] = make_int2(first, second);
-    if (n_ == kFlush) flush();
+    if (slots_.capacity != 0) pairs_[n_] = make_int2(first, second);
+    if (++n_ == kFlush) flush();
   }
   __device__ void flush() {
     if (n_ == 0) return;
     const unsigned long long first = reserve_slots(slots_.count, static_cast<unsigned long long>(n_));
-    for (int k = 0; k < n_; ++k) {
+    for (int k = 0; k < n_ && slots_.capacity != 0; ++k) {
       const unsigned long long slot = first + k;
       if (slot >= slots_.capacity) break;
       slots_.pairs[2 * slot] = pairs_[k].x;

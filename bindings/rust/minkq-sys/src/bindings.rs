@@ -249,6 +249,7 @@ pub const MINKQ_QUERY_LEAF_EXACT: minkq_query_flags = 1;
 pub const MINKQ_QUERY_CANONICAL: minkq_query_flags = 2;
 pub const MINKQ_QUERY_DIGEST: minkq_query_flags = 4;
 pub const MINKQ_QUERY_STATS: minkq_query_flags = 8;
+pub const MINKQ_QUERY_COUNT: minkq_query_flags = 16;
 pub type minkq_query_flags = ::std::os::raw::c_uint;
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]

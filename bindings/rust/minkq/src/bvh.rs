@@ -524,6 +524,21 @@ impl Bvh {
         query_vec(out, |pairs, capacity| self.query_raw(&query, pairs, capacity, Memory::Host))
     }
 
+    /// The exact number of pairs a query finds, without writing them ([`QueryFlags::COUNT`]
+    /// added; `CANONICAL` and `DIGEST` are refused).
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3]), Aabb::new([0.5; 3], [2.0; 3])])?;
+    /// assert_eq!(bvh.count(&BvhQuery::boxes(&[Aabb::new([0.9; 3], [1.1; 3])]))?, 2);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn count(&self, query: &BvhQuery<'_>) -> Result<u64> {
+        let mut query = BvhBufferQuery::from(query);
+        query.flags |= QueryFlags::COUNT;
+        Ok(self.query_raw(&query, ptr::null_mut(), 0, Memory::Host)?.count)
+    }
+
     fn query_raw(
         &self,
         query: &BvhBufferQuery<'_>,

@@ -83,7 +83,9 @@ impl PairBuffer {
         }
     }
 
-    /// The number of pairs of the last successful query.
+    /// The number of pairs of the last successful query: `pairs().len()` (0 after a
+    /// [`QueryFlags::COUNT`](crate::QueryFlags::COUNT) query, which keeps none; its count is
+    /// [`Scene::count`](crate::Scene::count)'s).
     ///
     /// ```
     /// let pairs = minkq::PairBuffer::new()?;
@@ -92,7 +94,13 @@ impl PairBuffer {
     /// ```
     pub fn len(&self) -> usize {
         // SAFETY: a live result.
-        unsafe { sys::minkq_result_count(self.raw.as_ptr()) as usize }
+        unsafe {
+            if sys::minkq_result_pairs(self.raw.as_ptr()).is_null() {
+                0
+            } else {
+                sys::minkq_result_count(self.raw.as_ptr()) as usize
+            }
+        }
     }
 
     /// Whether the last query found no pair.

@@ -289,6 +289,11 @@ flags! {
         /// Count the traversal's work into [`QueryInfo::stats`] (a separately compiled
         /// traversal: without the flag the counters cost nothing).
         STATS = sys::MINKQ_QUERY_STATS;
+        /// Count the pairs only: [`QueryInfo::count`] is exact and nothing is written (the
+        /// buffer is ignored, never [`Error::Capacity`](crate::Error::Capacity)); cheaper
+        /// than storing them. Not with `CANONICAL` or `DIGEST`. [`Scene::count`](crate::Scene::count)
+        /// and [`Bvh::count`](crate::Bvh::count) ask for it.
+        COUNT = sys::MINKQ_QUERY_COUNT;
     }
 }
 

@@ -223,19 +223,43 @@ impl Scene {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn work(&self, query: &Query) -> Result<WorkStats> {
-        let desc = query.with_flags(query.flags | QueryFlags::STATS).raw();
+        let info = self.count_raw(&query.with_flags(QueryFlags::STATS))?;
+        Ok(info.stats.unwrap_or_default())
+    }
+
+    /// The exact number of pairs a query finds, without writing or keeping them
+    /// ([`QueryFlags::COUNT`] added): to size a buffer first, or when the count is all that
+    /// is needed. Its other flags apply (`LEAF_EXACT` counts contacts); `CANONICAL` and
+    /// `DIGEST` are refused.
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// # let device = Device::cpu()?;
+    /// # let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.1], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1]];
+    /// # let triangles = [[0, 1, 2], [3, 4, 5]];
+    /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
+    /// let query = Query::vt(Mode::Sphere, 0.2);
+    /// assert_eq!(scene.count(&query)?, 6);
+    /// let mut exact = vec![[0; 2]; 6];
+    /// assert_eq!(scene.query_into(&query, &mut exact)?.count, 6);
+    /// let digest = query.with_flags(QueryFlags::DIGEST);
+    /// assert!(matches!(scene.count(&digest), Err(Error::InvalidArgument(_))));
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn count(&self, query: &Query) -> Result<u64> {
+        Ok(self.count_raw(query)?.count)
+    }
+
+    fn count_raw(&self, query: &Query) -> Result<QueryInfo> {
+        let query = query.with_flags(QueryFlags::COUNT);
+        let desc = query.raw();
         let mut info = QueryInfo::raw();
-        // SAFETY: capacity 0: nothing is written through the null pointer; the library fills
-        // the stats also when it reports CAPACITY.
+        // SAFETY: a count-only query writes no pair: the null pointer is never written.
         let status = unsafe {
             sys::minkq_scene_query(self.raw.as_ptr(), &desc, ptr::null_mut(), 0, Memory::Host.raw(), &mut info)
         };
-        match check(status) {
-            Ok(()) | Err(Error::Capacity { .. }) => {
-                Ok(QueryInfo::from_raw(&info, QueryFlags::STATS).stats.unwrap_or_default())
-            }
-            Err(e) => Err(e),
-        }
+        check(status)?;
+        Ok(QueryInfo::from_raw(&info, query.flags))
     }
 
     fn query_raw(&self, query: &Query, pairs: *mut i32, capacity: usize, memory: Memory) -> Result<QueryInfo> {
