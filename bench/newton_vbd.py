@@ -141,48 +141,68 @@ def _model(cells: int, side: float):
     return model, h
 
 
+class TwistScene:
+    """The twisted sheet: model, solver (self-contact on) and the pinned columns' turning; frame()
+    advances one frame (the detector's BVH rebuilt, then 10 substeps). Also a frame source for
+    ccd_peers.py --source newton."""
+
+    substeps, frame_dt = 10, 1.0 / 60.0
+
+    def __init__(self, args, solver_kwargs=None):
+        self.model, h = _model(args.cells, args.side)
+        model = self.model
+        n = args.cells + 1
+        left = [j * n for j in range(n)]
+        right = [j * n + args.cells for j in range(n)]
+        flags = model.particle_flags.numpy()
+        for v in left + right:
+            flags[v] &= ~ParticleFlags.ACTIVE
+        model.particle_flags = wp.array(flags, dtype=model.particle_flags.dtype)
+        self.h = h
+        self.margin, self.gap = 0.4 * h, 0.3 * h  # interaction distance and extra detection distance, to the mesh
+        self.solver = newton.solvers.SolverVBD(model, iterations=4, particle_enable_self_contact=True,
+                                               particle_self_contact_margin=self.margin,
+                                               particle_self_contact_gap=self.gap,
+                                               particle_vertex_contact_buffer_size=64,
+                                               particle_edge_contact_buffer_size=128, **(solver_kwargs or {}))
+        self.state_0, self.state_1, self.control = model.state(), model.state(), model.control()
+        self.pinned = wp.array(left + right, dtype=wp.int32)
+        self.signs = wp.array([1.0] * n + [-1.0] * n, dtype=float)
+        self.rest = wp.clone(model.particle_q)
+        self.centre = wp.vec3(*model.particle_q.numpy().mean(axis=0))
+        self.omega = args.omega
+        self.t = 0.0
+
+    def frame(self):
+        dt = self.frame_dt / self.substeps
+        self.solver.rebuild_bvh(self.state_0)
+        for _ in range(self.substeps):
+            self.t += dt
+            wp.launch(_turn_pinned, dim=self.pinned.shape[0],
+                      inputs=[self.pinned, self.rest, self.signs, self.centre, self.omega * self.t,
+                              self.state_0.particle_q, self.state_1.particle_q])
+            self.state_0.clear_forces()
+            self.solver.step(self.state_0, self.state_1, self.control, None, dt)
+            self.state_0, self.state_1 = self.state_1, self.state_0
+
+
 def run(label: str, args, solver_kwargs=None) -> dict:
-    model, h = _model(args.cells, args.side)
-    n = args.cells + 1
-    left = [j * n for j in range(n)]
-    right = [j * n + args.cells for j in range(n)]
-    flags = model.particle_flags.numpy()
-    for v in left + right:
-        flags[v] &= ~ParticleFlags.ACTIVE
-    model.particle_flags = wp.array(flags, dtype=model.particle_flags.dtype)
-    margin, gap = 0.4 * h, 0.3 * h  # interaction distance and extra detection distance, to the mesh
-    solver = newton.solvers.SolverVBD(model, iterations=4, particle_enable_self_contact=True,
-                                      particle_self_contact_margin=margin, particle_self_contact_gap=gap,
-                                      particle_vertex_contact_buffer_size=64, particle_edge_contact_buffer_size=128,
-                                      **(solver_kwargs or {}))
+    scene = TwistScene(args, solver_kwargs)
+    model, solver, h, margin = scene.model, scene.solver, scene.h, scene.margin
+    substeps = scene.substeps
     detector = solver.trimesh_collision_detector
     epsilon = float(solver._self_contact_edge_edge_parallel_epsilon)
-    state_0, state_1, control = model.state(), model.state(), model.control()
-    pinned = wp.array(left + right, dtype=wp.int32)
-    signs = wp.array([1.0] * n + [-1.0] * n, dtype=float)
-    rest = wp.clone(model.particle_q)
-    centre = wp.vec3(*model.particle_q.numpy().mean(axis=0))
-    substeps, frame_dt = 10, 1.0 / 60.0
-    dt = frame_dt / substeps
     edges = model.edge_indices
     within = forced = reported = crossing = boundary = 0
     first_intersection = None  # the first frame (of every 10th) with a self-intersection
     seconds = 0.0
-    t = 0.0
     for frame in range(args.frames + 1):
         start = time.perf_counter()
-        solver.rebuild_bvh(state_0)
-        for _ in range(substeps):
-            t += dt
-            wp.launch(_turn_pinned, dim=len(left) + len(right),
-                      inputs=[pinned, rest, signs, centre, args.omega * t, state_0.particle_q, state_1.particle_q])
-            state_0.clear_forces()
-            solver.step(state_0, state_1, control, None, dt)
-            state_0, state_1 = state_1, state_0
+        scene.frame()
         wp.synchronize()
         if frame > 0:  # frame 0 compiles the kernels
             seconds += time.perf_counter() - start
-        if frame % 10 == 0 and first_intersection is None and _intersecting_pairs(model, state_0.particle_q):
+        if frame % 10 == 0 and first_intersection is None and _intersecting_pairs(model, scene.state_0.particle_q):
             first_intersection = frame
         pairs = _reported_ee_pairs(detector.collision_info)
         reported += len(pairs)
@@ -204,7 +224,7 @@ def run(label: str, args, solver_kwargs=None) -> dict:
             missed = d[d < margin][~got]
             crossing += int((missed <= 1e-7 * margin).sum())
             boundary += int((missed >= margin * (1 - 1e-5)).sum())
-    intersecting = _intersecting_pairs(model, state_0.particle_q)
+    intersecting = _intersecting_pairs(model, scene.state_0.particle_q)
     return {"label": label, "epsilon": epsilon, "reported": reported, "within": within, "forced": forced,
             "other_misses": within - forced - crossing - boundary, "crossing": crossing, "boundary": boundary,
             "intersecting": intersecting, "first_intersection": first_intersection, "ms_per_substep": 1e3 * seconds / (args.frames * substeps),
