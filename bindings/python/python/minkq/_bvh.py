@@ -119,6 +119,17 @@ class BVH(_SizedQueries):
         count, dig = self._native.query_into(args.out(out), *native_args, bool(canonical), bool(digest))
         return QueryInfo(count, dig)
 
+    def count(self, shape: "Shape", queries: Any, radius: float = 0.0, *, mode: Optional["Mode"] = None) -> int:
+        """The exact number of pairs :meth:`query` would return, none written or kept.
+
+        >>> import numpy as np, minkq
+        >>> boxes = np.array([[[0, 0, 0], [1, 1, 1]], [[2, 2, 2], [3, 3, 3]]], np.float32)
+        >>> bvh = minkq.BVH(minkq.Device("cpu"), boxes)
+        >>> bvh.count("sphere", np.array([[0.5, 0.5, 0.5], [1.5, 1.5, 1.5]], np.float32), 0.9)
+        3
+        """
+        return self._native.count(*self._args(_Args(self.device), shape, queries, radius, mode))
+
     def _args(self, args: _Args, shape: Any, queries: Any, radius: Any, mode: Any) -> Tuple[str, Any, str, float]:
         shape = _choice(shape, "shape", ("sphere", "capsule", "box"))
         mode = _DEFAULT_BVH_MODE[shape] if mode is None else _choice(mode, "mode", MODES)

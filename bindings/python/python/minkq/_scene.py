@@ -398,6 +398,19 @@ class Scene(_StreamOrdered, _SizedQueries):
             self._stream = handle
         self._like = _like(args.last)
 
+    def count(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> int:
+        """The exact number of pairs :meth:`query` would return, none written or kept: to size
+        a buffer for :meth:`query_into` first, or when the count is all that is needed.
+
+        >>> import numpy as np, minkq
+        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], np.float32)
+        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2]], np.int32))
+        >>> scene.count("vt", "sphere", 0.2) == len(scene.query("vt", "sphere", 0.2)) == 1
+        True
+        """
+        checked = (_choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
+        return int(self._native.count(*checked, bool(leaf_exact)))
+
     def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
         """Runs the query once with the library's work counters on and returns them (the pairs
         are not kept). The counts depend only on the tree and the queries: the same on every

@@ -534,7 +534,21 @@ impl Bvh {
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn count(&self, query: &BvhQuery<'_>) -> Result<u64> {
-        let mut query = BvhBufferQuery::from(query);
+        self.count_buffers(&BvhBufferQuery::from(query))
+    }
+
+    /// [`Bvh::count`] of a query over [`Buffer`]s (host or, on a CUDA device, device memory).
+    ///
+    /// ```
+    /// # use minkq::*;
+    /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
+    /// let centres = [[0.5f32, 0.5, 0.5], [5.0, 5.0, 5.0]];
+    /// let query = BvhBufferQuery::spheres(Buffer::from_slice(&centres), Mode::Sphere, 0.1);
+    /// assert_eq!(bvh.count_buffers(&query)?, 1);
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn count_buffers(&self, query: &BvhBufferQuery<'_>) -> Result<u64> {
+        let mut query = *query;
         query.flags |= QueryFlags::COUNT;
         Ok(self.query_raw(&query, ptr::null_mut(), 0, Memory::Host)?.count)
     }
