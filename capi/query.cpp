@@ -73,6 +73,12 @@ minkq_status query_into_results(const std::array<minkq_result*, N>& results, Que
   return status;
 }
 
+// A count-only query into a result keeps no pairs: the pairs of an earlier query go (their
+// memory stays for the next one), so that minkq_result_pairs gives NULL.
+void drop_pairs_if_counting(const minkq_query_desc* query, minkq_result* result) {
+  if (query != nullptr && (query->flags & MINKQ_QUERY_COUNT)) result->pairs.clear();
+}
+
 // An asynchronous query's outputs, checked: pairs and count in the call's memory, flags the
 // path supports, canonical order within the reservation. `prefix` names the query ("", "vt_").
 minkq::PairOutput checked_async_output(const minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
@@ -175,8 +181,8 @@ minkq_status minkq_result_create(minkq_result** out_result) {
 void minkq_result_release(minkq_result* result) { delete result; }
 uint64_t minkq_result_count(const minkq_result* result) { return result ? result->count : 0; }
 const int32_t* minkq_result_pairs(const minkq_result* result) {
-  // A count-only query keeps no pairs: the buffer may hold fewer than its count (or stale ones).
-  return result && result->pairs.size() / 2 >= result->count && result->count > 0 ? result->pairs.data() : nullptr;
+  // A count-only query keeps no pairs (drop_pairs_if_counting): its buffer holds fewer than its count.
+  return result && result->count > 0 && result->pairs.size() / 2 >= result->count ? result->pairs.data() : nullptr;
 }
 uint64_t minkq_result_digest(const minkq_result* result) { return result ? result->digest : 0; }
 minkq_query_stats minkq_result_stats(const minkq_result* result) { return result ? result->stats : minkq_query_stats{}; }
@@ -186,6 +192,7 @@ minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc
     last_error = "result is NULL";
     return MINKQ_ERROR_INVALID_ARGUMENT;
   }
+  drop_pairs_if_counting(query, result);
   return query_into_results<1>({result}, [&](std::array<minkq_query_info, 1>& info) {
     return minkq_scene_query(scene, query, result->pairs.data(), result->pairs.size() / 2, MINKQ_MEMORY_HOST,
                              &info[0]);
@@ -201,6 +208,8 @@ minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_quer
                                         : "vt_result and ee_result are the same result";
     return MINKQ_ERROR_INVALID_ARGUMENT;
   }
+  drop_pairs_if_counting(vt_query, vt_result);
+  drop_pairs_if_counting(ee_query, ee_result);
   return query_into_results<2>({vt_result, ee_result}, [&](std::array<minkq_query_info, 2>& info) {
     return minkq_scene_query_vt_ee(scene, vt_query, ee_query, vt_result->pairs.data(), vt_result->pairs.size() / 2,
                                    ee_result->pairs.data(), ee_result->pairs.size() / 2, MINKQ_MEMORY_HOST, &info[0],
