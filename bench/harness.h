@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace minkq::bench {
@@ -33,6 +34,17 @@ struct Timing {
   }
 };
 
+// Median and range of a non-empty set of times (any order).
+inline Timing summarize(std::vector<double> t) {
+  std::sort(t.begin(), t.end());
+  Timing out;
+  out.repeats = int(t.size());
+  out.min = t.front();
+  out.max = t.back();
+  out.median = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+  return out;
+}
+
 // Runs fn warmup times untimed, then repeats times timed; each run may do untimed set-up in
 // before() (e.g. restoring state). Returns median and range in milliseconds.
 template <class Fn, class Before>
@@ -48,13 +60,7 @@ Timing measure(int warmup, int repeats, Fn&& fn, Before&& before) {
     fn();
     t.push_back(now_ms() - start);
   }
-  std::sort(t.begin(), t.end());
-  Timing out;
-  out.repeats = int(t.size());
-  out.min = t.front();
-  out.max = t.back();
-  out.median = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
-  return out;
+  return summarize(std::move(t));
 }
 template <class Fn>
 Timing measure(int warmup, int repeats, Fn&& fn) {

@@ -1,0 +1,133 @@
+// arborx_bench's scenes: the reference, procedural, real, scale and extra scenes in table order,
+// and CGAL's OFF format (for elephant-with-holes).
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "arborx_bench.h"
+
+namespace peer {
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string x; std::getline(in, x, ',');)
+    if (!x.empty()) out.push_back(x);
+  return out;
+}
+
+// OFF (CGAL's format): "OFF", counts, vertices, faces (polygons fan-triangulated).
+ref::Mesh load_off(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot open " + path);
+  std::string head;
+  f >> head;
+  if (head != "OFF") throw std::runtime_error(path + ": not an OFF file");
+  size_t nv = 0, nf = 0, ne = 0;
+  f >> nv >> nf >> ne;
+  ref::Mesh m;
+  m.xyz.resize(3 * nv);
+  for (size_t i = 0; i < 3 * nv; ++i) {
+    double x;
+    f >> x;
+    m.xyz[i] = float(x);
+  }
+  for (size_t i = 0; i < nf; ++i) {
+    int k;
+    f >> k;
+    std::vector<int32_t> poly(size_t(std::max(k, 0)));
+    for (auto& v : poly) f >> v;
+    for (int j = 1; j + 1 < k; ++j) m.tris.insert(m.tris.end(), {poly[0], poly[size_t(j)], poly[size_t(j) + 1]});
+  }
+  if (!f) throw std::runtime_error(path + ": truncated OFF file");
+  m.edges = ref::derive_edges(m.tris);
+  return m;
+}
+
+Scene mesh_scene(const std::string& suite, const std::string& name, const std::string& path, double factor) {
+  Scene s;
+  s.suite = suite;
+  s.name = name;
+  s.mesh = std::filesystem::path(path).extension() == ".off" ? load_off(path) : ref::load_mesh(path);
+  s.xyz = s.mesh.xyz;
+  s.factor = factor;
+  s.r = float(factor * ref::mean_edge_length(s.mesh));
+  s.what = std::filesystem::path(path).filename().string() + ", static";
+  return s;
+}
+
+
+std::vector<std::function<Scene()>> scene_list(const Options& opt) {
+  std::vector<std::function<Scene()>> list;
+  auto wanted = [&](const std::string& name) {
+    if (opt.only.empty()) return true;
+    for (const auto& x : split(opt.only))
+      if (x == name) return true;
+    return false;
+  };
+  auto sheet = [&](const std::string& suite, const std::string& name, double triangles) {
+    if (!wanted(name)) return;
+    list.push_back([=, &opt] {
+      const mb::SceneFrames f = mb::make_scene("twist_target", triangles, 1, opt.data_dir);
+      Scene s;
+      s.suite = suite;
+      s.name = name;
+      s.what = f.recipe;
+      s.mesh = f.mesh;
+      s.xyz = f.frames[0];
+      s.factor = 0.25;
+      s.r = float(0.25 * f.mean_edge);
+      return s;
+    });
+  };
+  for (const std::string& suite : opt.suites) {
+    if (suite == "reference") {
+      sheet(suite, "twisted_sheet_301", 2.0 * 300 * 300);
+      std::string elephant = opt.elephant;
+      if (elephant.empty() && std::string(ARBORX_BENCH_CGAL_DIR) != "")
+        elephant = std::string(ARBORX_BENCH_CGAL_DIR) + "/elephant-with-holes.off";
+      if (!wanted("elephant-with-holes")) continue;
+      if (elephant.empty() || !std::filesystem::is_regular_file(elephant))
+        std::fprintf(stderr, "arborx_bench: skipped elephant-with-holes: %s not found (build.sh fetches it; or --elephant PATH)\n",
+                     elephant.empty() ? "no path" : elephant.c_str());
+      else
+        list.push_back([=] { return mesh_scene("reference", "elephant-with-holes", elephant, 1.0); });
+    } else if (suite == "scenes") {
+      for (const std::string& name : mb::procedural_scene_names()) {
+        if (!wanted(name)) continue;
+        list.push_back([=, &opt] {
+          // minkq_bench's frames: 4, r = factor x mean edge of frame 0; measured at the last.
+          const mb::SceneFrames f = mb::make_scene(name, 0, 4, opt.data_dir);
+          Scene s;
+          s.suite = "scenes";
+          s.name = name;
+          s.what = "last of 4 frames: " + f.recipe;
+          s.mesh = f.mesh;
+          s.xyz = f.frames.back();
+          s.factor = f.radius_factor;
+          s.r = float(f.radius_factor * f.mean_edge);
+          return s;
+        });
+      }
+    } else if (suite == "real") {
+      for (const mb::RealMesh& m : mb::available_real_meshes(opt.data_dir)) {
+        if (!wanted(m.name)) continue;
+        list.push_back([=, &opt] { return mesh_scene("real", m.name, mb::mesh_path(m.path, opt.data_dir), 0.25); });
+      }
+    } else if (suite == "scale") {
+      sheet(suite, "twisted_sheet_1M", 1e6);
+    } else {
+      throw std::invalid_argument("unknown suite '" + suite + "'");
+    }
+  }
+  for (const auto& [path, factor] : opt.meshes) {
+    const std::string name = std::filesystem::path(path).stem().string();
+    if (wanted(name)) list.push_back([=] { return mesh_scene("extra", name, path, factor); });
+  }
+  return list;
+}
+
+}  // namespace peer
