@@ -4,10 +4,12 @@
 // and depth stays within the traversal stack's bound even when all Morton codes tie.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
 #include "store.h"
+#include "cpu/radix_sort.h"
 #include "cpu/tree.h"
 #include "minkq/queries.h"
 #include "test_util.h"
@@ -171,6 +173,38 @@ TEST(Bvh, build_is_deterministic) {
   b.build(GivenBoxes{boxes.data()}, int32_t(boxes.size()));
   ASSERT_EQ(a.nodes().size(), b.nodes().size());
   EXPECT_EQ(std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size() * sizeof(BvhNode)), 0);
+}
+
+// The build's radix sort equals a stable sort by key, for any size (one block or many), key
+// width, and share of ties (equal keys keep their order: the CUDA sort's index tie-break), and
+// when whole digits are shared by every key (those passes are skipped).
+TEST(Bvh, radix_sort_of_pairs_is_a_stable_sort_by_key) {
+  test::Random rng(test::fresh_seed());
+  for (const int64_t n : {0, 1, 2, 3, 100, 5000, 70001}) {
+    for (const int bits : {1, 8, 13, 63, 64}) {
+      for (const int distinct : {1, 7, 1 << 20}) {
+        std::vector<uint64_t> keys(static_cast<size_t>(n));
+        std::vector<int32_t> values(static_cast<size_t>(n));
+        const uint64_t mask = bits == 64 ? ~0ull : (1ull << bits) - 1;
+        const uint64_t high = (uint64_t(rng.integer(0, INT32_MAX)) << 33) & mask;  // a shared high part
+        for (int64_t i = 0; i < n; ++i) {
+          const uint64_t low = uint64_t(rng.integer(0, distinct - 1)) * 0x9e3779b97f4a7c15ull;
+          keys[size_t(i)] = (distinct == 7 ? high | (low >> 61) : low) & mask;
+          values[size_t(i)] = int32_t(i);
+        }
+        std::vector<std::pair<uint64_t, int32_t>> expected(static_cast<size_t>(n));
+        for (int64_t i = 0; i < n; ++i) expected[size_t(i)] = {keys[size_t(i)], values[size_t(i)]};
+        std::stable_sort(expected.begin(), expected.end(),
+                         [](const auto& a, const auto& b) { return a.first < b.first; });
+        radix_sort_pairs(keys, values, bits);
+        ASSERT_EQ(keys.size(), size_t(n));
+        for (int64_t i = 0; i < n; ++i) {
+          ASSERT_EQ(keys[size_t(i)], expected[size_t(i)].first) << "n " << n << " bits " << bits << " at " << i;
+          ASSERT_EQ(values[size_t(i)], expected[size_t(i)].second) << "n " << n << " bits " << bits << " at " << i;
+        }
+      }
+    }
+  }
 }
 
 // The leaf scan tests four boxes at a time (vector lanes on the host): for every range of a

@@ -27,8 +27,9 @@ void build_per_axis(CpuTree& tree, Boxes boxes, int32_t n) {
   std::vector<uint64_t> keys;
   std::vector<int32_t> order;
   if (n > 1) {
-    const MortonFrame frame = morton_frame_per_axis(centre_bounds(boxes, n));
-    sort_by_key(n, [&](int32_t i) { return morton_code(frame, box_centre(boxes(i))); }, keys, order);
+    std::vector<Box> element;
+    const MortonFrame frame = morton_frame_per_axis(element_boxes(boxes, n, element));
+    sort_by_key(n, [&](int32_t i) { return morton_code(frame, box_centre(element[size_t(i)])); }, keys, order);
   }
   tree.build_sorted(boxes, keys, std::move(order), n);
 }

@@ -63,10 +63,6 @@ struct PointBoxes {
     return points1 ? box_expand(b, points1[i]) : b;
   }
 };
-struct GivenBoxes {
-  const Box* boxes;
-  MINKQ_HD Box operator()(int32_t i) const { return boxes[i]; }
-};
 
 // ---- Query sources ---------------------------------------------------------------------------
 // Query i of a batch: the element that asks, and the sorted leaf position its leaves must lie

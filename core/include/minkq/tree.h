@@ -48,6 +48,13 @@ struct BvhView {
   int32_t num_prims;
 };
 
+// Primitive boxes already evaluated, one per primitive: the form a build reads them in after
+// evaluating each once (a Boxes functor: the box of primitive i).
+struct GivenBoxes {
+  const Box* boxes;
+  MINKQ_HD Box operator()(int32_t i) const { return boxes[i]; }
+};
+
 // ---- Morton codes ----------------------------------------------------------------------------
 
 MINKQ_HD uint64_t spread_bits_21(uint32_t v) {  // 21 bits -> every third bit of 63

@@ -6,54 +6,99 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
+#include <tbb/parallel_scan.h>
 
 #include <algorithm>
 #include <utility>
 #include <vector>
 
+#include "cpu/radix_sort.h"
 #include "cpu/runtime.h"
 #include "minkq/tree.h"
 
 namespace minkq {
 
-// The bounds of the centres of boxes(0..n-1) (min and max are exact: any order gives them).
+// Every element's box once: out[i] = boxes(i), returning the bounds of their centres (min and
+// max are exact: any order gives them). The build reads the boxes from `out` from then on.
 template <class Boxes>
-Box centre_bounds(Boxes boxes, int32_t n) {
+Box element_boxes(Boxes boxes, int32_t n, std::vector<Box>& out) {
+  out.resize(size_t(n));
   return tbb::parallel_reduce(
       tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),
       [&](const tbb::blocked_range<int32_t>& range, Box acc) {
-        for (int32_t i = range.begin(); i != range.end(); ++i) acc = box_expand(acc, box_centre(boxes(i)));
+        for (int32_t i = range.begin(); i != range.end(); ++i) {
+          const Box b = boxes(i);
+          out[size_t(i)] = b;
+          acc = box_expand(acc, box_centre(b));
+        }
         return acc;
       },
       [](Box a, Box b) { return box_union(a, b); });
 }
 
-// Ids 0..n-1 sorted by key_of(id), ties broken by id (as CUB's stable radix sort of the CUDA
-// backend), with the sorted keys.
+// Ids 0..n-1 sorted by key_of(id), ties broken by id (a stable radix sort, as CUB's of the
+// CUDA backend), with the sorted keys.
 template <class KeyOf>
 void sort_by_key(int32_t n, const KeyOf& key_of, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
-  std::vector<std::pair<uint64_t, int32_t>> keyed(static_cast<size_t>(n));
-  parallel_for_each(n, [&](int64_t i) { keyed[i] = {key_of(int32_t(i)), int32_t(i)}; });
-  tbb::parallel_sort(keyed.begin(), keyed.end());
-  keys.assign(size_t(n), 0);
-  ids.assign(size_t(n), 0);
+  keys.resize(size_t(n));
+  ids.resize(size_t(n));
   parallel_for_each(n, [&](int64_t i) {
-    keys[i] = keyed[i].first;
-    ids[i] = keyed[i].second;
+    keys[size_t(i)] = key_of(int32_t(i));
+    ids[size_t(i)] = int32_t(i);
   });
+  radix_sort_pairs(keys, ids, 64);
 }
 
-// Ids 0..n-1 sorted by the Morton code of their box centres (ties by id), with the keys.
+// Ids 0..n-1 sorted by the Morton code of the centres of boxes[0..n-1] (ties by id), with the
+// keys; centres: the bounds of those centres (element_boxes gives both).
+inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, std::vector<uint64_t>& keys,
+                           std::vector<int32_t>& ids) {
+  const int32_t n = int32_t(boxes.size());
+  const MortonFrame frame = morton_frame(centres);
+  keys.resize(size_t(n));
+  ids.resize(size_t(n));
+  parallel_for_each(n, [&](int64_t i) {
+    keys[size_t(i)] = morton_code(frame, box_centre(boxes[size_t(i)]));
+    ids[size_t(i)] = int32_t(i);
+  });
+  radix_sort_pairs(keys, ids, 63);  // Morton codes use the low 63 bits
+}
 template <class Boxes>
 void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
-  if (n == 0) {
-    keys.clear();
-    ids.clear();
-    return;
-  }
-  const MortonFrame frame = morton_frame(centre_bounds(boxes, n));
-  sort_by_key(n, [&](int32_t i) { return morton_code(frame, box_centre(boxes(i))); }, keys, ids);
+  std::vector<Box> element;
+  const Box centres = element_boxes(boxes, n, element);
+  sort_by_morton(element, centres, keys, ids);
+}
+
+// new_index[i] = the kept Karras nodes before node i (an exclusive scan in parallel); returns
+// how many are kept.
+inline int32_t index_kept_nodes(const std::vector<KarrasNode>& karras, int32_t leaf_size,
+                                std::vector<int32_t>& new_index) {
+  const int32_t count = int32_t(karras.size());
+  new_index.resize(size_t(count));
+  return tbb::parallel_scan(
+      tbb::blocked_range<int32_t>(0, count, 16384), 0,
+      [&](const tbb::blocked_range<int32_t>& range, int32_t kept, bool is_final) {
+        for (int32_t i = range.begin(); i != range.end(); ++i) {
+          if (is_final) new_index[size_t(i)] = kept;
+          kept += keeps_node(i, karras[size_t(i)], leaf_size) ? 1 : 0;
+        }
+        return kept;
+      },
+      [](int32_t a, int32_t b) { return a + b; });
+}
+
+// The node records of the tree over n >= 2 sorted keys, links and splits without boxes: the
+// Karras nodes in parallel, those kept numbered by the scan, then each written once.
+inline void build_hierarchy(const uint64_t* keys, int32_t n, int32_t leaf_size, std::vector<BvhNode>& nodes) {
+  std::vector<KarrasNode> karras(static_cast<size_t>(n - 1));
+  parallel_for_each(n - 1, [&](int64_t i) { karras[size_t(i)] = karras_node(int32_t(i), keys, n); });
+  std::vector<int32_t> new_index;
+  nodes.assign(size_t(index_kept_nodes(karras, leaf_size, new_index)), BvhNode{});
+  parallel_for_each(n - 1, [&](int64_t i) {
+    if (keeps_node(int32_t(i), karras[size_t(i)], leaf_size))
+      collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes.data());
+  });
 }
 
 // tree.h's bottom-up refit from every child slot of `nodes` in parallel (the arrival counters,
@@ -73,14 +118,16 @@ class CpuTree {
   // Primitive at each sorted leaf position.
   const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
-  // Builds the tree over boxes(0..n-1): sorted by the Morton codes of their centres, then
-  // the hierarchy over the sorted codes.
+  // Builds the tree over boxes(0..n-1): each box evaluated once, the primitives sorted by
+  // the Morton codes of the box centres, then the hierarchy over the sorted codes and its boxes.
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
+    std::vector<Box> element;
     std::vector<uint64_t> keys;
     std::vector<int32_t> order;
-    if (n > 1) sort_by_morton(boxes, n, keys, order);
-    build_sorted(boxes, keys, std::move(order), n, config);
+    const Box centres = element_boxes(boxes, n, element);
+    if (n > 1) sort_by_morton(element, centres, keys, order);
+    build_over(element, keys, std::move(order), config);
   }
 
   // The same over primitives already in leaf order: sorted_prims[p] is the primitive at leaf
@@ -89,38 +136,9 @@ class CpuTree {
   template <class Boxes>
   void build_sorted(Boxes boxes, const std::vector<uint64_t>& keys, std::vector<int32_t> sorted_prims, int32_t n,
                     const BuildConfig& config = {}) {
-    const int32_t leaf_size = config.leaf_size;
-    n_ = n;
-    cost_at_build_ = 0.0;
-    nodes_.clear();
-    sorted_prims_ = std::move(sorted_prims);
-    sorted_prims_.resize(size_t(n), 0);
-    leaf_groups_.assign(size_t(box_group_count(n)), BoxGroup{});
-    arrivals_.clear();
-    if (n == 0) return;
-    if (n == 1) {
-      nodes_.assign(1, one_leaf_root());
-      arrivals_.assign(1, 0);
-      refit(boxes);
-      cost_at_build_ = area_cost();
-      return;
-    }
-    std::vector<KarrasNode> karras(size_t(n - 1));
-    parallel_for_each(n - 1, [&](int64_t i) { karras[i] = karras_node(int32_t(i), keys.data(), n); });
-    std::vector<int32_t> new_index(size_t(n - 1));
-    int32_t kept = 0;
-    for (int32_t i = 0; i < n - 1; ++i) {
-      new_index[i] = kept;
-      kept += keeps_node(i, karras[i], leaf_size) ? 1 : 0;
-    }
-    nodes_.assign(size_t(kept), BvhNode{});
-    arrivals_.assign(size_t(kept), 0);
-    parallel_for_each(n - 1, [&](int64_t i) {
-      if (keeps_node(int32_t(i), karras[i], leaf_size))
-        collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes_.data());
-    });
-    refit(boxes);
-    cost_at_build_ = area_cost();
+    std::vector<Box> element;
+    element_boxes(boxes, n, element);
+    build_over(element, keys, std::move(sorted_prims), config);
   }
 
   template <class Boxes>
@@ -146,6 +164,24 @@ class CpuTree {
   }
 
  private:
+  // build_sorted() over the primitives' boxes, element[i] the box of primitive i.
+  void build_over(const std::vector<Box>& element, const std::vector<uint64_t>& keys, std::vector<int32_t> sorted_prims,
+                  const BuildConfig& config) {
+    const int32_t n = int32_t(element.size());
+    n_ = n;
+    cost_at_build_ = 0.0;
+    nodes_.clear();
+    sorted_prims_ = std::move(sorted_prims);
+    sorted_prims_.resize(size_t(n), 0);
+    leaf_groups_.assign(size_t(box_group_count(n)), BoxGroup{});
+    arrivals_.clear();
+    if (n == 0) return;
+    if (n == 1) nodes_.assign(1, one_leaf_root()); else build_hierarchy(keys.data(), n, config.leaf_size, nodes_);
+    arrivals_.assign(nodes_.size(), 0);
+    refit(GivenBoxes{element.data()});
+    cost_at_build_ = area_cost();
+  }
+
   int32_t n_ = 0;
   double cost_at_build_ = 0.0;
   std::vector<BvhNode> nodes_;

@@ -1,5 +1,5 @@
 // The CUDA tree: tree.h's per-element build and refit steps, one thread per element, with
-// CUB's radix sort and reductions; the counterpart of cpu/tree.h, whose trees it matches bit
+// CUB's radix sort, scan and reductions; the counterpart of cpu/tree.h, whose trees it matches bit
 // for bit. Included by cuda/backend.cu only.
 #pragma once
 
@@ -24,11 +24,17 @@ struct CentreBox {
   __host__ __device__ Box operator()(int32_t i) const { return Box::of_point(box_centre(boxes(i))); }
 };
 
+// Every element's box once (cpu/tree.h's element_boxes): the build reads them from `out`.
 template <class Boxes>
-static __global__ void morton_kernel(Boxes boxes, int32_t n, const Box* centre_bounds, uint64_t* keys, int32_t* ids) {
+static __global__ void element_boxes_kernel(Boxes boxes, int32_t n, Box* out) {
+  const int64_t i = global_index();
+  if (i < n) out[i] = boxes(int32_t(i));
+}
+
+static __global__ void morton_kernel(const Box* boxes, int32_t n, const Box* centre_bounds, uint64_t* keys, int32_t* ids) {
   const int64_t i = global_index();
   if (i >= n) return;
-  keys[i] = morton_code(morton_frame(*centre_bounds), box_centre(boxes(int32_t(i))));
+  keys[i] = morton_code(morton_frame(*centre_bounds), box_centre(boxes[i]));
   ids[i] = int32_t(i);
 }
 
@@ -74,6 +80,7 @@ static __global__ void one_leaf_kernel(BvhNode* nodes, int32_t* num_nodes) {
 // What a Morton sort needs besides its output; kept by a tree (or executor) that has reserved
 // it, else made for one build and freed after.
 struct SortScratch {
+  DeviceBuffer<Box> boxes;  // every element's box, evaluated once
   DeviceBuffer<Box> centre_bounds;
   DeviceBuffer<uint64_t> keys, sorted_keys;  // sorted_keys: the build's input
   DeviceBuffer<int32_t> order;
@@ -82,14 +89,13 @@ struct SortScratch {
 
 // The CUB calls of a build, each run twice by run_cub (to size, then to run) and sized alone
 // by reserve(): the same arguments either way.
-template <class Boxes>
-cudaError_t reduce_centre_bounds(void* storage, size_t& bytes, Boxes boxes, int32_t n, Box* out) {
+inline cudaError_t reduce_centre_bounds(void* storage, size_t& bytes, const Box* boxes, int32_t n, Box* out) {
   const thrust::counting_iterator<int32_t> ids(0);
-  return cub::DeviceReduce::TransformReduce(storage, bytes, ids, out, n, BoxUnion{}, CentreBox<Boxes>{boxes},
-                                            Box::empty(), stream());
+  return cub::DeviceReduce::TransformReduce(storage, bytes, ids, out, n, BoxUnion{},
+                                            CentreBox<GivenBoxes>{GivenBoxes{boxes}}, Box::empty(), stream());
 }
 // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in the
-// CPU's sort of (key, index) pairs. Morton codes use the low 63 bits.
+// CPU's stable radix sort (cpu/radix_sort.h). Morton codes use the low 63 bits.
 inline cudaError_t sort_morton_pairs(void* storage, size_t& bytes, SortScratch& s, int32_t* sorted_ids, int32_t n) {
   return cub::DeviceRadixSort::SortPairs(storage, bytes, s.keys.data(), s.sorted_keys.data(), s.order.data(),
                                          sorted_ids, n, 0, 63, stream());
@@ -98,34 +104,38 @@ inline cudaError_t scan_kept(void* storage, size_t& bytes, const int32_t* kept, 
   return cub::DeviceScan::ExclusiveSum(storage, bytes, kept, new_index, n, stream());
 }
 
-// Sizes `s` for Morton sorts of n boxes, kept from then on.
+// Sizes `s` for Morton sorts of n boxes (of any Boxes type), kept from then on.
 template <class Boxes>
-void reserve_sort(SortScratch& s, Boxes boxes, int32_t n) {
+void reserve_sort(SortScratch& s, Boxes, int32_t n) {
+  s.boxes.ensure(size_t(n));
   s.centre_bounds.ensure(1);
   s.keys.ensure(size_t(n));
   s.sorted_keys.ensure(size_t(n));
   s.order.ensure(size_t(n));
   size_t reduce_bytes = 0, sort_bytes = 0;
-  check(reduce_centre_bounds(nullptr, reduce_bytes, boxes, n, nullptr), "cub::DeviceReduce::TransformReduce");
+  check(reduce_centre_bounds(nullptr, reduce_bytes, nullptr, n, nullptr), "cub::DeviceReduce::TransformReduce");
   check(sort_morton_pairs(nullptr, sort_bytes, s, nullptr, n), "cub::DeviceRadixSort::SortPairs");
   s.temp.ensure(std::max<size_t>({reduce_bytes, sort_bytes, 1}));
 }
 
 // Ids 0..n-1 sorted by the Morton code of their box centres, ties broken by id: cpu/tree.h's
-// sort_by_morton on the device, the sorted codes in s.sorted_keys.
+// sort_by_morton on the device, the sorted codes in s.sorted_keys and each element's box, once
+// evaluated, in s.boxes.
 template <class Boxes>
 void sort_by_morton(Boxes boxes, int32_t n, SortScratch& s, DeviceBuffer<int32_t>& sorted_ids) {
   sorted_ids.ensure(size_t(n));
   if (n == 0) return;
+  s.boxes.ensure(size_t(n));
   s.centre_bounds.ensure(1);
   s.keys.ensure(size_t(n));
   s.sorted_keys.ensure(size_t(n));
   s.order.ensure(size_t(n));
   // Bounds of the centres: min/max are exact, so the reduction order does not matter.
+  launch("element_boxes_kernel launch", element_boxes_kernel<Boxes>, n, kThreads, boxes, n, s.boxes.data());
   run_cub(s.temp, "cub::DeviceReduce::TransformReduce", [&](void* storage, size_t& bytes) {
-    return reduce_centre_bounds(storage, bytes, boxes, n, s.centre_bounds.data());
+    return reduce_centre_bounds(storage, bytes, s.boxes.data(), n, s.centre_bounds.data());
   });
-  launch("morton_kernel launch", morton_kernel<Boxes>, n, kThreads, boxes, n, s.centre_bounds.data(), s.keys.data(),
+  launch("morton_kernel launch", morton_kernel, n, kThreads, s.boxes.data(), n, s.centre_bounds.data(), s.keys.data(),
          s.order.data());
   run_cub(s.temp, "cub::DeviceRadixSort::SortPairs",
           [&](void* storage, size_t& bytes) { return sort_morton_pairs(storage, bytes, s, sorted_ids.data(), n); });
@@ -198,7 +208,7 @@ class CudaTree {
     launch("count_nodes_kernel launch", count_nodes_kernel, 1, 1, s.new_index.data(), s.kept.data(), n, counts_.data());
     launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, s.karras.data(), s.new_index.data(), n,
            config.leaf_size, nodes_.data());
-    refit(boxes);
+    refit(GivenBoxes{s.sort.boxes.data()});  // the boxes evaluated once by the sort
     store_cost(costs_.data() + kCostAtBuild);
   }
 

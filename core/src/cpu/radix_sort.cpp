@@ -1,0 +1,112 @@
+#include "cpu/radix_sort.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <utility>
+
+namespace minkq {
+namespace {
+
+constexpr int kDigitBits = 8;
+constexpr uint32_t kBuckets = 1u << kDigitBits;
+// Blocks of at least this many pairs: each block is one task's histogram and scatter of the
+// top digit; fewer pairs are sorted on one thread.
+constexpr int64_t kMinBlock = 16384;
+
+// The LSD passes over bits [lo, hi) of one range, on one thread: ping-pong between the two
+// buffers; returns whether the sorted range ended in the second (b) buffer.
+bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_t n, int lo, int hi) {
+  uint32_t count[kBuckets];
+  bool in_b = false;
+  for (int shift = lo; shift < hi; shift += kDigitBits) {
+    uint64_t *src_k = in_b ? b_k : a_k, *dst_k = in_b ? a_k : b_k;
+    int32_t *src_v = in_b ? b_v : a_v, *dst_v = in_b ? a_v : b_v;
+    const uint64_t mask = (uint64_t(1) << std::min(kDigitBits, hi - shift)) - 1;
+    std::fill(count, count + kBuckets, 0u);
+    for (int64_t i = 0; i < n; ++i) ++count[(src_k[i] >> shift) & mask];
+    uint32_t running = 0;
+    bool shared = false;
+    for (uint32_t d = 0; d < kBuckets; ++d) {
+      shared = shared || count[d] == uint32_t(n);
+      const uint32_t c = count[d];
+      count[d] = running;
+      running += c;
+    }
+    if (shared) continue;
+    for (int64_t i = 0; i < n; ++i) {
+      const uint32_t p = count[(src_k[i] >> shift) & mask]++;
+      dst_k[p] = src_k[i];
+      dst_v[p] = src_v[i];
+    }
+    in_b = !in_b;
+  }
+  return in_b;
+}
+
+}  // namespace
+
+// One parallel pass on the top digit splits the pairs into buckets that fit a core's cache,
+// then each bucket runs its LSD passes over the lower bits alone (sort_range): one pass over
+// memory instead of one per digit. Stable throughout, so the order is a stable sort's.
+void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values, int bits) {
+  const int64_t n = int64_t(keys.size());
+  if (n < 2) return;
+  std::vector<uint64_t> other_keys(size_t(n), 0);
+  std::vector<int32_t> other_values(size_t(n), 0);
+  const int top = std::max(0, bits - kDigitBits);  // the top digit: bits [top, bits)
+  if (n < kMinBlock || top == 0) {
+    if (sort_range(keys.data(), values.data(), other_keys.data(), other_values.data(), n, 0, bits)) {
+      keys.swap(other_keys);
+      values.swap(other_values);
+    }
+    return;
+  }
+  // The top digit, in parallel over blocks: a few per thread balance the load.
+  const int64_t threads = std::max(1, tbb::this_task_arena::max_concurrency());
+  const int64_t blocks = std::clamp<int64_t>(n / kMinBlock, 1, 4 * threads);
+  const int64_t block = (n + blocks - 1) / blocks;
+  std::vector<uint32_t> offsets(size_t(blocks * kBuckets));
+  auto digit = [top](uint64_t key) { return uint32_t(key >> top) & (kBuckets - 1); };
+  tbb::parallel_for(int64_t(0), blocks, [&](int64_t b) {
+    uint32_t* count = offsets.data() + b * kBuckets;
+    std::fill(count, count + kBuckets, 0u);
+    for (int64_t i = b * block, end = std::min(n, i + block); i < end; ++i) ++count[digit(keys[size_t(i)])];
+  });
+  // Where each block's keys of each digit go: digits in order, blocks in order within one.
+  std::vector<uint32_t> bucket_start(kBuckets + 1);
+  uint32_t running = 0;
+  for (uint32_t d = 0; d < kBuckets; ++d) {
+    bucket_start[d] = running;
+    for (int64_t b = 0; b < blocks; ++b) {
+      const uint32_t c = offsets[size_t(b * kBuckets + d)];
+      offsets[size_t(b * kBuckets + d)] = running;
+      running += c;
+    }
+  }
+  bucket_start[kBuckets] = running;
+  tbb::parallel_for(int64_t(0), blocks, [&](int64_t b) {
+    uint32_t* next = offsets.data() + b * kBuckets;
+    for (int64_t i = b * block, end = std::min(n, i + block); i < end; ++i) {
+      const uint32_t p = next[digit(keys[size_t(i)])]++;
+      other_keys[p] = keys[size_t(i)];
+      other_values[p] = values[size_t(i)];
+    }
+  });
+  // Each bucket on its own, from other_* back into keys / values.
+  tbb::parallel_for(uint32_t(0), kBuckets, [&](uint32_t d) {
+    const uint32_t first = bucket_start[d], count = bucket_start[d + 1] - first;
+    if (count == 0) return;
+    uint64_t* a_k = other_keys.data() + first;
+    int32_t* a_v = other_values.data() + first;
+    uint64_t* b_k = keys.data() + first;
+    int32_t* b_v = values.data() + first;
+    if (!sort_range(a_k, a_v, b_k, b_v, count, 0, top)) {
+      std::copy(a_k, a_k + count, b_k);
+      std::copy(a_v, a_v + count, b_v);
+    }
+  });
+}
+
+}  // namespace minkq

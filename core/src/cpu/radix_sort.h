@@ -1,0 +1,18 @@
+// The CPU build's key sort: a parallel radix sort of (key, value) pairs (one pass on the top
+// digit, then LSD passes within each bucket), the host counterpart of the CUDA build's
+// cub::DeviceRadixSort::SortPairs. Stable, so values that start
+// as 0..n-1 break ties by index exactly as CUB's sort does, and the result does not depend on
+// the thread count. Hand-written because no Debian or PyPI library offers a parallel host radix
+// sort of pairs (TBB's and oneDPL's host sorts compare; Boost's spreadsort runs on one thread).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace minkq {
+
+// Sorts keys ascending by their low `bits` bits (1 to 64; higher bits must be zero), moving
+// values along; equal keys keep their order. Digits that every key shares are skipped.
+void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values, int bits);
+
+}  // namespace minkq
