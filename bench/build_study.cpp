@@ -6,6 +6,7 @@
 //
 // usage: minkq_build_study [--threads N] [--repeats N] [--quick] [--large] [--data DIR] [--out DIR]
 //   --large adds the 1M-triangle twisted sheet; --quick: small scenes, 3 repeats, no file check.
+#include <sys/resource.h>
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -33,7 +34,15 @@ struct Row {
   double cost = 0;
   Timing retired, library, boxes, sort, hierarchy, refit, area, one_pass;
   bool one_pass_same = false;
+  double retired_faults = 0, library_faults = 0;  // minor page faults per whole build
 };
+
+// Minor page faults of this process so far (first touches of fresh memory).
+long minor_faults() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+}
 
 template <class T>
 bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
@@ -76,17 +85,24 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
   // Whole builds into fresh trees, round by round so that a slow spell of the shared machine
   // falls on both.
   std::vector<double> t_old, t_new;
+  long faults_old = 0, faults_new = 0;
   for (int k = 0; k < warmup + repeats; ++k) {
     RetiredTree old;
+    long f = minor_faults();
     double start = now_ms();
     build_retired(old, boxes, n);
     const double a = now_ms() - start;
+    const long fa = minor_faults() - f;
     CpuTree now;
+    f = minor_faults();
     start = now_ms();
     now.build(boxes, n);
     const double b = now_ms() - start;
-    if (k >= warmup) t_old.push_back(a), t_new.push_back(b);
+    const long fb = minor_faults() - f;
+    if (k >= warmup) t_old.push_back(a), t_new.push_back(b), faults_old += fa, faults_new += fb;
   }
+  row.retired_faults = double(faults_old) / repeats;
+  row.library_faults = double(faults_new) / repeats;
   row.retired = summarize(t_old);
   row.library = summarize(t_new);
   // The library's phases, each alone (its inputs made untimed).
@@ -176,13 +192,16 @@ int main(int argc, char** argv) {
       << "the hierarchy (Karras nodes, scan, node records), the refit from the element boxes, the area cost. "
       << "**one-pass** (bench/studies/one_pass_build.h, not kept) builds the hierarchy and its boxes together, "
       << "bottom-up (Apetrei 2014, as ArborX does): compare it with hierarchy + refit; **same**: its nodes and leaf "
-      << "boxes equal the library's, byte for byte.\n\n"
-      << "| scene | tree | elements | nodes | area cost | retired ms | library ms | speed-up | boxes | sort | "
-         "hierarchy | refit | area | one-pass | same |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      << "boxes equal the library's, byte for byte. **faults**: minor page faults per whole build (getrusage), the "
+      << "first touches of memory the allocator had to map afresh.\n\n"
+      << "| scene | tree | elements | nodes | area cost | retired ms | library ms | speed-up | faults retired / library | "
+         "boxes | sort | hierarchy | refit | area | one-pass | same |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows)
       o << "| " << r.scene << " | " << r.tree << " | " << r.n << " | " << r.nodes << " | " << fmt(r.cost, 5) << " | "
         << r.retired.text() << " | " << r.library.text() << " | " << fmt(r.retired.median / r.library.median, 3)
-        << "x | " << fmt(r.boxes.median) << " | " << fmt(r.sort.median) << " | " << fmt(r.hierarchy.median) << " | "
+        << "x | " << fmt(r.retired_faults, 4) << " / " << fmt(r.library_faults, 4) << " | " << fmt(r.boxes.median)
+        << " | " << fmt(r.sort.median) << " | " << fmt(r.hierarchy.median) << " | "
         << fmt(r.refit.median) << " | " << fmt(r.area.median) << " | " << fmt(r.one_pass.median) << " | "
         << (r.one_pass_same ? "yes" : "NO") << " |\n";
     const std::string file = out + "/build.md";
