@@ -31,14 +31,14 @@ inline int32_t atomic_exchange(int32_t* slot, int32_t value) {
 // leaf p's box into its group lane, and for every node this thread completes its Karras record
 // and its box (node_boxes, by Karras index).
 inline void climb_from_leaf(int32_t p, const uint64_t* keys, int32_t n, const Box* element, const int32_t* order,
-                              BoxGroup* leaf_groups, int32_t* ends, KarrasNode* karras, Box* node_boxes) {
+                            BoxGroup* leaf_groups, int32_t* ends, KarrasNode* karras, Box* node_boxes) {
   Box box = element[order[p]];
   set_group_box(leaf_groups[p >> 2], p & 3, box);
   int32_t first = p, last = p, split = -1;  // the node reached so far, and its split (-1: a leaf)
   while (true) {
     const bool root = first == 0 && last == n - 1;
     const bool left = !root && (first == 0 || (last != n - 1 && common_prefix(keys, n, last, last + 1) >
-                                                                    common_prefix(keys, n, first - 1, first)));
+                                                                  common_prefix(keys, n, first - 1, first)));
     if (split >= 0) {  // an internal node, complete: its record and box
       const int32_t self = root ? 0 : left ? last : first;
       karras[self] = {first, last, split};
@@ -62,7 +62,7 @@ inline void climb_from_leaf(int32_t p, const uint64_t* keys, int32_t n, const Bo
 // Kept node i's child boxes from the one-pass build: a binary child's box, whether the child
 // stays a node or becomes a leaf range (unions are exact: the refit would give the same).
 inline void set_child_boxes(int32_t i, const KarrasNode* karras, const int32_t* new_index, const Box* node_boxes,
-                              const Box* element, const int32_t* order, BvhNode* nodes) {
+                            const Box* element, const int32_t* order, BvhNode* nodes) {
   const KarrasNode k = karras[i];
   BvhNode& node = nodes[new_index[i]];
   node.left_box = k.first == k.split ? element[order[k.first]] : node_boxes[k.split];
