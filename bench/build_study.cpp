@@ -2,7 +2,8 @@
 // CpuTree::build) beside the one it replaced (bench/studies/karras_build.h), in the same run,
 // on the same threads. Per scene and tree (triangles, edges): both builds are first checked to
 // give the same tree record for record (nodes, leaf order, leaf boxes, area cost); then each
-// build, and each phase of the library's, is timed. Writes build.md.
+// build, rebuilds of a tree that keeps its scratch, and each phase of the library's build are
+// timed. Writes build.md.
 //
 // usage: minkq_build_study [--threads N] [--repeats N] [--quick] [--large] [--data DIR] [--out DIR]
 //   --large adds the 1M-triangle twisted sheet; --quick: small scenes, 3 repeats, no file check.
@@ -19,6 +20,7 @@
 #include "common.h"
 #include "cpu/tree.h"
 #include "scenes.h"
+#include "study_options.h"
 #include "studies/karras_build.h"
 #include "studies/one_pass_build.h"
 
@@ -32,9 +34,9 @@ struct Row {
   int32_t n = 0;
   size_t nodes = 0;
   double cost = 0;
-  Timing retired, library, boxes, sort, hierarchy, refit, area, one_pass;
+  Timing retired, library, kept, boxes, sort, hierarchy, refit, area, one_pass;
   bool one_pass_same = false;
-  double retired_faults = 0, library_faults = 0;  // minor page faults per whole build
+  double retired_faults = 0, library_faults = 0, kept_faults = 0;  // minor page faults per whole build
 };
 
 // Minor page faults of this process so far (first touches of fresh memory).
@@ -84,8 +86,23 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
   }
   // Whole builds into fresh trees, round by round so that a slow spell of the shared machine
   // falls on both.
-  std::vector<double> t_old, t_new;
-  long faults_old = 0, faults_new = 0;
+  // And rebuilds of one tree that keeps its scratch (CpuTree::reserve_build, what a scene
+  // reserved with MINKQ_RESERVE_REBUILD does), checked equal to a fresh build first.
+  std::vector<double> t_old, t_new, t_kept;
+  long faults_old = 0, faults_new = 0, faults_kept = 0;
+  CpuTree kept;
+  kept.reserve_build(n);
+  kept.build(boxes, n);
+  {
+    CpuTree now;
+    now.build(boxes, n);
+    kept.build(boxes, n);
+    if (!same_bytes(kept.nodes(), now.nodes()) || kept.sorted_prims() != now.sorted_prims()) {
+      std::fprintf(stderr, "FAIL %s %s: a rebuild with kept scratch differs from a fresh build\n", scene.c_str(),
+                   tree_name);
+      return false;
+    }
+  }
   for (int k = 0; k < warmup + repeats; ++k) {
     RetiredTree old;
     long f = minor_faults();
@@ -99,12 +116,22 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
     now.build(boxes, n);
     const double b = now_ms() - start;
     const long fb = minor_faults() - f;
-    if (k >= warmup) t_old.push_back(a), t_new.push_back(b), faults_old += fa, faults_new += fb;
+    f = minor_faults();
+    start = now_ms();
+    kept.build(boxes, n);
+    const double c = now_ms() - start;
+    const long fc = minor_faults() - f;
+    if (k >= warmup) {
+      t_old.push_back(a), t_new.push_back(b), t_kept.push_back(c);
+      faults_old += fa, faults_new += fb, faults_kept += fc;
+    }
   }
   row.retired_faults = double(faults_old) / repeats;
   row.library_faults = double(faults_new) / repeats;
+  row.kept_faults = double(faults_kept) / repeats;
   row.retired = summarize(t_old);
   row.library = summarize(t_new);
+  row.kept = summarize(t_kept);
   // The library's phases, each alone (its inputs made untimed).
   std::vector<Box> element;
   std::vector<uint64_t> keys;
@@ -148,40 +175,20 @@ bool study_scene(const SceneFrames& sc, int warmup, int repeats, std::vector<Row
 
 int main(int argc, char** argv) {
   try {
-    std::string data = MINKQ_BENCH_DATA_DIR, out = MINKQ_BENCH_RESULTS_DIR;
-    int threads = 2, repeats = 11;
-    bool quick = false, large = false;
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
-      else if (a == "--repeats" && i + 1 < argc) repeats = std::atoi(argv[++i]);
-      else if (a == "--data" && i + 1 < argc) data = argv[++i];
-      else if (a == "--out" && i + 1 < argc) out = argv[++i];
-      else if (a == "--quick") quick = true, repeats = 3;
-      else if (a == "--large") large = true;
-      else {
-        std::fprintf(stderr,
-                     "usage: minkq_build_study [--threads N] [--repeats N] [--quick] [--large] [--data DIR] [--out DIR]\n");
-        return 2;
-      }
-    }
+    StudyOptions opt{MINKQ_BENCH_DATA_DIR, MINKQ_BENCH_RESULTS_DIR};
+    if (!parse_study_options(argc, argv, "minkq_build_study", opt)) return 2;
+    const std::string& out = opt.out;
+    const int threads = opt.threads, repeats = opt.repeats;
     tbb::global_control control(tbb::global_control::max_allowed_parallelism, size_t(std::max(1, threads)));
     const int warmup = 2;
     const double load_start = load_average();
     std::vector<Row> rows;
-    bool ok = true;
-    ok = study_scene(make_scene("twist_target", quick ? 2e4 : 1.8e5, 1, data), warmup, repeats, rows) && ok;
-    if (large) ok = study_scene(make_scene("twist_target", 1e6, 1, data), warmup, repeats, rows) && ok;
-    for (const RealMesh& m : available_real_meshes(data)) {
-      if (quick && m.name != "bunny") continue;
-      ok = study_scene(load_real_scene(m, data), warmup, repeats, rows) && ok;
-    }
+    const bool ok = for_each_study_scene(opt, false, [&](const SceneFrames& sc) {
+      return study_scene(sc, warmup, repeats, rows);
+    });
     std::ostringstream o;
     o << "# Tree builds: the library's beside the one it replaced (issue 27)\n\n"
-      << "Written by `minkq_build_study" << (large ? " --large" : "") << (quick ? " --quick" : "")
-      << "` (bench/build_study.cpp). Machine: " << machine_line("cpu") << "; " << threads
-      << " TBB threads. Load average (1 min) at start " << fmt(load_start, 3) << ", at end " << fmt(load_average(), 3)
-      << ".\n\n"
+      << written_by(opt, "minkq_build_study", load_start)
       << "**retired** = the build before issue 27 (bench/studies/karras_build.h: the box functor evaluated in three "
       << "passes, a comparison sort of (key, id) pairs, a serial scan of the kept nodes); **library** = "
       << "`CpuTree::build` (each box evaluated once, a parallel radix sort, a parallel scan). Both give the same "
@@ -192,15 +199,19 @@ int main(int argc, char** argv) {
       << "the hierarchy (Karras nodes, scan, node records), the refit from the element boxes, the area cost. "
       << "**one-pass** (bench/studies/one_pass_build.h, not kept) builds the hierarchy and its boxes together, "
       << "bottom-up (Apetrei 2014, as ArborX does): compare it with hierarchy + refit; **same**: its nodes and leaf "
-      << "boxes equal the library's, byte for byte. **faults**: minor page faults per whole build (getrusage), the "
-      << "first touches of memory the allocator had to map afresh.\n\n"
-      << "| scene | tree | elements | nodes | area cost | retired ms | library ms | speed-up | faults retired / library | "
-         "boxes | sort | hierarchy | refit | area | one-pass | same |\n"
-         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      << "boxes equal the library's, byte for byte. **kept** = rebuilds of one tree that keeps its build scratch "
+      << "(`CpuTree::reserve_build`, as a scene reserved with MINKQ_RESERVE_REBUILD does; checked equal to a fresh "
+      << "build), in the same rounds; kept speed-up = retired / kept. **faults**: minor page faults per whole build "
+      << "(getrusage), the first touches of memory the allocator had to map afresh.\n\n"
+      << "| scene | tree | elements | nodes | area cost | retired ms | library ms | speed-up | kept ms | kept speed-up | "
+         "faults retired / library / kept | boxes | sort | hierarchy | refit | area | one-pass | same |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows)
       o << "| " << r.scene << " | " << r.tree << " | " << r.n << " | " << r.nodes << " | " << fmt(r.cost, 5) << " | "
         << r.retired.text() << " | " << r.library.text() << " | " << fmt(r.retired.median / r.library.median, 3)
-        << "x | " << fmt(r.retired_faults, 4) << " / " << fmt(r.library_faults, 4) << " | " << fmt(r.boxes.median)
+        << "x | " << r.kept.text() << " | " << fmt(r.retired.median / r.kept.median, 3) << "x | "
+        << fmt(r.retired_faults, 4) << " / " << fmt(r.library_faults, 4) << " / " << fmt(r.kept_faults, 4) << " | "
+        << fmt(r.boxes.median)
         << " | " << fmt(r.sort.median) << " | " << fmt(r.hierarchy.median) << " | "
         << fmt(r.refit.median) << " | " << fmt(r.area.median) << " | " << fmt(r.one_pass.median) << " | "
         << (r.one_pass_same ? "yes" : "NO") << " |\n";

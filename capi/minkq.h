@@ -365,9 +365,10 @@ typedef enum minkq_reserve_flags {
  * Queries without MINKQ_QUERY_CANONICAL need no reservation. Reservations only grow and last
  * as long as the scene; call this before capturing. A blocking call (it may allocate and
  * synchronise). Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
- * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (on
- * CUDA, where the device cannot hold the scratch; the CPU keeps none, so it never fails
- * there), DEVICE. */
+ * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (where
+ * the device cannot hold the scratch; on the CPU only MINKQ_RESERVE_REBUILD keeps any: the
+ * builds' scratch, about 64 bytes per element of each tree, so that rebuilds allocate nothing),
+ * DEVICE. */
 minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity);
 
 /* minkq_scene_refit, enqueued on `stream` (see above: the vertices in device memory on CUDA;

@@ -175,6 +175,35 @@ TEST(Bvh, build_is_deterministic) {
   EXPECT_EQ(std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size() * sizeof(BvhNode)), 0);
 }
 
+// A tree that keeps its build scratch (reserve_build) rebuilds record for record as a fresh
+// tree builds, whatever sizes came before (the kept leaf order, keys and Karras nodes of an
+// earlier build must not leak into a later one), and counts the scratch it keeps in bytes().
+TEST(Bvh, a_tree_that_keeps_its_scratch_rebuilds_as_a_fresh_one) {
+  test::Random rng(test::fresh_seed());
+  CpuTree kept;
+  kept.reserve_build(3000);
+  const size_t bare = [] {
+    CpuTree t;
+    return t.bytes();
+  }();
+  EXPECT_GE(kept.bytes(), bare + 3000 * 60) << "the reserved scratch shows in bytes()";
+  for (int n : {3000, 3000, 17, 1, 0, 2, 5000, 3000}) {
+    const std::vector<Box> boxes = random_boxes(rng, n, rng.uniform(0.5f, 5.0f));
+    CpuTree fresh;
+    fresh.build(GivenBoxes{boxes.data()}, n);
+    kept.build(GivenBoxes{boxes.data()}, n);
+    ASSERT_EQ(kept.nodes().size(), fresh.nodes().size()) << "n " << n;
+    EXPECT_EQ(std::memcmp(kept.nodes().data(), fresh.nodes().data(), fresh.nodes().size() * sizeof(BvhNode)), 0)
+        << "n " << n;
+    EXPECT_EQ(kept.sorted_prims(), fresh.sorted_prims()) << "n " << n;
+    EXPECT_EQ(std::memcmp(kept.leaf_groups(), fresh.leaf_groups(), size_t(box_group_count(n)) * sizeof(BoxGroup)), 0)
+        << "n " << n;
+    EXPECT_EQ(kept.cost_at_build(), fresh.cost_at_build()) << "n " << n;
+    check_tree(kept, boxes);
+    EXPECT_GE(kept.bytes(), fresh.bytes() + size_t(std::max(n, 3000)) * 60) << "n " << n;
+  }
+}
+
 // The build's radix sort equals a stable sort by key, for any size (one block or many), key
 // width, and share of ties (equal keys keep their order: the CUDA sort's index tie-break), and
 // when whole digits are shared by every key (those passes are skipped).

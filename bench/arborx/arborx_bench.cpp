@@ -14,6 +14,10 @@
 //                                minkq_ablation and minkq_bench's layout count build single
 //                                trees (minkq_scene_create builds both plus copies); ArborX: the
 //                                element boxes computed into a View, then the BVH over them.
+//   rebuild ..., scratch kept    minkq: the same build into one tree that keeps its scratch
+//                                (CpuTree::reserve_build, a scene reserved with
+//                                MINKQ_RESERVE_REBUILD; revisions without it skip the rows);
+//                                ArborX: a fresh build again (it has no rebuild in place).
 //   VT box (count)               minkq: minkq_scene_query, box mode, with MINKQ_QUERY_COUNT where
 //                                the measured library has it, else into capacity 0 (the exact
 //                                count, nothing written); ArborX: intersects(Box(v +- r)) against

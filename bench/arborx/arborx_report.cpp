@@ -21,6 +21,8 @@ struct Target {
 const Target kTargets[] = {
     {"build triangle tree", "boxes + BVH", 1.5},
     {"build edge tree", "boxes + BVH", 1.5},
+    {"rebuild triangle tree, scratch kept", "boxes + BVH", 1.5},
+    {"rebuild edge tree, scratch kept", "boxes + BVH", 1.5},
     {"VT box (count)", "intersects(Box(v +- r))", 1.5},
     {"VT sphere (count)", "intersects(Sphere(v, r))", 1.5},
     {"EE box, each pair once (count)", "HalfTraversal (internal, as DBSCAN)", 1.5},
@@ -70,6 +72,8 @@ void write_report(const std::vector<SceneResult>& results, const Options& opt, c
        "was checked. ms = median (range) of the timed rounds. **speed-up** = ArborX ms / minkq ms (> 1: minkq faster), "
        "the issue's convention; the target is the issue's. Definitions (bench/arborx/arborx_bench.cpp's header): builds = "
        "element boxes from the vertices + tree (minkq: `CpuTree::build`, the build `minkq_scene_create` runs per tree; "
+       "rebuilds with scratch kept: the same into one tree after `CpuTree::reserve_build`, as a scene reserved with "
+       "MINKQ_RESERVE_REBUILD rebuilds, against ArborX's fresh build; "
        "ArborX: boxes into a View + `BoundingVolumeHierarchy`); VT = (vertex, triangle) pairs without the vertex's own "
        "triangles; EE = (e, f), e < f, edges sharing a vertex dropped; counts: minkq `minkq_scene_query` with "
     << (ARBORX_BENCH_MINKQ_COUNT_FLAG ? "`MINKQ_QUERY_COUNT`" : "capacity 0 (the exact count, nothing written)")

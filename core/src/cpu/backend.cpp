@@ -67,8 +67,8 @@ class CpuExecutor {
   }
   template <class Boxes>
   void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids) {
-    std::vector<uint64_t> keys;
-    minkq::sort_by_morton(boxes, n, keys, ids);
+    BuildScratch local;
+    minkq::sort_by_morton(boxes, n, ids, sort_reserved_ ? sort_ : local);
   }
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
@@ -83,15 +83,21 @@ class CpuExecutor {
     return totals;
   }
 
-  // Asynchronous calls: nothing to reserve (host vectors grow as they need), and the check
-  // before the copy needs no staging.
+  // Asynchronous calls need nothing reserved (host vectors grow as they need, and the check
+  // before the copy needs no staging); a rebuild reservation keeps the builds' and the vertex
+  // sort's scratch, so that rebuilds of the scene allocate nothing.
   void reserve_staging(std::vector<Vec3>&, int32_t) {}
   void reserve_pending() {}
   void reserve_canonical(size_t) {}
   template <class Boxes>
-  void reserve_build(CpuTree&, Boxes, int32_t) {}
+  void reserve_build(CpuTree& tree, Boxes, int32_t n) {
+    tree.reserve_build(n);
+  }
   template <class Boxes>
-  void reserve_sort(Boxes, int32_t) {}
+  void reserve_sort(Boxes, int32_t n) {
+    sort_.reserve(n);
+    sort_reserved_ = true;
+  }
   void commit_finite(const Strided& values, std::vector<Vec3>&, std::vector<Vec3>& dst, float* rho,
                      PendingError::Call call) {
     if (const int64_t bad = first_non_finite_host(values, 3); bad >= 0) {
@@ -119,6 +125,8 @@ class CpuExecutor {
 
  private:
   PendingError pending_;
+  bool sort_reserved_ = false;
+  BuildScratch sort_;  // the vertex order's sort scratch, kept once reserved
 };
 
 class CpuBackend final : public Backend {

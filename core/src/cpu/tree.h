@@ -52,7 +52,7 @@ void sort_by_key(int32_t n, const KeyOf& key_of, std::vector<uint64_t>& keys, st
 // Ids 0..n-1 sorted by the Morton code of the centres of boxes[0..n-1] (ties by id), with the
 // keys; centres: the bounds of those centres (element_boxes gives both).
 inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, std::vector<uint64_t>& keys,
-                           std::vector<int32_t>& ids) {
+                           std::vector<int32_t>& ids, RadixScratch& scratch) {
   const int32_t n = int32_t(boxes.size());
   const MortonFrame frame = morton_frame(centres);
   keys.resize(size_t(n));
@@ -61,13 +61,43 @@ inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, st
     keys[size_t(i)] = morton_code(frame, box_centre(boxes[size_t(i)]));
     ids[size_t(i)] = int32_t(i);
   });
-  radix_sort_pairs(keys, ids, 63);  // Morton codes use the low 63 bits
+  radix_sort_pairs(keys, ids, 63, scratch);  // Morton codes use the low 63 bits
 }
-template <class Boxes>
-void sort_by_morton(Boxes boxes, int32_t n, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
+inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, std::vector<uint64_t>& keys,
+                           std::vector<int32_t>& ids) {
+  RadixScratch scratch;
+  sort_by_morton(boxes, centres, keys, ids, scratch);
+}
+
+// The scratch of a build over n elements, about 64 B per element: the element boxes, the keys
+// and the ids in key order, the sort's second buffers, the Karras nodes and their new numbers.
+// A tree keeps it once reserved (CpuTree::reserve_build), so that rebuilds of the same size
+// allocate nothing; otherwise each build makes and frees its own.
+struct BuildScratch {
   std::vector<Box> element;
-  const Box centres = element_boxes(boxes, n, element);
-  sort_by_morton(element, centres, keys, ids);
+  std::vector<uint64_t> keys;
+  std::vector<int32_t> order;
+  RadixScratch sort;
+  std::vector<KarrasNode> karras;
+  std::vector<int32_t> new_index;
+  void reserve(int32_t n) {
+    const size_t count = size_t(std::max(n, 0)), inner = size_t(std::max(n - 1, 0));
+    element.reserve(count), keys.reserve(count), order.reserve(count);
+    sort.keys.reserve(count), sort.values.reserve(count);
+    karras.reserve(inner), new_index.reserve(inner);
+  }
+  size_t bytes() const {
+    return element.capacity() * sizeof(Box) + keys.capacity() * sizeof(uint64_t) + order.capacity() * sizeof(int32_t) +
+           sort.bytes() + karras.capacity() * sizeof(KarrasNode) + new_index.capacity() * sizeof(int32_t);
+  }
+};
+
+// Ids 0..n-1 in the Morton order of boxes(0..n-1)'s centres (the order of the queries that
+// walk a tree in it), with the keys, from the scratch's element boxes and sort buffers.
+template <class Boxes>
+void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids, BuildScratch& s) {
+  const Box centres = element_boxes(boxes, n, s.element);
+  sort_by_morton(s.element, centres, s.keys, ids, s.sort);
 }
 
 // new_index[i] = the kept Karras nodes before node i (an exclusive scan in parallel); returns
@@ -89,16 +119,22 @@ inline int32_t index_kept_nodes(const std::vector<KarrasNode>& karras, int32_t l
 }
 
 // The node records of the tree over n >= 2 sorted keys, links and splits without boxes: the
-// Karras nodes in parallel, those kept numbered by the scan, then each written once.
-inline void build_hierarchy(const uint64_t* keys, int32_t n, int32_t leaf_size, std::vector<BvhNode>& nodes) {
-  std::vector<KarrasNode> karras(static_cast<size_t>(n - 1));
+// Karras nodes in parallel (into karras), those kept numbered by the scan (into new_index), then
+// each written once.
+inline void build_hierarchy(const uint64_t* keys, int32_t n, int32_t leaf_size, std::vector<BvhNode>& nodes,
+                            std::vector<KarrasNode>& karras, std::vector<int32_t>& new_index) {
+  karras.resize(size_t(n - 1));
   parallel_for_each(n - 1, [&](int64_t i) { karras[size_t(i)] = karras_node(int32_t(i), keys, n); });
-  std::vector<int32_t> new_index;
   nodes.assign(size_t(index_kept_nodes(karras, leaf_size, new_index)), BvhNode{});
   parallel_for_each(n - 1, [&](int64_t i) {
     if (keeps_node(int32_t(i), karras[size_t(i)], leaf_size))
       collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes.data());
   });
+}
+inline void build_hierarchy(const uint64_t* keys, int32_t n, int32_t leaf_size, std::vector<BvhNode>& nodes) {
+  std::vector<KarrasNode> karras;
+  std::vector<int32_t> new_index;
+  build_hierarchy(keys, n, leaf_size, nodes, karras, new_index);
 }
 
 // tree.h's bottom-up refit from every child slot of `nodes` in parallel (the arrival counters,
@@ -122,12 +158,11 @@ class CpuTree {
   // the Morton codes of the box centres, then the hierarchy over the sorted codes and its boxes.
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
-    std::vector<Box> element;
-    std::vector<uint64_t> keys;
-    std::vector<int32_t> order;
-    const Box centres = element_boxes(boxes, n, element);
-    if (n > 1) sort_by_morton(element, centres, keys, order);
-    build_over(element, keys, std::move(order), config);
+    BuildScratch local;
+    BuildScratch& s = reserved_ ? scratch_ : local;
+    const Box centres = element_boxes(boxes, n, s.element);
+    if (n > 1) sort_by_morton(s.element, centres, s.keys, s.order, s.sort);
+    build_over(s.keys, s.order, s, config);
   }
 
   // The same over primitives already in leaf order: sorted_prims[p] is the primitive at leaf
@@ -136,9 +171,18 @@ class CpuTree {
   template <class Boxes>
   void build_sorted(Boxes boxes, const std::vector<uint64_t>& keys, std::vector<int32_t> sorted_prims, int32_t n,
                     const BuildConfig& config = {}) {
-    std::vector<Box> element;
-    element_boxes(boxes, n, element);
-    build_over(element, keys, std::move(sorted_prims), config);
+    BuildScratch local;
+    BuildScratch& s = reserved_ ? scratch_ : local;
+    element_boxes(boxes, n, s.element);
+    build_over(keys, sorted_prims, s, config);
+  }
+
+  // Keeps the scratch of builds over n primitives from now on (BuildScratch), so that rebuilds
+  // of that size allocate nothing; bytes() counts it.
+  void reserve_build(int32_t n) {
+    scratch_.reserve(n);
+    sorted_prims_.reserve(size_t(std::max(n, 0)));  // swapped with the scratch's order by each build
+    reserved_ = true;
   }
 
   template <class Boxes>
@@ -156,29 +200,32 @@ class CpuTree {
   Box leaf_box(int32_t p) const { return group_box(leaf_groups_[size_t(p >> 2)], p & 3); }
   const BoxGroup* leaf_groups() const { return leaf_groups_.data(); }
   int32_t size() const { return n_; }
-  // Bytes held: node records with their refit counters, and per primitive its id and box in
-  // leaf order (boxes in groups of four: up to three unused lanes).
+  // Bytes held: node records with their refit counters, per primitive its id and box in leaf
+  // order (boxes in groups of four: up to three unused lanes), and the build scratch once
+  // reserved.
   size_t bytes() const {
     return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) + size_t(n_) * sizeof(int32_t) +
-           leaf_groups_.size() * sizeof(BoxGroup);
+           leaf_groups_.size() * sizeof(BoxGroup) + (reserved_ ? scratch_.bytes() : 0);
   }
 
  private:
-  // build_sorted() over the primitives' boxes, element[i] the box of primitive i.
-  void build_over(const std::vector<Box>& element, const std::vector<uint64_t>& keys, std::vector<int32_t> sorted_prims,
+  // build_sorted() over the primitives' boxes in s.element (element i: primitive i's), with
+  // sorted_prims taken as the leaf order (its vector swapped with the tree's last one).
+  void build_over(const std::vector<uint64_t>& keys, std::vector<int32_t>& sorted_prims, BuildScratch& s,
                   const BuildConfig& config) {
-    const int32_t n = int32_t(element.size());
+    const int32_t n = int32_t(s.element.size());
     n_ = n;
     cost_at_build_ = 0.0;
     nodes_.clear();
-    sorted_prims_ = std::move(sorted_prims);
-    sorted_prims_.resize(size_t(n), 0);
+    sorted_prims_.swap(sorted_prims);
+    if (n <= 1) sorted_prims_.assign(size_t(n), 0);
     leaf_groups_.assign(size_t(box_group_count(n)), BoxGroup{});
     arrivals_.clear();
     if (n == 0) return;
-    if (n == 1) nodes_.assign(1, one_leaf_root()); else build_hierarchy(keys.data(), n, config.leaf_size, nodes_);
+    if (n == 1) nodes_.assign(1, one_leaf_root());
+    else build_hierarchy(keys.data(), n, config.leaf_size, nodes_, s.karras, s.new_index);
     arrivals_.assign(nodes_.size(), 0);
-    refit(GivenBoxes{element.data()});
+    refit(GivenBoxes{s.element.data()});
     cost_at_build_ = area_cost();
   }
 
@@ -188,6 +235,8 @@ class CpuTree {
   std::vector<int32_t> arrivals_;
   std::vector<int32_t> sorted_prims_;
   std::vector<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
+  bool reserved_ = false;
+  BuildScratch scratch_;  // kept once reserved
 };
 
 }  // namespace minkq
