@@ -44,7 +44,7 @@ fi
 
 cmake -S "$root/bench" -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA="${MINKQ_WITH_CUDA:-AUTO}" >/dev/null
 cmake --build "$build" -j "$(nproc)" --target minkq_bench minkq_stability minkq_hr_study minkq_ablation \
-  minkq_float64_swept minkq_count minkq_build_study >/dev/null
+  minkq_float64_swept minkq_count minkq_build_study minkq_traversal_study >/dev/null
 bin=$build/bin
 mkdir -p "$out"
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-), $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -58,6 +58,7 @@ if [ $quick = 1 ]; then
   "$bin/minkq_float64_swept" --quick --out "$out" || status=$?
   "$bin/minkq_count" --quick --out "$out" || status=$?
   "$bin/minkq_build_study" --quick --out "$out" || status=$?
+  "$bin/minkq_traversal_study" --quick --out "$out" || status=$?
   [ $status = 0 ] && echo "bench quick run: 1 passed, 0 failed (no false negatives; results in $out)" \
                   || echo "bench quick run: 0 passed, 1 failed (status $status; see $out)"
   exit $status
@@ -72,6 +73,7 @@ fi
 "$bin/minkq_float64_swept" --out "$out" || status=$?
 "$bin/minkq_count" --large --out "$out" || status=$?
 "$bin/minkq_build_study" --large --out "$out" || status=$?
+"$bin/minkq_traversal_study" --large --out "$out" || status=$?
 
 venv=$build/venv
 if [ $install = 1 ] && [ ! -x "$venv/bin/python" ]; then python3 -m venv "$venv"; fi

@@ -1,7 +1,8 @@
 // The traversal, written once for every query shape and both backends: a query walks the
 // tree (tree.h) top-down with a small stack, tests child boxes with the shape's box test and
 // scans leaf ranges four boxes at a time with the shape's leaf test (shapes.h states the
-// contract a shape fulfils). Work is counted when asked for and compiled out when not.
+// contract a shape fulfils); a self-query walks only the half after its own leaf. Work is
+// counted when asked for and compiled out when not.
 #pragma once
 
 #include "minkq/tree.h"
@@ -66,36 +67,46 @@ MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const int32_t* sorte
   scan_leaves(leaf_groups, sorted_prims, shape, first, last, after, on_leaf, work);
 }
 
-// The one traversal: on_leaf(prim, box) is called for every primitive whose box the shape
-// overlaps (the contract at the top of shapes.h makes that exact: may_overlap accepts every
-// ancestor box of such a box). Only leaves at sorted positions after `after` are reached: a
-// self-query from the leaf at position i passes i and meets each pair once; other queries
-// pass -1. A node is entered only when its last position is past `after` (the root:
-// n - 1 > after), so only the left child (last = split) can fail.
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
+// The one walk of the tree, for every query shape and both backends: on_range(first, last,
+// box, own) is called, in the order met, for every leaf range [first, last] that the shape may
+// overlap (may_overlap passes its box and the box of every node above it, but for a
+// self-query's path, below). Only leaf ranges holding positions after `after` are reached: a
+// self-query from the leaf at position i passes i; other queries pass -1. A node is entered
+// only when its last position is past `after` (the root: n - 1 > after), so only a left child
+// (last = split) is ever skipped for that. own: the range holds position `after` itself, so
+// only its positions after `after` count.
+//
+// A self-query walks the half of the tree after its own leaf (a half traversal, as ArborX's
+// HalfTraversal does by climbing from the leaf): every node on the path from the root to the
+// leaf range holding position `after` holds the query's own box, which the shape overlaps, so
+// the path is followed down the splits with no box test, while the children beside it are
+// tested as in any walk. The ranges, and the order they are met in, are those of the plain
+// top-down walk with the path's always-true tests left out (and were a path test false, no box
+// below it could hold a pair: the pairs would still be the same).
+template <class Shape, class OnRange, class Work>
+MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRange& on_range, Work& work) {
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
-  auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, first, last, after, range_box, on_leaf, work);
-  };
   int32_t stack[kTraversalStack];
   int sp = 0;
   int32_t node = 0;
+  bool on_path = after >= 0;  // node's range holds `after` (the root's does)
   while (true) {
     const BvhNode& n = bvh.nodes[node];
     work.visit_node();
     int32_t next = -1;
+    // The child holding `after` and leaves past it (a left child ending at `after` is skipped).
+    const bool left_on_path = on_path && after < n.split, right_on_path = on_path && after > n.split;
     if (n.split > after) {
-      work.test_node();
-      if (shape.may_overlap(n.left_box)) {
-        if (n.left < 0) visit_range(~n.left, n.split, n.left_box); else next = n.left;
+      if (!left_on_path) work.test_node();
+      if (left_on_path || shape.may_overlap(n.left_box)) {
+        if (n.left < 0) on_range(~n.left, n.split, n.left_box, left_on_path); else next = n.left;
       }
     }
     if (n.right != kNoChild) {
-      work.test_node();
-      if (shape.may_overlap(n.right_box)) {
+      if (!right_on_path) work.test_node();
+      if (right_on_path || shape.may_overlap(n.right_box)) {
         if (n.right < 0) {
-          visit_range(n.split + 1, ~n.right, n.right_box);
+          on_range(n.split + 1, ~n.right, n.right_box, right_on_path);
         } else if (next < 0) {
           next = n.right;
         } else {
@@ -103,10 +114,24 @@ MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
         }
       }
     }
+    // Still on the path when going on into the child that holds `after` (always `next` then).
+    on_path = (left_on_path && n.left >= 0) || (right_on_path && n.right >= 0);
     if (next >= 0) { node = next; continue; }
     if (sp == 0) return;
     node = stack[--sp];
   }
+}
+
+// The traversal: on_leaf(prim, box) is called for every primitive at a sorted position after
+// `after` whose box the shape overlaps (the contract at the top of shapes.h makes that exact:
+// may_overlap accepts every ancestor box of such a box), a self-query thus meeting each pair
+// once.
+template <class Shape, class OnLeaf, class Work>
+MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
+  auto on_range = [&](int32_t first, int32_t last, const Box& range_box, bool) {
+    visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, first, last, after, range_box, on_leaf, work);
+  };
+  walk(bvh, shape, after, on_range, work);
 }
 
 }  // namespace minkq

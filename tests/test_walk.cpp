@@ -1,0 +1,145 @@
+// The walk of traversal.h against its definition: the leaf ranges a query meets, and, for a
+// self-query (the half traversal), that the path down to its own leaf range is followed with no
+// box test while every other child past it is tested exactly as a top-down walk tests it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <tuple>
+#include <vector>
+
+#include "cpu/tree.h"
+#include "minkq/shapes.h"
+#include "minkq/traversal.h"
+#include "test_util.h"
+
+namespace minkq {
+namespace {
+
+// One link of the tree: a child (a node or a leaf range) covering sorted positions
+// [first, last], with the box its parent stores for it.
+struct Link {
+  int32_t first, last;
+  Box box;
+};
+// A leaf range with the links above it, the root's child first and its own link last.
+struct RangePath {
+  int32_t first, last;
+  std::vector<Link> links;
+};
+
+void collect_ranges(const CpuTree& tree, int32_t node, int32_t first, int32_t last, std::vector<Link>& above,
+                    std::vector<RangePath>& out) {
+  const BvhNode& n = tree.nodes()[node];
+  const int32_t child[2] = {n.left, n.right};
+  const int32_t lo[2] = {first, n.split + 1}, hi[2] = {n.split, last};
+  const Box box[2] = {n.left_box, n.right_box};
+  for (int side = 0; side < 2; ++side) {
+    if (child[side] == kNoChild) continue;
+    above.push_back({lo[side], hi[side], box[side]});
+    if (child[side] < 0) out.push_back({lo[side], hi[side], above});
+    else collect_ranges(tree, child[side], lo[side], hi[side], above, out);
+    above.pop_back();
+  }
+}
+
+std::vector<RangePath> ranges_of(const CpuTree& tree) {
+  std::vector<RangePath> out;
+  std::vector<Link> above;
+  if (tree.view().num_prims > 0) collect_ranges(tree, 0, 0, tree.view().num_prims - 1, above, out);
+  return out;
+}
+
+// A shape that passes every box (kind 1), none (kind 0), or runs the box mode's test (kind 2),
+// counting its tests.
+struct CountingShape {
+  int kind;
+  BoxShape box;
+  mutable uint64_t tests = 0;
+  bool may_overlap(const Box& b) const {
+    ++tests;
+    return kind == 2 ? box.may_overlap(b) : kind == 1;
+  }
+};
+
+using Met = std::tuple<int32_t, int32_t, bool>;  // first, last, own
+
+// The definition: a leaf range holding positions past `after` is met when it holds `after`
+// itself (own), or when its box and the box of every link above it that does not hold `after`
+// pass; a link holding `after` (the path) is never tested. Tests: every link past `after`
+// whose parent is reached, except those on the path.
+void expect_walk_as_defined(const CpuTree& tree, const CountingShape& shape, int32_t after, const char* what) {
+  std::vector<Met> got;
+  auto on_range = [&](int32_t first, int32_t last, const Box&, bool own) {
+    got.emplace_back(first, last, own);
+    EXPECT_TRUE(own || shape.kind != 0) << what << ": a rejected range was met";
+  };
+  shape.tests = 0;
+  WorkCounts work;
+  walk(tree.view(), shape, after, on_range, work);
+  EXPECT_EQ(work.node_tests, shape.tests) << what;
+
+  std::vector<Met> want;
+  auto holds = [after](const Link& l) { return l.first <= after && after <= l.last; };
+  for (const RangePath& r : ranges_of(tree)) {
+    if (r.last <= after) continue;
+    bool reached = true;
+    for (size_t k = 0; k < r.links.size() && reached; ++k) {
+      const Link& l = r.links[k];
+      if (!holds(l)) reached = shape.kind == 2 ? shape.box.may_overlap(l.box) : shape.kind == 1;
+    }
+    if (reached) want.emplace_back(r.first, r.last, holds(r.links.back()));
+  }
+  // Tests, counted over the distinct links: a link is tested when its parent is reached (every
+  // link above it is on the path or passes) and it holds positions past `after` off the path.
+  struct Key {
+    int32_t first, last;
+    bool operator<(const Key& o) const { return std::tie(first, last) < std::tie(o.first, o.last); }
+  };
+  std::vector<Key> tested;
+  for (const RangePath& r : ranges_of(tree)) {
+    bool parent_reached = true;
+    for (const Link& l : r.links) {
+      if (!parent_reached) break;
+      if (l.last > after && !holds(l)) {
+        tested.push_back({l.first, l.last});
+        parent_reached = shape.kind == 2 ? shape.box.may_overlap(l.box) : shape.kind == 1;
+      } else if (l.last <= after) {
+        parent_reached = false;  // never entered: holds nothing past `after`
+      }
+    }
+  }
+  std::sort(tested.begin(), tested.end());
+  const uint64_t tests = uint64_t(std::unique(tested.begin(), tested.end(), [](const Key& a, const Key& b) {
+                     return a.first == b.first && a.last == b.last;
+                   }) - tested.begin());
+  std::vector<Met> sorted_got = got;
+  std::sort(sorted_got.begin(), sorted_got.end());
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(sorted_got, want) << what;
+  EXPECT_EQ(std::adjacent_find(sorted_got.begin(), sorted_got.end()), sorted_got.end()) << what << ": a range met twice";
+  EXPECT_EQ(shape.tests, tests) << what;
+}
+
+TEST(Walk, meets_the_leaf_ranges_past_the_query_and_tests_none_on_its_path) {
+  test::Random rng(27);
+  for (int32_t n : {1, 2, 3, 5, 17, 64, 300}) {
+    for (int32_t leaf_size : {1, 4, kLeafSize}) {
+      std::vector<Box> boxes(static_cast<size_t>(n));
+      for (Box& b : boxes) b = rng.box(rng.vec3(-1.0f, 1.0f), 0.1f);
+      CpuTree tree;
+      tree.build(GivenBoxes{boxes.data()}, n, BuildConfig{leaf_size});
+      for (int32_t after = -1; after < n; ++after) {
+        for (int kind = 0; kind < 3; ++kind) {
+          const Vec3 c = rng.vec3(-1.0f, 1.0f);
+          const CountingShape shape{kind, BoxShape::from({c, c, rng.uniform(0.0f, 0.6f)})};
+          const std::string what = "n " + std::to_string(n) + " leaf size " + std::to_string(leaf_size) + " after " +
+                                   std::to_string(after) + " shape " + std::to_string(kind);
+          expect_walk_as_defined(tree, shape, after, what.c_str());
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace minkq
