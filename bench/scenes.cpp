@@ -15,7 +15,7 @@ namespace minkq::bench {
 namespace ref = minkq::reference;
 
 std::string find_mesh(const std::string& relative, const std::string& data_dir) {
-  for (const std::string dir : {std::string(MINKQ_BENCH_MESH_DIR), data_dir})
+  for (const std::string& dir : {std::string(MINKQ_BENCH_MESH_DIR), data_dir})
     if (!dir.empty() && std::filesystem::is_regular_file(dir + "/" + relative)) return dir + "/" + relative;
   return "";
 }

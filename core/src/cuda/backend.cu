@@ -90,12 +90,12 @@ class CudaExecutor {
   }
   void reserve_canonical(size_t capacity) { cuda::reserve_canonical(async_ws_, capacity); }
   template <class Boxes>
-  void reserve_build(CudaTree& tree, Boxes boxes, int32_t n) {
-    tree.reserve_build(boxes, n);
+  void reserve_build(CudaTree& tree, Boxes, int32_t n) {
+    tree.reserve_build(n);
   }
   template <class Boxes>
-  void reserve_sort(Boxes boxes, int32_t n) {
-    cuda::reserve_sort(sort_, boxes, n);
+  void reserve_sort(Boxes, int32_t n) {
+    cuda::reserve_sort(sort_, n);
     sort_reserved_ = true;
   }
   // Gathers and checks into staging, then takes the vertices only if all are finite (runtime.cuh's

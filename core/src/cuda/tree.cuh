@@ -17,11 +17,10 @@ struct BoxUnion {
   __host__ __device__ Box operator()(const Box& a, const Box& b) const { return box_union(a, b); }
 };
 
-// Primitive i's centre as a point box: reduced with BoxUnion, this is the CPU's box_expand.
-template <class Boxes>
+// Element i's centre as a point box: reduced with BoxUnion, this is the CPU's box_expand.
 struct CentreBox {
-  Boxes boxes;
-  __host__ __device__ Box operator()(int32_t i) const { return Box::of_point(box_centre(boxes(i))); }
+  const Box* boxes;  // the element boxes, evaluated once
+  __host__ __device__ Box operator()(int32_t i) const { return Box::of_point(box_centre(boxes[i])); }
 };
 
 // Every element's box once (cpu/tree.h's element_boxes): the build reads them from `out`.
@@ -92,7 +91,7 @@ struct SortScratch {
 inline cudaError_t reduce_centre_bounds(void* storage, size_t& bytes, const Box* boxes, int32_t n, Box* out) {
   const thrust::counting_iterator<int32_t> ids(0);
   return cub::DeviceReduce::TransformReduce(storage, bytes, ids, out, n, BoxUnion{},
-                                            CentreBox<GivenBoxes>{GivenBoxes{boxes}}, Box::empty(), stream());
+                                            CentreBox{boxes}, Box::empty(), stream());
 }
 // LSD radix sort is stable and the values start as 0..n-1: ties are broken by index, as in the
 // CPU's stable radix sort (cpu/radix_sort.h). Morton codes use the low 63 bits.
@@ -104,9 +103,9 @@ inline cudaError_t scan_kept(void* storage, size_t& bytes, const int32_t* kept, 
   return cub::DeviceScan::ExclusiveSum(storage, bytes, kept, new_index, n, stream());
 }
 
-// Sizes `s` for Morton sorts of n boxes (of any Boxes type), kept from then on.
-template <class Boxes>
-void reserve_sort(SortScratch& s, Boxes, int32_t n) {
+// Sizes `s` for Morton sorts of n elements (their boxes evaluated once into s.boxes first, so
+// the element type does not matter), kept from then on.
+inline void reserve_sort(SortScratch& s, int32_t n) {
   s.boxes.ensure(size_t(n));
   s.centre_bounds.ensure(1);
   s.keys.ensure(size_t(n));
@@ -212,13 +211,12 @@ class CudaTree {
     store_cost(costs_.data() + kCostAtBuild);
   }
 
-  // Keeps the scratch of builds over n primitives from now on (boxes: their type sizes CUB's
-  // calls), so that builds enqueue their work without allocating.
-  template <class Boxes>
-  void reserve_build(Boxes boxes, int32_t n) {
+  // Keeps the scratch of builds over n primitives from now on, so that builds enqueue their
+  // work without allocating.
+  void reserve_build(int32_t n) {
     const int32_t inner = std::max(n - 1, 1);
     size_for(n);
-    reserve_sort(scratch_.sort, boxes, n);
+    reserve_sort(scratch_.sort, n);
     scratch_.karras.ensure(size_t(inner));
     scratch_.kept.ensure(size_t(inner));
     scratch_.new_index.ensure(size_t(inner));
