@@ -153,9 +153,9 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
                                int repeats, bool& ok) {
   const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
   const int32_t ne = int32_t(sc.mesh.edge_count());
-  std::vector<uint64_t> keys;
   std::vector<int32_t> order;
-  sort_by_morton(PointBoxes{v}, nv, keys, order);
+  SortScratch scratch;
+  sort_by_morton(PointBoxes{v}, nv, order, scratch);
   std::string out;
   Outcome base[3];
   for (int32_t leaf : {1, 2, 4, 8, 16}) {
@@ -195,13 +195,13 @@ std::string compare_fine_nodes_one(const std::string& scene, const BvhView& bvh,
 struct FrameTrees {
   int32_t nv, ne;
   CpuTree triangles, edges;
-  std::vector<uint64_t> keys;
   std::vector<int32_t> order;
   FrameTrees(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e)
       : nv(int32_t(sc.mesh.vertex_count())), ne(int32_t(sc.mesh.edge_count())) {
     triangles.build(TriangleBoxes{v, t}, int32_t(sc.mesh.triangle_count()));
     edges.build(EdgeBoxes{v, e}, ne);
-    sort_by_morton(PointBoxes{v}, nv, keys, order);
+    SortScratch scratch;
+    sort_by_morton(PointBoxes{v}, nv, order, scratch);
   }
 };
 
@@ -317,7 +317,6 @@ struct FirstAndLast {
   const Edge* e;
   float r;
   int32_t nv, nt, ne;
-  std::vector<uint64_t> keys;
   std::vector<int32_t> order;
   FirstAndLast(const SceneFrames& sc, const char* study)
       : v0(reinterpret_cast<const Vec3*>(sc.frames.front().data())),
@@ -329,7 +328,8 @@ struct FirstAndLast {
         nt(int32_t(sc.mesh.triangle_count())),
         ne(int32_t(sc.mesh.edge_count())) {
     std::fprintf(stderr, "%s (%s): %d V, %d T, r = %.4g\n", sc.name.c_str(), study, nv, nt, double(r));
-    sort_by_morton(PointBoxes{v}, nv, keys, order);
+    SortScratch scratch;
+    sort_by_morton(PointBoxes{v}, nv, order, scratch);
   }
 };
 

@@ -67,7 +67,7 @@ class CpuExecutor {
   }
   template <class Boxes>
   void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids) {
-    BuildScratch local;
+    SortScratch local;
     minkq::sort_by_morton(boxes, n, ids, sort_reserved_ ? sort_ : local);
   }
   template <class Work, class... Pass>
@@ -126,7 +126,7 @@ class CpuExecutor {
  private:
   PendingError pending_;
   bool sort_reserved_ = false;
-  BuildScratch sort_;  // the vertex order's sort scratch, kept once reserved
+  SortScratch sort_;  // the vertex order's sort scratch, kept once reserved
 };
 
 class CpuBackend final : public Backend {

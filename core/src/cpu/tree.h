@@ -69,36 +69,47 @@ inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, st
   sort_by_morton(boxes, centres, keys, ids, scratch);
 }
 
-// The scratch of a build over n elements, about 64 B per element: the element boxes, the keys
-// and the ids in key order, the sort's second buffers, the Karras nodes and their new numbers.
-// A tree keeps it once reserved (CpuTree::reserve_build), so that rebuilds of the same size
-// allocate nothing; otherwise each build makes and frees its own.
-struct BuildScratch {
+// What a Morton sort of n elements needs besides its output, about 44 B per element: each
+// element's box (evaluated once), the keys, the radix sort's second buffers.
+struct SortScratch {
   std::vector<Box> element;
   std::vector<uint64_t> keys;
+  RadixScratch radix;
+  void reserve(int32_t n) {
+    const size_t count = size_t(std::max(n, 0));
+    element.reserve(count), keys.reserve(count), radix.keys.reserve(count), radix.values.reserve(count);
+  }
+  size_t bytes() const {
+    return element.capacity() * sizeof(Box) + keys.capacity() * sizeof(uint64_t) + radix.bytes();
+  }
+};
+
+// Ids 0..n-1 in the Morton order of boxes(0..n-1)'s centres (ties by id), each box evaluated
+// once into s.element and the sorted keys left in s.keys.
+template <class Boxes>
+void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids, SortScratch& s) {
+  const Box centres = element_boxes(boxes, n, s.element);
+  sort_by_morton(s.element, centres, s.keys, ids, s.radix);
+}
+
+// The scratch of a build over n elements, about 64 B per element: the sort's, the ids in key
+// order, the Karras nodes and their new numbers. A tree keeps it once reserved
+// (CpuTree::reserve_build), so that rebuilds of the same size allocate nothing; otherwise each
+// build makes and frees its own.
+struct BuildScratch {
+  SortScratch sort;
   std::vector<int32_t> order;
-  RadixScratch sort;
   std::vector<KarrasNode> karras;
   std::vector<int32_t> new_index;
   void reserve(int32_t n) {
     const size_t count = size_t(std::max(n, 0)), inner = size_t(std::max(n - 1, 0));
-    element.reserve(count), keys.reserve(count), order.reserve(count);
-    sort.keys.reserve(count), sort.values.reserve(count);
-    karras.reserve(inner), new_index.reserve(inner);
+    sort.reserve(n), order.reserve(count), karras.reserve(inner), new_index.reserve(inner);
   }
   size_t bytes() const {
-    return element.capacity() * sizeof(Box) + keys.capacity() * sizeof(uint64_t) + order.capacity() * sizeof(int32_t) +
-           sort.bytes() + karras.capacity() * sizeof(KarrasNode) + new_index.capacity() * sizeof(int32_t);
+    return sort.bytes() + order.capacity() * sizeof(int32_t) + karras.capacity() * sizeof(KarrasNode) +
+           new_index.capacity() * sizeof(int32_t);
   }
 };
-
-// Ids 0..n-1 in the Morton order of boxes(0..n-1)'s centres (the order of the queries that
-// walk a tree in it), with the keys, from the scratch's element boxes and sort buffers.
-template <class Boxes>
-void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids, BuildScratch& s) {
-  const Box centres = element_boxes(boxes, n, s.element);
-  sort_by_morton(s.element, centres, s.keys, ids, s.sort);
-}
 
 // new_index[i] = the kept Karras nodes before node i (an exclusive scan in parallel); returns
 // how many are kept.
@@ -160,9 +171,8 @@ class CpuTree {
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
     BuildScratch local;
     BuildScratch& s = reserved_ ? scratch_ : local;
-    const Box centres = element_boxes(boxes, n, s.element);
-    if (n > 1) sort_by_morton(s.element, centres, s.keys, s.order, s.sort);
-    build_over(s.keys, s.order, s, config);
+    if (n > 1) sort_by_morton(boxes, n, s.order, s.sort); else element_boxes(boxes, n, s.sort.element);
+    build_over(s.sort.keys, s.order, s, config);
   }
 
   // The same over primitives already in leaf order: sorted_prims[p] is the primitive at leaf
@@ -173,7 +183,7 @@ class CpuTree {
                     const BuildConfig& config = {}) {
     BuildScratch local;
     BuildScratch& s = reserved_ ? scratch_ : local;
-    element_boxes(boxes, n, s.element);
+    element_boxes(boxes, n, s.sort.element);
     build_over(keys, sorted_prims, s, config);
   }
 
@@ -209,11 +219,11 @@ class CpuTree {
   }
 
  private:
-  // build_sorted() over the primitives' boxes in s.element (element i: primitive i's), with
+  // build_sorted() over the primitives' boxes in s.sort.element (element i: primitive i's), with
   // sorted_prims taken as the leaf order (its vector swapped with the tree's last one).
   void build_over(const std::vector<uint64_t>& keys, std::vector<int32_t>& sorted_prims, BuildScratch& s,
                   const BuildConfig& config) {
-    const int32_t n = int32_t(s.element.size());
+    const int32_t n = int32_t(s.sort.element.size());
     n_ = n;
     cost_at_build_ = 0.0;
     nodes_.clear();
@@ -225,7 +235,7 @@ class CpuTree {
     if (n == 1) nodes_.assign(1, one_leaf_root());
     else build_hierarchy(keys.data(), n, config.leaf_size, nodes_, s.karras, s.new_index);
     arrivals_.assign(nodes_.size(), 0);
-    refit(GivenBoxes{s.element.data()});
+    refit(GivenBoxes{s.sort.element.data()});
     cost_at_build_ = area_cost();
   }
 
