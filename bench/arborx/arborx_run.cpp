@@ -220,20 +220,18 @@ SceneResult run_scene(Scene sc, const Options& opt, const Exec& space, minkq_dev
   minkq::CpuTree kept_triangles, kept_edges;
   if (keep_scratch(kept_triangles, nt, 0) && keep_scratch(kept_edges, ne, 0)) {
     const std::function<uint64_t()> ax_triangles = cs[1].run, ax_edges = cs[3].run;  // the builds above
-    cs.emplace_back("rebuild triangle tree, scratch kept", "minkq", "CpuTree::build after reserve_build", nothing,
-                  [&] {
-                    kept_triangles.build(minkq::TriangleBoxes{v, tris}, nt);
-                    return uint64_t(nt);
-                  },
-                  uint64_t(nt));
-    cs.emplace_back("rebuild triangle tree, scratch kept", "ArborX", "boxes + BVH", reset, ax_triangles, uint64_t(nt));
-    cs.emplace_back("rebuild edge tree, scratch kept", "minkq", "CpuTree::build after reserve_build", nothing,
-                  [&] {
-                    kept_edges.build(minkq::EdgeBoxes{v, edges}, ne);
-                    return uint64_t(ne);
-                  },
-                  uint64_t(ne));
-    cs.emplace_back("rebuild edge tree, scratch kept", "ArborX", "boxes + BVH", reset, ax_edges, uint64_t(ne));
+    auto rebuild_rows = [&](const char* row, minkq::CpuTree& tree, auto boxes, int32_t n,
+                            const std::function<uint64_t()>& arborx_build) {
+      cs.emplace_back(row, "minkq", "CpuTree::build after reserve_build", nothing,
+                      [&tree, boxes, n] {
+                        tree.build(boxes, n);
+                        return uint64_t(n);
+                      },
+                      uint64_t(n));
+      cs.emplace_back(row, "ArborX", "boxes + BVH", reset, arborx_build, uint64_t(n));
+    };
+    rebuild_rows("rebuild triangle tree, scratch kept", kept_triangles, minkq::TriangleBoxes{v, tris}, nt, ax_triangles);
+    rebuild_rows("rebuild edge tree, scratch kept", kept_edges, minkq::EdgeBoxes{v, edges}, ne, ax_edges);
   }
   auto minkq_count = [&](minkq_query_kind kind, minkq_mode mode) {
     return [&, kind, mode] { return run_minkq(scene.get(), kind, mode, r, nullptr, 0, kCountFlags).count; };
