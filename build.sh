@@ -10,7 +10,8 @@ set -euo pipefail
 cd "$(dirname "$0")"
 preset=${PRESET:-default}
 binary_dir=build; [ "$preset" != default ] && binary_dir=build-$preset
-packages=(cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev libgtest-dev googletest dpkg-dev)
+packages=(cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev libgtest-dev googletest dpkg-dev
+          libopenmpi-dev openmpi-bin)  # Open MPI: minkq_mpi and its tests under mpirun
 
 install_packages() {
   local missing=()

@@ -4,6 +4,7 @@
 #include "minkq.h"
 #include "minkq.hpp"
 #include "minkq_reference.h"
+#include "cli_common.h"
 
 #include <algorithm>
 #include <chrono>
@@ -61,61 +62,10 @@ options:
 exit status: 0 success, 1 false negatives found (demo), 2 bad arguments, 3 failure (file, API)
 )";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using namespace minkq::cli;  // Args, UsageError, parse_number, parse_radius, query_modes
 
 // Owning handles, check(), open_device(), new_result() and new_mesh_scene() (capi/minkq.hpp).
 using namespace minkq::cxx;
-
-// "--name value" or "--name=value" options, and "--name" switches, after the positional
-// arguments.
-struct Args {
-  std::vector<std::string> positional;
-  std::vector<std::pair<std::string, std::string>> options;
-  std::vector<std::string> switches_set;
-
-  Args(int argc, char** argv, int first, const std::vector<std::string>& known,
-       const std::vector<std::string>& switches = {}) {
-    for (int i = first; i < argc; ++i) {
-      std::string a = argv[i];
-      if (a.rfind("--", 0) != 0) {
-        positional.push_back(a);
-        continue;
-      }
-      if (std::find(switches.begin(), switches.end(), a) != switches.end()) {
-        switches_set.push_back(a);
-        continue;
-      }
-      std::string value;
-      const size_t eq = a.find('=');
-      if (eq != std::string::npos) {
-        value = a.substr(eq + 1), a = a.substr(0, eq);
-      } else {
-        if (i + 1 >= argc) throw UsageError("option " + a + " needs a value");
-        value = argv[++i];
-      }
-      if (std::find(known.begin(), known.end(), a) == known.end()) throw UsageError("unknown option " + a);
-      options.emplace_back(a, value);
-    }
-  }
-  bool has(const std::string& name) const {
-    return std::find(switches_set.begin(), switches_set.end(), name) != switches_set.end();
-  }
-  const std::string* get(const std::string& name) const {
-    const std::string* v = nullptr;
-    for (const auto& [k, val] : options)
-      if (k == name) v = &val;  // the last one wins
-    return v;
-  }
-};
-
-double parse_number(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) throw UsageError(option + ": not a finite number: '" + text + "'");
-  return v;
-}
 
 // A VT + EE scene with incident pairs dropped; edges are derived by the library.
 Scene make_scene(minkq_device* device, const ref::Mesh& m) {
@@ -262,38 +212,20 @@ Scene query_scene(minkq_device* device, const std::string& first, const std::str
 
 int query(const Args& args) {
   if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
-  if (!args.get("--radius")) throw UsageError("query needs --radius R");
-  const double radius = parse_number("--radius", *args.get("--radius"));
-  if (radius < 0) throw UsageError("--radius: must be >= 0");
-  if (!std::isfinite(float(radius))) throw UsageError("--radius: too large for a float");
+  const float radius = parse_radius(args);
   const std::string* to = args.get("--to");
   const std::string mode = args.get("--mode") ? *args.get("--mode") : (to ? "box" : "leaf_exact");
   const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";
-  if (to && mode == "leaf_exact")
-    throw UsageError("--mode leaf_exact: swept queries (--to) report candidates for a narrow phase; use box, sphere, "
-                     "capsule_ray or capsule_exact");
-
-  // (VT mode, EE mode, flags) for each name; see the usage text.
-  minkq_mode vt_mode, ee_mode;
-  uint32_t flags = MINKQ_QUERY_DIGEST | (args.has("--stats") ? uint32_t(MINKQ_QUERY_STATS) : 0u);
-  if (mode == "box") {
-    vt_mode = ee_mode = MINKQ_MODE_BOX;
-  } else if (mode == "sphere" || mode == "capsule_exact") {
-    vt_mode = to ? MINKQ_MODE_CAPSULE_EXACT : MINKQ_MODE_SPHERE, ee_mode = to ? MINKQ_MODE_BOX : MINKQ_MODE_CAPSULE_EXACT;
-  } else if (mode == "capsule_ray") {
-    vt_mode = MINKQ_MODE_CAPSULE_RAY, ee_mode = to ? MINKQ_MODE_BOX : MINKQ_MODE_CAPSULE_RAY;
-  } else if (mode == "leaf_exact") {
-    vt_mode = ee_mode = MINKQ_MODE_BOX, flags |= MINKQ_QUERY_LEAF_EXACT;
-  } else {
-    throw UsageError("--mode: unknown mode '" + mode + "' (box, sphere, capsule_ray, capsule_exact, leaf_exact)");
-  }
+  const QueryModes modes = query_modes(mode, to != nullptr);
+  const minkq_mode vt_mode = modes.vt, ee_mode = modes.ee;
+  const uint32_t flags = modes.flags | MINKQ_QUERY_DIGEST | (args.has("--stats") ? uint32_t(MINKQ_QUERY_STATS) : 0u);
 
   Device device = open_device(backend);
   Scene scene = query_scene(device.get(), args.positional[0], to);
   Result result = new_result();
   const std::string* out = args.get("--out");
   for (const auto& [kind, name, m] : {std::tuple{MINKQ_QUERY_VT, "vt", vt_mode}, std::tuple{MINKQ_QUERY_EE, "ee", ee_mode}}) {
-    const minkq_query_desc q{kind, m, flags, float(radius)};
+    const minkq_query_desc q{kind, m, flags, radius};
     check(minkq_scene_query_result(scene.get(), &q, result.get()), "minkq_scene_query_result");
     std::printf("%s candidates %" PRIu64 " digest %016" PRIx64 "\n", name, minkq_result_count(result.get()),
                 minkq_result_digest(result.get()));

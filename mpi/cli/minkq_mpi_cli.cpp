@@ -1,0 +1,168 @@
+// minkq-mpi: the distributed query of a mesh file, for checking and for users.
+//   mpirun -n K minkq-mpi query MESH --radius R [--mode M] --partition slab|morton|random [--seed S]
+// Every rank loads the mesh and takes its part; rank 0 prints the lines `minkq query` prints
+// (the digests of the global pair sets, in the single-process numbering) and each rank's
+// figures.
+#include <mpi.h>
+
+#include <cinttypes>
+#include <cstdio>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <xxhash.h>
+
+#include "cli_common.h"
+#include "distributed.h"
+#include "minkq.hpp"
+#include "minkq_mpi.h"
+#include "minkq_reference.h"
+
+namespace {
+
+using namespace minkq::cli;
+namespace tools = minkq::mpi_tools;
+
+constexpr int kExitUsage = 2, kExitFailure = 3;
+
+const char* const kUsage = R"(usage: mpirun -n K minkq-mpi query MESH --radius R [options]
+
+  Loads an OBJ or PLY mesh on every rank, splits it over the K ranks, and runs the distributed
+  VT and EE queries (incident pairs dropped) in mode M. Rank 0 prints
+  "vt candidates N digest HEX" and "ee candidates N digest HEX" for the union of the ranks'
+  pairs, equal to `minkq query MESH --radius R --mode M`, then one line of figures per rank.
+  It fails (exit 3) when a pair is reported by two ranks.
+
+options:
+  --mode M        box, sphere, capsule_ray, capsule_exact, leaf_exact (default), as minkq query
+  --partition P   slab (triangles by centroid x), morton (chunks of the centroids' Morton
+                  order), random (every triangle and every vertex on a random rank); default slab
+  --seed S        the random partition's seed (default 1)
+  --backend B     each rank's device: cpu, cuda, cuda:N or auto (default: cpu); "cuda" picks
+                  GPU (local rank mod GPUs)
+)";
+
+struct Failed : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void check(minkq_status status, const char* call) {
+  if (status != MINKQ_SUCCESS)
+    throw Failed(std::string(call) + " failed: " + minkq_status_name(status) + ": " + minkq_mpi_last_error_message());
+}
+
+std::string device_spec(const std::string& backend) {
+  if (backend != "cuda") return backend;
+  const int gpus = minkq_cuda_device_count();
+  if (gpus == 0) return backend;  // minkq_device_create says why
+  int local_rank = 0;
+  MPI_Comm node;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  MPI_Comm_rank(node, &local_rank);
+  MPI_Comm_free(&node);
+  return "cuda:" + std::to_string(local_rank % gpus);
+}
+
+uint64_t digest(const tools::GlobalPairs& pairs) {
+  std::vector<int32_t> flat;
+  flat.reserve(2 * pairs.size());
+  for (const auto& [a, b] : pairs) {
+    if (a > INT32_MAX || b > INT32_MAX) throw Failed("a global id over 2^31 - 1: no int32 digest");
+    flat.push_back(int32_t(a)), flat.push_back(int32_t(b));
+  }
+  return XXH64(flat.data(), flat.size() * sizeof(int32_t), 0);
+}
+
+int query(const Args& args, int rank, int size) {
+  if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
+  const float radius = parse_radius(args);
+  const QueryModes modes = query_modes(args.get("--mode") ? *args.get("--mode") : "leaf_exact", false);
+  tools::Partition partition;
+  try {
+    partition = tools::parse_partition(args.get("--partition") ? *args.get("--partition") : "slab");
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--partition: ") + e.what());
+  }
+  const double seed = args.get("--seed") ? parse_number("--seed", *args.get("--seed")) : 1;
+  if (seed < 0 || seed != double(uint64_t(seed))) throw UsageError("--seed: a non-negative integer");
+
+  const minkq::reference::Mesh mesh = minkq::reference::load_mesh(args.positional[0]);
+  const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, partition, uint64_t(seed));
+  const tools::Part part = tools::part_of(mesh.xyz, mesh.tris, owners, rank);
+  minkq::cxx::Device device = minkq::cxx::open_device(device_spec(args.get("--backend") ? *args.get("--backend") : "cpu"));
+  const minkq_mpi_scene_desc desc =
+      tools::desc_of(part, MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT);
+  minkq_mpi_scene* scene = nullptr;
+  check(minkq_mpi_scene_create(MPI_COMM_WORLD, device.get(), &desc, &scene), "minkq_mpi_scene_create");
+  minkq_mpi_result* result = nullptr;
+  check(minkq_mpi_result_create(&result), "minkq_mpi_result_create");
+  uint64_t local_pairs[2] = {0, 0};
+  bool twice = false;
+  for (const auto& [kind, name, mode] :
+       {std::tuple{MINKQ_QUERY_VT, "vt", modes.vt}, std::tuple{MINKQ_QUERY_EE, "ee", modes.ee}}) {
+    const minkq_query_desc q{kind, mode, modes.flags, radius};
+    check(minkq_mpi_scene_query(scene, &q, result), "minkq_mpi_scene_query");
+    local_pairs[kind == MINKQ_QUERY_EE] = minkq_mpi_result_count(result);
+    const tools::GlobalPairs all = tools::gather_pairs(MPI_COMM_WORLD, result);
+    if (rank == 0) {
+      tools::GlobalPairs distinct = all;
+      distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+      std::printf("%s candidates %zu digest %016" PRIx64 "\n", name, distinct.size(), digest(distinct));
+      if (distinct.size() != all.size()) {
+        std::fprintf(stderr, "minkq-mpi: %zu %s pairs were reported by more than one rank\n",
+                     all.size() - distinct.size(), name);
+        twice = true;
+      }
+    }
+  }
+  minkq_mpi_rank_info info{};
+  check(minkq_mpi_scene_rank_info(scene, &info), "minkq_mpi_scene_rank_info");
+  const uint64_t figures[9] = {info.owned_vertices, info.owned_triangles, info.owned_edges,
+                               info.copied_vertices, info.ghost_vertices,  info.ghost_edges,
+                               info.neighbours,      local_pairs[0],       local_pairs[1]};
+  std::vector<uint64_t> everyone(rank == 0 ? 9 * size_t(size) : 0);
+  MPI_Gather(figures, 9, MPI_UINT64_T, everyone.data(), 9, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+  if (rank == 0)
+    for (int p = 0; p < size; ++p) {
+      const uint64_t* f = everyone.data() + 9 * size_t(p);
+      std::printf("rank %d owned vertices %" PRIu64 " triangles %" PRIu64 " edges %" PRIu64 " copies %" PRIu64
+                  " ghost vertices %" PRIu64 " ghost edges %" PRIu64 " neighbours %" PRIu64 " pairs vt %" PRIu64
+                  " ee %" PRIu64 "\n",
+                  p, f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]);
+    }
+  minkq_mpi_result_release(result);
+  minkq_mpi_scene_release(scene);
+  int failed = twice;
+  MPI_Bcast(&failed, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  return failed ? kExitFailure : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const std::string command = argc > 1 ? argv[1] : "";
+  int code = 0;
+  try {
+    if (command == "--help" || command == "-h" || command == "help") {
+      if (rank == 0) std::fputs(kUsage, stdout);
+    } else if (command == "query") {
+      code = query(Args(argc, argv, 2, {"--radius", "--mode", "--partition", "--seed", "--backend"}), rank, size);
+    } else {
+      throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
+    }
+  } catch (const UsageError& e) {
+    if (rank == 0) std::fprintf(stderr, "minkq-mpi: %s\n(run 'minkq-mpi --help' for usage)\n", e.what());
+    code = kExitUsage;
+  } catch (const std::exception& e) {
+    // A collective failure is reported by every rank with the same text: rank 0 prints it.
+    if (rank == 0) std::fprintf(stderr, "minkq-mpi: %s\n", e.what());
+    code = kExitFailure;
+  }
+  MPI_Finalize();
+  return code;
+}
