@@ -7,6 +7,7 @@
 
 #include <cinttypes>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -43,8 +44,13 @@ options:
                   GPU (local rank mod GPUs)
 )";
 
+// A collective failure (a minkq_mpi call: the same on every rank).
 struct Failed : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+// Every rank stops with this exit status; the reason is printed already.
+struct Stop {
+  int code;
 };
 
 void check(minkq_status status, const char* call) {
@@ -52,45 +58,81 @@ void check(minkq_status status, const char* call) {
     throw Failed(std::string(call) + " failed: " + minkq_status_name(status) + ": " + minkq_mpi_last_error_message());
 }
 
-std::string device_spec(const std::string& backend) {
-  if (backend != "cuda") return backend;
-  const int gpus = minkq_cuda_device_count();
-  if (gpus == 0) return backend;  // minkq_device_create says why
-  int local_rank = 0;
+// This rank's index among the ranks on its node (collective).
+int node_rank() {
   MPI_Comm node;
   MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  int local_rank = 0;
   MPI_Comm_rank(node, &local_rank);
   MPI_Comm_free(&node);
+  return local_rank;
+}
+
+// "cuda" means one GPU per rank: the node-local rank's, round robin.
+std::string device_spec(const std::string& backend, int local_rank) {
+  const int gpus = minkq_cuda_device_count();
+  if (backend != "cuda" || gpus == 0) return backend;  // minkq_device_create says why not
   return "cuda:" + std::to_string(local_rank % gpus);
 }
 
+// The digest `minkq query` prints: XXH64 of the canonical pairs as little-endian int32 (global
+// ids of a mesh file fit).
 uint64_t digest(const tools::GlobalPairs& pairs) {
   std::vector<int32_t> flat;
   flat.reserve(2 * pairs.size());
-  for (const auto& [a, b] : pairs) {
-    if (a > INT32_MAX || b > INT32_MAX) throw Failed("a global id over 2^31 - 1: no int32 digest");
-    flat.push_back(int32_t(a)), flat.push_back(int32_t(b));
-  }
+  for (const auto& [a, b] : pairs) flat.push_back(int32_t(a)), flat.push_back(int32_t(b));
   return XXH64(flat.data(), flat.size() * sizeof(int32_t), 0);
 }
 
-int query(const Args& args, int rank, int size) {
-  if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
-  const float radius = parse_radius(args);
-  const QueryModes modes = query_modes(args.get("--mode") ? *args.get("--mode") : "leaf_exact", false);
-  tools::Partition partition;
+// Runs each rank's own set-up (arguments, mesh file, device), then agrees: when it failed
+// anywhere, the lowest failing rank prints why and every rank stops, with none left waiting.
+template <class Work>
+void agreed(int rank, Work&& work) {
+  std::string message;
+  int code = 0;
   try {
-    partition = tools::parse_partition(args.get("--partition") ? *args.get("--partition") : "slab");
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--partition: ") + e.what());
+    work();
+  } catch (const UsageError& e) {
+    message = e.what(), code = kExitUsage;
+  } catch (const std::exception& e) {
+    message = e.what(), code = kExitFailure;
   }
-  const double seed = args.get("--seed") ? parse_number("--seed", *args.get("--seed")) : 1;
-  if (seed < 0 || seed != double(uint64_t(seed))) throw UsageError("--seed: a non-negative integer");
+  int size = 1, first = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int mine = code ? rank : size;
+  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  if (first == size) return;
+  MPI_Bcast(&code, 1, MPI_INT, first, MPI_COMM_WORLD);
+  if (rank == first)
+    std::fprintf(stderr, "minkq-mpi: %s%s\n", size > 1 ? ("rank " + std::to_string(rank) + ": ").c_str() : "",
+                 message.c_str());
+  throw Stop{code};
+}
 
-  const minkq::reference::Mesh mesh = minkq::reference::load_mesh(args.positional[0]);
-  const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, partition, uint64_t(seed));
-  const tools::Part part = tools::part_of(mesh.xyz, mesh.tris, owners, rank);
-  minkq::cxx::Device device = minkq::cxx::open_device(device_spec(args.get("--backend") ? *args.get("--backend") : "cpu"));
+int query(const Args& args, int rank, int size) {
+  float radius = 0;
+  QueryModes modes{};
+  minkq::reference::Mesh mesh;
+  tools::Part part;
+  minkq::cxx::Device device;
+  const int local_rank = node_rank();
+  agreed(rank, [&] {
+    if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
+    radius = parse_radius(args);
+    modes = query_modes(args.get("--mode") ? *args.get("--mode") : "leaf_exact", false);
+    tools::Partition partition;
+    try {
+      partition = tools::parse_partition(args.get("--partition") ? *args.get("--partition") : "slab");
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--partition: ") + e.what());
+    }
+    const double seed = args.get("--seed") ? parse_number("--seed", *args.get("--seed")) : 1;
+    if (seed < 0 || seed != double(uint64_t(seed))) throw UsageError("--seed: a non-negative integer");
+    mesh = minkq::reference::load_mesh(args.positional[0]);
+    const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, partition, uint64_t(seed));
+    part = tools::part_of(mesh.xyz, mesh.tris, owners, rank);
+    device = minkq::cxx::open_device(device_spec(args.get("--backend") ? *args.get("--backend") : "cpu", local_rank));
+  });
   const minkq_mpi_scene_desc desc =
       tools::desc_of(part, MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT);
   minkq_mpi_scene* scene = nullptr;
@@ -151,15 +193,19 @@ int main(int argc, char** argv) {
     if (command == "--help" || command == "-h" || command == "help") {
       if (rank == 0) std::fputs(kUsage, stdout);
     } else if (command == "query") {
-      code = query(Args(argc, argv, 2, {"--radius", "--mode", "--partition", "--seed", "--backend"}), rank, size);
+      std::unique_ptr<Args> args;
+      agreed(rank, [&] {
+        args = std::make_unique<Args>(argc, argv, 2, std::vector<std::string>{"--radius", "--mode", "--partition", "--seed", "--backend"});
+      });
+      code = query(*args, rank, size);
     } else {
-      throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
+      agreed(rank, [&] { throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'"); });
     }
-  } catch (const UsageError& e) {
-    if (rank == 0) std::fprintf(stderr, "minkq-mpi: %s\n(run 'minkq-mpi --help' for usage)\n", e.what());
-    code = kExitUsage;
-  } catch (const std::exception& e) {
-    // A collective failure is reported by every rank with the same text: rank 0 prints it.
+  } catch (const Stop& stop) {
+    if (stop.code == kExitUsage && rank == 0) std::fprintf(stderr, "(run 'minkq-mpi --help' for usage)\n");
+    code = stop.code;
+  } catch (const Failed& e) {
+    // A collective failure: every rank has the same text; rank 0 prints it.
     if (rank == 0) std::fprintf(stderr, "minkq-mpi: %s\n", e.what());
     code = kExitFailure;
   }
