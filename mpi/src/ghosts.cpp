@@ -1,8 +1,11 @@
 // The ghost layer of one query, and the local minkq scene over it.
 //
-// A rank's reach is the box of its owned triangles (VT) or owned edges (EE), which holds every
-// element it reports pairs for. A rank sends another the vertices (VT) or edges (EE) it owns
-// whose boxes, grown by R, overlap that rank's reach, with R = r (1 + 2^-12) + 2^-12 M and M
+// A rank's reach is a set of boxes over its owned triangles (VT) or owned edges (EE), which
+// hold every element it reports pairs for: up to kReachBoxes boxes of runs of them in Morton
+// order, so that a rank whose elements are scattered (a Morton chunk of a twisted sheet, a
+// graph partition) does not draw in everything inside one large box. A rank sends another
+// the vertices (VT) or edges (EE) it owns whose boxes, grown by R, overlap a box of that
+// rank's reach (found with a minkq bvh over the reach boxes), with R = r (1 + 2^-12) + 2^-12 M and M
 // the largest coordinate magnitude of the mesh: a margin far above the rounding of any of
 // minkq's tests (leaf tests keep pairs within r + 2^-19 of the elements' size and distance),
 // so every pair a single-process query reports has both elements on the rank that reports it.
@@ -10,9 +13,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <unordered_map>
 
 #include "collective.h"
+#include "minkq/tree.h"  // spread_bits_21
 #include "scene.h"
 
 namespace minkq::mpi {
@@ -45,11 +50,60 @@ struct GhostEdge {
   float p[2][3];
 };
 
-// This rank's reach (what it reports pairs for) and its sources (what it may send as ghosts).
+constexpr int kReachBoxes = 64;
+
+// This rank's reach (what it reports pairs for, in up to kReachBoxes boxes; the rest empty),
+// the box of its sources (what it may send as ghosts), and its coordinates' magnitude.
 struct Extent {
-  Box reach, source;
+  Box reach[kReachBoxes];
+  Box source;
   double magnitude = 0;  // largest |coordinate| of its owned vertices
+  Box reach_bounds() const {
+    Box all;
+    for (const Box& b : reach)
+      if (!b.empty())
+        for (int k = 0; k < 3; ++k) all.lo[k] = std::min(all.lo[k], b.lo[k]), all.hi[k] = std::max(all.hi[k], b.hi[k]);
+    return all;
+  }
+  bool reached_by(const Box& b, double grow) const {
+    if (!b.reaches(reach_bounds(), grow)) return false;
+    for (const Box& r : reach)
+      if (b.reaches(r, grow)) return true;
+    return false;
+  }
 };
+constexpr int kExtentDoubles = 6 * (kReachBoxes + 1) + 1;
+
+// The boxes of elements (each the box of its `per` vertices) grouped into kReachBoxes runs of
+// their centres' Morton order.
+void group_boxes(const std::vector<Box>& boxes, Box* out) {
+  Box bounds;
+  for (const Box& b : boxes)
+    for (int k = 0; k < 3; ++k) bounds.lo[k] = std::min(bounds.lo[k], b.lo[k]), bounds.hi[k] = std::max(bounds.hi[k], b.hi[k]);
+  std::vector<std::pair<uint64_t, uint32_t>> order(boxes.size());
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    uint64_t code = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double extent = bounds.hi[k] - bounds.lo[k];
+      const double centre = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
+      const double unit = extent > 0 ? (centre - bounds.lo[k]) / extent : 0.0;
+      code |= minkq::spread_bits_21(uint32_t(std::min(std::max(unit, 0.0), 1.0) * 2097151.0)) << k;
+    }
+    order[i] = {code, uint32_t(i)};
+  }
+  std::sort(order.begin(), order.end());
+  for (size_t i = 0; i < order.size(); ++i) {
+    Box& group = out[i * kReachBoxes / order.size()];
+    const Box& b = boxes[order[i].second];
+    for (int k = 0; k < 3; ++k) group.lo[k] = std::min(group.lo[k], b.lo[k]), group.hi[k] = std::max(group.hi[k], b.hi[k]);
+  }
+}
+
+Box box_of(const float* x, const int32_t* v, int per) {
+  Box b;
+  for (int i = 0; i < per; ++i) b.add(x + 3 * size_t(v[i]));
+  return b;
+}
 
 Extent extent(const SceneState& s, minkq_query_kind kind) {
   Extent e;
@@ -57,15 +111,73 @@ Extent extent(const SceneState& s, minkq_query_kind kind) {
   for (size_t v = 0; v < s.vertex_owned.size(); ++v)
     if (s.vertex_owned[v])
       for (int k = 0; k < 3; ++k) e.magnitude = std::max(e.magnitude, std::fabs(double(x[3 * v + k])));
+  std::vector<Box> elements;
   if (kind == MINKQ_QUERY_VT) {
-    for (int32_t v : s.triangles) e.reach.add(x + 3 * size_t(v));
+    for (size_t t = 0; t < s.triangle_ids.size(); ++t) elements.push_back(box_of(x, &s.triangles[3 * t], 3));
     for (size_t v = 0; v < s.vertex_owned.size(); ++v)
       if (s.vertex_owned[v]) e.source.add(x + 3 * v);
   } else {
-    for (const OwnedEdge& edge : s.edges) e.reach.add(x + 3 * size_t(edge.a)), e.reach.add(x + 3 * size_t(edge.b));
-    e.source = e.reach;
+    for (const OwnedEdge& edge : s.edges) {
+      const int32_t ends[2] = {edge.a, edge.b};
+      elements.push_back(box_of(x, ends, 2));
+      e.source.add(x + 3 * size_t(edge.a)), e.source.add(x + 3 * size_t(edge.b));
+    }
   }
+  group_boxes(elements, e.reach);
   return e;
+}
+
+// A box grown by g, as floats rounded outward: what the bvh tests compare exactly.
+void grown_corners(const Box& b, double g, float* lo, float* hi) {
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = float(b.lo[k] - g), hi[k] = float(b.hi[k] + g);
+    if (double(lo[k]) > b.lo[k] - g) lo[k] = std::nextafter(lo[k], -INFINITY);
+    if (double(hi[k]) < b.hi[k] + g) hi[k] = std::nextafter(hi[k], INFINITY);
+  }
+}
+
+// For each destination, which of `boxes` (this rank's source elements) grown by g overlap one
+// of its reach boxes: one minkq bvh over the destinations' boxes, one box query.
+std::vector<std::vector<uint32_t>> select(minkq_device* device, const std::vector<Box>& boxes, double g,
+                                          const std::vector<int>& dests, const std::vector<Extent>& extents) {
+  std::vector<std::vector<uint32_t>> chosen(dests.size());
+  std::vector<float> reach;
+  std::vector<uint32_t> reach_dest;
+  for (size_t i = 0; i < dests.size(); ++i)
+    for (const Box& b : extents[size_t(dests[i])].reach)
+      if (!b.empty()) {
+        for (int k = 0; k < 3; ++k) reach.push_back(float(b.lo[k]));  // floats exactly: boxes of floats
+        for (int k = 0; k < 3; ++k) reach.push_back(float(b.hi[k]));
+        reach_dest.push_back(uint32_t(i));
+      }
+  if (reach_dest.empty() || boxes.empty()) return chosen;
+  std::vector<float> lo(3 * boxes.size()), hi(3 * boxes.size());
+  for (size_t i = 0; i < boxes.size(); ++i) grown_corners(boxes[i], g, &lo[3 * i], &hi[3 * i]);
+  auto check = [](minkq_status status, const char* call) {
+    if (status) fail(status, std::string(call) + ": " + minkq_last_error_message());
+  };
+  minkq_bvh* bvh = nullptr;
+  check(minkq_bvh_create(device, minkq_buffer{reach.data(), 0, reach_dest.size(), MINKQ_MEMORY_HOST}, &bvh),
+        "minkq_bvh_create");
+  std::unique_ptr<minkq_bvh, void (*)(minkq_bvh*)> owned(bvh, minkq_bvh_release);
+  minkq_bvh_query_desc q{MINKQ_SHAPE_BOX, MINKQ_MODE_BOX, 0, 0.0f,
+                         minkq_buffer{lo.data(), 0, boxes.size(), MINKQ_MEMORY_HOST},
+                         minkq_buffer{hi.data(), 0, boxes.size(), MINKQ_MEMORY_HOST}};
+  std::vector<int32_t> pairs(2 * std::max<size_t>(boxes.size(), 64));
+  minkq_query_info info{};
+  minkq_status status = minkq_bvh_query(bvh, &q, pairs.data(), pairs.size() / 2, MINKQ_MEMORY_HOST, &info);
+  if (status == MINKQ_ERROR_CAPACITY) {
+    pairs.resize(2 * size_t(info.count));
+    status = minkq_bvh_query(bvh, &q, pairs.data(), pairs.size() / 2, MINKQ_MEMORY_HOST, &info);
+  }
+  check(status, "minkq_bvh_query");
+  std::vector<uint64_t> keys(size_t(info.count));  // (destination, element), deduplicated
+  for (size_t i = 0; i < keys.size(); ++i)
+    keys[i] = uint64_t(reach_dest[size_t(pairs[2 * i + 1])]) << 32 | uint32_t(pairs[2 * i]);
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  for (uint64_t k : keys) chosen[size_t(k >> 32)].push_back(uint32_t(k));
+  return chosen;
 }
 
 // The local scene's arrays for this query, before they go into a minkq scene.
@@ -138,28 +250,32 @@ void update(SceneState& s, LocalScene& local, minkq_query_kind kind, Assembly& a
 minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float radius) {
   // Every rank's reach and sources, and the mesh's magnitude, in one all-gather.
   const Extent mine = extent(s, kind);
-  std::array<double, 13> packed;
-  std::copy(mine.reach.lo, mine.reach.lo + 3, packed.begin());
-  std::copy(mine.reach.hi, mine.reach.hi + 3, packed.begin() + 3);
-  std::copy(mine.source.lo, mine.source.lo + 3, packed.begin() + 6);
-  std::copy(mine.source.hi, mine.source.hi + 3, packed.begin() + 9);
-  packed[12] = mine.magnitude;
-  std::vector<double> all(13 * size_t(s.size));
-  mpi_check(MPI_Allgather(packed.data(), 13, MPI_DOUBLE, all.data(), 13, MPI_DOUBLE, s.comm), "MPI_Allgather");
+  std::vector<double> packed;
+  packed.reserve(kExtentDoubles);
+  for (const Box* b = mine.reach; b != mine.reach + kReachBoxes + 1; ++b) {
+    const Box& box = b == mine.reach + kReachBoxes ? mine.source : *b;
+    packed.insert(packed.end(), box.lo, box.lo + 3), packed.insert(packed.end(), box.hi, box.hi + 3);
+  }
+  packed.push_back(mine.magnitude);
+  std::vector<double> all(kExtentDoubles * size_t(s.size));
+  mpi_check(MPI_Allgather(packed.data(), kExtentDoubles, MPI_DOUBLE, all.data(), kExtentDoubles, MPI_DOUBLE, s.comm),
+            "MPI_Allgather");
   std::vector<Extent> extents(s.size);
   double magnitude = 0;
   for (int p = 0; p < s.size; ++p) {
-    const double* e = all.data() + 13 * size_t(p);
-    std::copy(e, e + 3, extents[p].reach.lo), std::copy(e + 3, e + 6, extents[p].reach.hi);
-    std::copy(e + 6, e + 9, extents[p].source.lo), std::copy(e + 9, e + 12, extents[p].source.hi);
-    magnitude = std::max(magnitude, e[12]);
+    const double* e = all.data() + kExtentDoubles * size_t(p);
+    for (int b = 0; b <= kReachBoxes; ++b) {
+      Box& box = b == kReachBoxes ? extents[p].source : extents[p].reach[b];
+      std::copy(e + 6 * b, e + 6 * b + 3, box.lo), std::copy(e + 6 * b + 3, e + 6 * b + 6, box.hi);
+    }
+    magnitude = std::max(magnitude, e[kExtentDoubles - 1]);
   }
   const double grow = double(radius) * (1 + 0x1p-12) + 0x1p-12 * magnitude;
   std::vector<int> dests, sources;
   for (int p = 0; p < s.size; ++p) {
     if (p == s.rank) continue;
-    if (extents[s.rank].source.reaches(extents[p].reach, grow)) dests.push_back(p);
-    if (extents[p].source.reaches(extents[s.rank].reach, grow)) sources.push_back(p);
+    if (extents[p].reached_by(extents[s.rank].source, grow)) dests.push_back(p);
+    if (extents[s.rank].reached_by(extents[p].source, grow)) sources.push_back(p);
   }
   std::vector<int> partners = dests;
   partners.insert(partners.end(), sources.begin(), sources.end());
@@ -168,15 +284,24 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
 
   const float* x = s.xyz.data();
   if (kind == MINKQ_QUERY_VT) {
-    std::vector<std::vector<GhostVertex>> send(dests.size());
-    for (size_t i = 0; i < dests.size(); ++i)
-      for (size_t v = 0; v < s.vertex_owned.size(); ++v) {
-        if (!s.vertex_owned[v]) continue;
+    std::vector<uint32_t> owned;
+    std::vector<Box> boxes;
+    for (size_t v = 0; v < s.vertex_owned.size(); ++v)
+      if (s.vertex_owned[v]) {
         Box b;
         b.add(x + 3 * v);
-        if (b.reaches(extents[dests[i]].reach, grow))
-          send[i].push_back({s.vertex_ids[v], {x[3 * v], x[3 * v + 1], x[3 * v + 2]}, 0});
+        owned.push_back(uint32_t(v)), boxes.push_back(b);
       }
+    std::vector<std::vector<GhostVertex>> send(dests.size());
+    const minkq_status status = phase(s.comm, [&] {
+      const auto chosen = select(s.device, boxes, grow, dests, extents);
+      for (size_t i = 0; i < dests.size(); ++i)
+        for (uint32_t k : chosen[i]) {
+          const size_t v = owned[k];
+          send[i].push_back({s.vertex_ids[v], {x[3 * v], x[3 * v + 1], x[3 * v + 2]}, 0});
+        }
+    });
+    if (status) return status;
     const auto in = neighbour_exchange(s.comm, dests, send, sources);
     return phase(s.comm, [&] {
       Assembly a(s);
@@ -189,17 +314,24 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
       update(s, s.vt, kind, a);
     });
   }
+  std::vector<Box> boxes;
+  for (const OwnedEdge& e : s.edges) {
+    const int32_t ends[2] = {e.a, e.b};
+    boxes.push_back(box_of(x, ends, 2));
+  }
   std::vector<std::vector<GhostEdge>> send(dests.size());
-  for (size_t i = 0; i < dests.size(); ++i)
-    for (const OwnedEdge& e : s.edges) {
-      Box b;
-      b.add(x + 3 * size_t(e.a)), b.add(x + 3 * size_t(e.b));
-      if (!b.reaches(extents[dests[i]].reach, grow)) continue;
-      GhostEdge g{e.id, {s.vertex_ids[e.a], s.vertex_ids[e.b]}, {}};
-      std::copy(x + 3 * size_t(e.a), x + 3 * size_t(e.a) + 3, g.p[0]);
-      std::copy(x + 3 * size_t(e.b), x + 3 * size_t(e.b) + 3, g.p[1]);
-      send[i].push_back(g);
-    }
+  const minkq_status status = phase(s.comm, [&] {
+    const auto chosen = select(s.device, boxes, grow, dests, extents);
+    for (size_t i = 0; i < dests.size(); ++i)
+      for (uint32_t k : chosen[i]) {
+        const OwnedEdge& e = s.edges[k];
+        GhostEdge g{e.id, {s.vertex_ids[e.a], s.vertex_ids[e.b]}, {}};
+        std::copy(x + 3 * size_t(e.a), x + 3 * size_t(e.a) + 3, g.p[0]);
+        std::copy(x + 3 * size_t(e.b), x + 3 * size_t(e.b) + 3, g.p[1]);
+        send[i].push_back(g);
+      }
+  });
+  if (status) return status;
   const auto in = neighbour_exchange(s.comm, dests, send, sources);
   return phase(s.comm, [&] {
     Assembly a(s);
