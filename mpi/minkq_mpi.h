@@ -98,6 +98,13 @@ void minkq_mpi_scene_release(minkq_mpi_scene* scene);
 minkq_status minkq_mpi_scene_refit(minkq_mpi_scene* scene, minkq_buffer vertices);
 minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertices);
 
+/* Writes to *out_growth, on every rank, how far the refits since the last builds have stretched
+ * the local trees: the largest minkq_scene_tree_growth over the ranks' VT and EE trees (1 when
+ * none has been refit, or before the first query builds them). Rebuild (minkq_mpi_scene_rebuild)
+ * when it passes about 1.5, as for one scene. Collective. Errors: INVALID_ARGUMENT (NULL scene
+ * or out_growth, on any rank). */
+minkq_status minkq_mpi_scene_tree_growth(minkq_mpi_scene* scene, double* out_growth);
+
 /* A rank's share of the pairs of the last query, in global ids: a growing host buffer that the
  * library owns. Not collective. */
 typedef struct minkq_mpi_result minkq_mpi_result;

@@ -206,6 +206,24 @@ void minkq_mpi_scene_release(minkq_mpi_scene* scene) {
 minkq_status minkq_mpi_scene_refit(minkq_mpi_scene* scene, minkq_buffer vertices) { return move(scene, vertices, false); }
 minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertices) { return move(scene, vertices, true); }
 
+minkq_status minkq_mpi_scene_tree_growth(minkq_mpi_scene* scene, double* out_growth) {
+  if (!scene) return lone_failure(MINKQ_ERROR_INVALID_ARGUMENT, "scene is NULL");
+  return guarded([&] {
+    double growth = 1;
+    minkq_status status = checked_phase(*scene, [&] {
+      require(out_growth != nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "out_growth is NULL");
+      for (const LocalScene* local : {&scene->vt, &scene->ee}) {
+        double g = 1;
+        if (local->scene && minkq_scene_tree_growth(local->scene, &g) == MINKQ_SUCCESS) growth = std::max(growth, g);
+      }
+    });
+    if (status) return status;
+    mpi_check(MPI_Allreduce(MPI_IN_PLACE, &growth, 1, MPI_DOUBLE, MPI_MAX, scene->comm), "MPI_Allreduce");
+    *out_growth = growth;
+    return MINKQ_SUCCESS;
+  });
+}
+
 minkq_status minkq_mpi_result_create(minkq_mpi_result** out_result) {
   return guarded([&] {
     require(out_result != nullptr, MINKQ_ERROR_INVALID_ARGUMENT, "out_result is NULL");

@@ -188,6 +188,15 @@ void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, d
             step == 0 ? minkq_mpi_scene_refit(scene.s, host(xyz)) : minkq_mpi_scene_rebuild(scene.s, host(xyz));
         expect(moved_status == MINKQ_SUCCESS, what + ": move: " + minkq_mpi_last_error_message());
         compare(device, scene.s, moved, flags, r, what + (step == 0 ? ", refit" : ", rebuild"));
+        // The growth is every rank's largest, so the same on all of them; 1 right after builds.
+        double growth = 0;
+        expect_same_everywhere(minkq_mpi_scene_tree_growth(scene.s, &growth), what + ": growth");
+        double lo = growth, hi = growth;
+        MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+        MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        expect(lo == hi && growth >= 1 && (step == 0 || growth == 1),
+               what + ": growth " + std::to_string(growth) + " (ranks from " + std::to_string(lo) + " to " +
+                   std::to_string(hi) + ")");
       }
     }
 }
@@ -255,7 +264,7 @@ void error_cases(minkq_device* device) {
       expect_error(create(device, bad, flags, s), MINKQ_ERROR_INVALID_ARGUMENT, "on its owner",
                    "a triangle copy with other vertices");
   }
-  {  // flags that differ between ranks
+  if (size > 1) {  // flags that differ between ranks
     Scene s;
     expect_error(create(device, good, rank == last ? uint32_t(MINKQ_SCENE_VT) : flags, s), MINKQ_ERROR_INVALID_ARGUMENT,
                  "differ between the ranks", "flags differ");

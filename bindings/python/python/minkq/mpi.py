@@ -1,0 +1,248 @@
+"""Distributed VT and EE queries of a mesh split over MPI ranks (``minkq_mpi.h``), over mpi4py.
+
+Each rank passes its part of the mesh: its local vertices and triangles, a global id for each
+(int64) and which of them it owns; every call is collective over the communicator. A query
+returns this rank's share of the pairs as a (k, 2) int64 array of global ids, such that the
+union over the ranks is exactly the pair set of the same query on the whole mesh in one
+process (EE pairs in the global edge numbering, which for vertex ids 0..n-1 is the
+single-process scene's) and each pair is on exactly one rank::
+
+    from mpi4py import MPI
+    import minkq.mpi
+    scene = minkq.mpi.Scene(MPI.COMM_WORLD, vertices, triangles, vertex_ids, triangle_ids,
+                            vertex_owned, triangle_owned)
+    pairs = scene.query("ee", "box", radius, leaf_exact=True)   # this rank's pairs
+
+An error on any rank raises the same exception, with the same message naming the rank and
+the element, on every rank.
+
+This module loads ``libminkq_mpi.so`` (built with minkq's MPI component and linked against
+the system's MPI, so it is not in the wheel): from ``MINKQ_MPI_LIB`` (the file) or
+``MINKQ_MPI_LIB_DIR`` (its folder) when set, else from the library search path (after
+``cmake --install`` or the Debian package). It uses the libminkq that library links, not the
+wheel's, so its scenes take a device spec string rather than a :class:`minkq.Device`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+from typing import Any, Dict, Optional
+
+import numpy as np
+
+from ._errors import _from_status
+
+__all__ = ["Scene", "library_path"]
+
+_KINDS = {"vt": 0, "ee": 1}
+_MODES = {"box": 0, "sphere": 1, "capsule_ray": 2, "capsule_exact": 3}
+_SCENE_VT, _SCENE_EE, _SCENE_DROP_INCIDENT = 1, 2, 4
+_LEAF_EXACT, _CANONICAL, _STATS, _COUNT = 1, 2, 8, 16
+
+
+class _Buffer(ctypes.Structure):
+    _fields_ = [("data", ctypes.c_void_p), ("byte_stride", ctypes.c_size_t), ("count", ctypes.c_size_t),
+                ("memory", ctypes.c_int)]
+
+
+class _Desc(ctypes.Structure):
+    _fields_ = [("flags", ctypes.c_uint32)] + [
+        (name, _Buffer)
+        for name in ("vertices", "triangles", "vertex_ids", "triangle_ids", "vertex_owned", "triangle_owned")
+    ]
+
+
+class _QueryDesc(ctypes.Structure):
+    _fields_ = [("kind", ctypes.c_int), ("mode", ctypes.c_int), ("flags", ctypes.c_uint32), ("radius", ctypes.c_float)]
+
+
+class _Stats(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_uint64) for name in ("nodes_visited", "node_tests", "primitive_tests", "candidates")]
+
+
+class _RankInfo(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_uint64) for name in (
+        "owned_vertices", "owned_triangles", "owned_edges", "copied_vertices", "ghost_vertices", "ghost_edges",
+        "neighbours", "global_edges", "local_builds", "local_refits")]
+
+
+_lib: Optional[ctypes.CDLL] = None
+_core: Optional[ctypes.CDLL] = None
+_path: Optional[str] = None
+
+
+def library_path() -> str:
+    """The libminkq_mpi this module loads (see the module's documentation)."""
+    if os.environ.get("MINKQ_MPI_LIB"):
+        return os.environ["MINKQ_MPI_LIB"]
+    if os.environ.get("MINKQ_MPI_LIB_DIR"):
+        return os.path.join(os.environ["MINKQ_MPI_LIB_DIR"], "libminkq_mpi.so")
+    return "libminkq_mpi.so.1"
+
+
+def _load() -> ctypes.CDLL:
+    global _lib, _core, _path
+    if _lib is not None:
+        return _lib
+    _path = library_path()
+    try:
+        lib = ctypes.CDLL(_path)
+    except OSError as e:
+        raise ImportError(
+            f"minkq.mpi: cannot load {_path} ({e}); build minkq with its MPI component and set "
+            "MINKQ_MPI_LIB_DIR to the folder of libminkq_mpi.so, or install it") from e
+    # The libminkq that libminkq_mpi links: its SONAME (libminkq.so.<MINKQ_ABI_VERSION>) resolves
+    # to the copy already loaded with it.
+    core = ctypes.CDLL("libminkq.so.2")
+    P, S = ctypes.c_void_p, ctypes.c_int
+    lib.minkq_mpi_last_error_message.restype = ctypes.c_char_p
+    lib.minkq_mpi_scene_create.argtypes = [P, P, ctypes.POINTER(_Desc), ctypes.POINTER(P)]
+    lib.minkq_mpi_scene_release.argtypes = [P]
+    lib.minkq_mpi_scene_refit.argtypes = [P, _Buffer]
+    lib.minkq_mpi_scene_rebuild.argtypes = [P, _Buffer]
+    lib.minkq_mpi_result_create.argtypes = [ctypes.POINTER(P)]
+    lib.minkq_mpi_result_release.argtypes = [P]
+    lib.minkq_mpi_result_count.argtypes = [P]
+    lib.minkq_mpi_result_count.restype = ctypes.c_uint64
+    lib.minkq_mpi_result_pairs.argtypes = [P]
+    lib.minkq_mpi_result_pairs.restype = ctypes.POINTER(ctypes.c_int64)
+    lib.minkq_mpi_result_stats.argtypes = [P]
+    lib.minkq_mpi_result_stats.restype = _Stats
+    lib.minkq_mpi_scene_query.argtypes = [P, ctypes.POINTER(_QueryDesc), P]
+    lib.minkq_mpi_scene_rank_info.argtypes = [P, ctypes.POINTER(_RankInfo)]
+    for f in ("minkq_mpi_scene_create", "minkq_mpi_scene_refit", "minkq_mpi_scene_rebuild",
+              "minkq_mpi_result_create", "minkq_mpi_scene_query", "minkq_mpi_scene_rank_info"):
+        getattr(lib, f).restype = S
+    core.minkq_device_create.argtypes = [ctypes.c_char_p, ctypes.POINTER(P)]
+    core.minkq_device_create.restype = S
+    core.minkq_device_release.argtypes = [P]
+    core.minkq_last_error_message.restype = ctypes.c_char_p
+    _lib, _core = lib, core
+    return lib
+
+
+def _check(status: int, message: bytes) -> None:
+    if status != 0:
+        raise _from_status(status, message.decode("utf-8", "replace"))
+
+
+def _comm_handle(comm: Any) -> Any:
+    """The C MPI_Comm of an mpi4py communicator, as ctypes passes it."""
+    from mpi4py import MPI
+
+    handle = MPI._handleof(comm)
+    return ctypes.c_void_p(handle) if MPI._sizeof(MPI.Comm) == ctypes.sizeof(ctypes.c_void_p) else ctypes.c_int(handle)
+
+
+def _host(array: np.ndarray, count: int) -> _Buffer:
+    return _Buffer(array.ctypes.data if array.size else None, 0, count, 0)
+
+
+class Scene:
+    """A mesh split over the ranks of ``comm`` (an mpi4py communicator): this rank's part.
+
+    ``vertices`` (n, 3) float32-convertible; ``triangles`` (m, 3) local vertex indices;
+    ``vertex_ids`` (n,) and ``triangle_ids`` (m,) global ids (int64 >= 0, distinct on a rank);
+    ``vertex_owned`` (n,) and ``triangle_owned`` (m,) booleans: whether this rank owns each.
+    ``vt`` and ``ee`` pick the queries the scene answers; ``drop_incident`` drops pairs that
+    share a vertex. ``device`` is this rank's device spec ("cpu", "cuda:N"). Collective.
+    """
+
+    def __init__(self, comm: Any, vertices: Any, triangles: Any, vertex_ids: Any, triangle_ids: Any,
+                 vertex_owned: Any, triangle_owned: Any, *, vt: bool = True, ee: bool = True,
+                 drop_incident: bool = True, device: str = "cpu") -> None:
+        lib = _load()
+        self._scene = ctypes.c_void_p()
+        self._result = ctypes.c_void_p()
+        self._device = ctypes.c_void_p()
+        self._comm = comm
+        # Arrays this rank checks (shape); the library checks the rest, collectively.
+        v = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        t = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
+        arrays: Dict[str, np.ndarray] = {
+            "vertices": v, "triangles": t,
+            "vertex_ids": np.ascontiguousarray(vertex_ids, dtype=np.int64).reshape(-1),
+            "triangle_ids": np.ascontiguousarray(triangle_ids, dtype=np.int64).reshape(-1),
+            "vertex_owned": np.ascontiguousarray(vertex_owned, dtype=np.uint8).reshape(-1),
+            "triangle_owned": np.ascontiguousarray(triangle_owned, dtype=np.uint8).reshape(-1),
+        }
+        assert _core is not None
+        _check(_core.minkq_device_create(device.encode(), ctypes.byref(self._device)), _core.minkq_last_error_message())
+        desc = _Desc(flags=(_SCENE_VT if vt else 0) | (_SCENE_EE if ee else 0)
+                     | (_SCENE_DROP_INCIDENT if drop_incident else 0))
+        for name, array in arrays.items():
+            setattr(desc, name, _host(array, len(array)))
+        self._vertex_count = len(v)
+        _check(lib.minkq_mpi_scene_create(_comm_handle(comm), self._device, ctypes.byref(desc),
+                                          ctypes.byref(self._scene)), lib.minkq_mpi_last_error_message())
+        _check(lib.minkq_mpi_result_create(ctypes.byref(self._result)), lib.minkq_mpi_last_error_message())
+
+    def close(self) -> None:
+        """Releases the scene (collective: every rank closes it); also when it is collected."""
+        if _lib is None:
+            return
+        if getattr(self, "_result", None):
+            _lib.minkq_mpi_result_release(self._result)
+            self._result = ctypes.c_void_p()
+        if getattr(self, "_scene", None):
+            _lib.minkq_mpi_scene_release(self._scene)
+            self._scene = ctypes.c_void_p()
+        if getattr(self, "_device", None) and _core is not None:
+            _core.minkq_device_release(self._device)
+            self._device = ctypes.c_void_p()
+
+    def __del__(self) -> None:
+        self.close()
+
+    def __enter__(self) -> "Scene":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def _move(self, vertices: Any, rebuild: bool) -> None:
+        v = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        call = _lib.minkq_mpi_scene_rebuild if rebuild else _lib.minkq_mpi_scene_refit
+        _check(call(self._scene, _host(v, len(v))), _lib.minkq_mpi_last_error_message())
+
+    def refit(self, vertices: Any) -> None:
+        """Moves this rank's vertices (the next query refits the local trees). Collective."""
+        self._move(vertices, False)
+
+    def rebuild(self, vertices: Any) -> None:
+        """Moves this rank's vertices; the next query builds the local trees afresh. Collective."""
+        self._move(vertices, True)
+
+    def _run(self, kind: str, mode: str, radius: float, flags: int) -> None:
+        if kind not in _KINDS:
+            raise ValueError(f"kind must be one of {tuple(_KINDS)}, not {kind!r}")
+        if mode not in _MODES:
+            raise ValueError(f"mode must be one of {tuple(_MODES)}, not {mode!r}")
+        q = _QueryDesc(_KINDS[kind], _MODES[mode], flags, float(radius))
+        _check(_lib.minkq_mpi_scene_query(self._scene, ctypes.byref(q), self._result),
+               _lib.minkq_mpi_last_error_message())
+
+    def query(self, kind: str, mode: str, radius: float, *, leaf_exact: bool = False,
+              canonical: bool = False) -> np.ndarray:
+        """This rank's pairs, a (k, 2) int64 array of global ids: (vertex, triangle) for "vt",
+        (e, f) with e < f for "ee". Modes and ``leaf_exact`` as :meth:`minkq.Scene.query`;
+        ``canonical`` sorts this rank's pairs. Collective (the same arguments on every rank)."""
+        self._run(kind, mode, radius, (_LEAF_EXACT if leaf_exact else 0) | (_CANONICAL if canonical else 0))
+        n = int(_lib.minkq_mpi_result_count(self._result))
+        if n == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        pointer = _lib.minkq_mpi_result_pairs(self._result)
+        return np.ctypeslib.as_array(pointer, shape=(n, 2)).copy()
+
+    def count(self, kind: str, mode: str, radius: float, *, leaf_exact: bool = False) -> int:
+        """The number of this rank's pairs, without keeping them. Collective."""
+        self._run(kind, mode, radius, _COUNT | (_LEAF_EXACT if leaf_exact else 0))
+        return int(_lib.minkq_mpi_result_count(self._result))
+
+    def rank_info(self) -> Dict[str, int]:
+        """This rank's figures: owned vertices, triangles and edges, copies, the ghosts of the
+        last VT and EE queries, neighbours, the global edge count, local builds and refits."""
+        info = _RankInfo()
+        _check(_lib.minkq_mpi_scene_rank_info(self._scene, ctypes.byref(info)), _lib.minkq_mpi_last_error_message())
+        return {name: int(getattr(info, name)) for name, _ in _RankInfo._fields_}

@@ -1,0 +1,93 @@
+"""The rank program of test_mpi.py, under ``mpirun -n K python mpi_ranks.py SEED``.
+
+A wavy grid sheet, split at random over the ranks (every triangle and every vertex on a
+random rank, each rank holding the corners of its triangles as copies), queried through
+minkq.mpi; rank 0 gathers the pairs and compares them, pair by pair, with the single-process
+query of the wheel's minkq.Scene. Also after a refit, and a collective error. Exits non-zero
+on any difference.
+"""
+
+import sys
+
+import numpy as np
+from mpi4py import MPI
+
+import minkq
+import minkq.mpi
+
+comm = MPI.COMM_WORLD
+rank, size = comm.Get_rank(), comm.Get_size()
+seed = int(sys.argv[1])
+failures = []
+
+
+def sheet(n, phase):
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="xy")
+    x, y = i.ravel() / (n - 1), j.ravel() / (n - 1)
+    xyz = np.stack([x, y, 0.08 * np.sin(9 * x + phase) * np.cos(7 * y)], axis=1).astype(np.float32)
+    a = (j[:-1, :-1] * n + i[:-1, :-1]).ravel()
+    tris = np.concatenate([np.stack([a, a + 1, a + n + 1], 1), np.stack([a, a + n + 1, a + n], 1)]).astype(np.int32)
+    return xyz, tris
+
+
+n = 24
+xyz, tris = sheet(n, 0.0)
+rng = np.random.default_rng(seed)
+tri_owner = rng.integers(0, size, len(tris))
+vertex_owner = rng.integers(0, size, len(xyz))
+mine_t = np.flatnonzero(tri_owner == rank)
+held = np.zeros(len(xyz), bool)
+held[tris[mine_t].ravel()] = True
+held[vertex_owner == rank] = True
+local_v = rng.permutation(np.flatnonzero(held))
+index = np.full(len(xyz), -1)
+index[local_v] = np.arange(len(local_v))
+r = 0.6 / (n - 1)
+
+
+def check(scene, whole_xyz, what):
+    single = minkq.Scene(minkq.Device("cpu"), whole_xyz, tris, vt=True, ee=True, drop_incident=True)
+    for kind, mode, leaf in [("vt", "box", False), ("vt", "sphere", False), ("vt", "box", True),
+                             ("ee", "box", False), ("ee", "capsule_exact", False), ("ee", "box", True)]:
+        mine = scene.query(kind, mode, r, leaf_exact=leaf)
+        counted = scene.count(kind, mode, r, leaf_exact=leaf)
+        if counted != len(mine):
+            failures.append(f"{what} {kind} {mode}: count {counted} but {len(mine)} pairs on rank {rank}")
+        gathered = comm.gather(mine, root=0)
+        if rank != 0:
+            continue
+        union = np.concatenate(gathered)
+        want = single.query(kind, mode, r, leaf_exact=leaf, canonical=True).astype(np.int64)
+        got = np.unique(union, axis=0)
+        if len(got) != len(union):
+            failures.append(f"{what} {kind} {mode}: {len(union) - len(got)} pairs on two ranks")
+        if not np.array_equal(got, want):
+            failures.append(f"{what} {kind} {mode}: {len(got)} pairs, single process {len(want)}")
+
+
+with minkq.mpi.Scene(comm, xyz[local_v], index[tris[mine_t]], local_v, mine_t, vertex_owner[local_v] == rank,
+                     np.ones(len(mine_t), bool)) as scene:
+    check(scene, xyz, "created")
+    if scene.rank_info()["global_edges"] != 3 * (n - 1) ** 2 + 2 * (n - 1):
+        failures.append(f"global edges {scene.rank_info()['global_edges']}")
+    moved, _ = sheet(n, 1.3)
+    scene.refit(moved[local_v])
+    check(scene, moved, "refit")
+    bad = moved[local_v].copy()
+    if rank == size - 1 and len(bad):
+        bad[0, 2] = np.nan
+    try:
+        scene.refit(bad)
+        failures.append("a NaN on the last rank was accepted")
+    except minkq.NonFiniteError as e:
+        if f"rank {size - 1}: vertex 0" not in str(e):
+            failures.append(f"message {e}")
+    check(scene, moved, "after a failed refit")
+
+everyone = comm.allgather(failures)
+if rank == 0:
+    for rank_failures in everyone:
+        for f in rank_failures:
+            print("FAIL", f)
+    print(f"mpi_ranks: {size} ranks, seed {seed}, {sum(map(len, everyone))} failures")
+sys.exit(1 if any(everyone) else 0)
