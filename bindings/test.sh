@@ -50,7 +50,7 @@ fi
 if [ -z "${MINKQ_LIB_DIR:-}" ]; then
   step "building libminkq.so (CPU backend) in $build"
   cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA=OFF \
-    -DMINKQ_BUILD_TESTS=OFF -DMINKQ_BUILD_EXAMPLES=OFF >/dev/null
+    -DMINKQ_BUILD_TESTS=OFF -DMINKQ_BUILD_EXAMPLES=OFF -DMINKQ_WITH_MPI=OFF >/dev/null
   cmake --build "$build" --target minkq -j "$(nproc)"
   MINKQ_LIB_DIR=$build/capi
 fi

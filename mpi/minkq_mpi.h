@@ -30,7 +30,9 @@
  * margin) of the box of its triangles. Ghosts go only to the ranks whose box they can reach:
  * point-to-point messages between neighbours, after one all-gather of the ranks' boxes per
  * query. The local trees are refit when the ghost layer keeps its members, and built afresh
- * when it changes or after minkq_mpi_scene_rebuild.
+ * when it changes or after minkq_mpi_scene_rebuild. With a skin (minkq_mpi_scene_set_skin) the
+ * layer is a skin wider and is kept while no vertex has moved more than half a skin since it
+ * was chosen: queries then send only the ghosts' new positions, to the same ranks.
  *
  * Collective calls: every function taking a scene (and minkq_mpi_scene_create) is collective
  * over the scene's communicator: every rank calls it, in the same order, with the same query
@@ -98,6 +100,15 @@ void minkq_mpi_scene_release(minkq_mpi_scene* scene);
 minkq_status minkq_mpi_scene_refit(minkq_mpi_scene* scene, minkq_buffer vertices);
 minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertices);
 
+/* Sets the skin: a width s >= 0 (finite, the same on every rank) by which the ghost layer is
+ * chosen wider, so that later queries with the same radius keep it, sending only the ghosts'
+ * positions, until some vertex has moved more than s / 2 (on an axis) since it was chosen;
+ * then the next query chooses it afresh. 0 (the default) chooses it at every query. A wider
+ * skin sends more ghosts less often; the pairs are the same for every skin. Collective.
+ * Errors: INVALID_ARGUMENT (NULL scene, a negative skin, skins that differ between the ranks),
+ * NON_FINITE. */
+minkq_status minkq_mpi_scene_set_skin(minkq_mpi_scene* scene, double skin);
+
 /* Writes to *out_growth, on every rank, how far the refits since the last builds have stretched
  * the local trees: the largest minkq_scene_tree_growth over the ranks' VT and EE trees (1 when
  * none has been refit, or before the first query builds them). Rebuild (minkq_mpi_scene_rebuild)
@@ -137,6 +148,8 @@ typedef struct minkq_mpi_rank_info {
   uint64_t global_edges;        /* the whole mesh's edge count */
   uint64_t local_builds;        /* local trees built (created or rebuilt) so far, VT and EE */
   uint64_t local_refits;        /* local trees refit so far */
+  uint64_t ghost_exchanges;     /* ghost layers chosen and sent so far, VT and EE */
+  uint64_t ghost_updates;       /* queries that kept their ghost layer (a skin), moving it only */
 } minkq_mpi_rank_info;
 /* Not collective. Errors: INVALID_ARGUMENT (NULL scene or out_info). */
 minkq_status minkq_mpi_scene_rank_info(const minkq_mpi_scene* scene, minkq_mpi_rank_info* out_info);

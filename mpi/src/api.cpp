@@ -206,6 +206,28 @@ void minkq_mpi_scene_release(minkq_mpi_scene* scene) {
 minkq_status minkq_mpi_scene_refit(minkq_mpi_scene* scene, minkq_buffer vertices) { return move(scene, vertices, false); }
 minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertices) { return move(scene, vertices, true); }
 
+minkq_status minkq_mpi_scene_set_skin(minkq_mpi_scene* scene, double skin) {
+  if (!scene) return lone_failure(MINKQ_ERROR_INVALID_ARGUMENT, "scene is NULL");
+  return guarded([&] {
+    minkq_status status = checked_phase(*scene, [&] {
+      require(std::isfinite(skin), MINKQ_ERROR_NON_FINITE, "the skin " + std::to_string(skin) + " is not finite");
+      require(skin >= 0, MINKQ_ERROR_INVALID_ARGUMENT, "the skin " + std::to_string(skin) + " is negative");
+    });
+    if (status) return status;
+    double range[2] = {skin, -skin};
+    mpi_check(MPI_Allreduce(MPI_IN_PLACE, range, 2, MPI_DOUBLE, MPI_MIN, scene->comm), "MPI_Allreduce");
+    status = checked_phase(*scene, [&] {
+      require(range[0] == -range[1], MINKQ_ERROR_INVALID_ARGUMENT,
+              "the skins differ between the ranks (from " + std::to_string(range[0]) + " to " +
+                  std::to_string(-range[1]) + ")");
+    });
+    if (status) return status;
+    scene->skin = skin;
+    scene->vt.pattern.valid = scene->ee.pattern.valid = false;
+    return MINKQ_SUCCESS;
+  });
+}
+
 minkq_status minkq_mpi_scene_tree_growth(minkq_mpi_scene* scene, double* out_growth) {
   if (!scene) return lone_failure(MINKQ_ERROR_INVALID_ARGUMENT, "scene is NULL");
   return guarded([&] {
@@ -333,6 +355,8 @@ minkq_status minkq_mpi_scene_rank_info(const minkq_mpi_scene* scene, minkq_mpi_r
   i.global_edges = scene->global_edges;
   i.local_builds = scene->builds;
   i.local_refits = scene->refits;
+  i.ghost_exchanges = scene->exchanges;
+  i.ghost_updates = scene->updates;
   set_last_error("");
   return MINKQ_SUCCESS;
 }

@@ -127,6 +127,10 @@ Extent extent(const SceneState& s, minkq_query_kind kind) {
   return e;
 }
 
+void check_local(minkq_status status, const char* call) {
+  if (status) fail(status, std::string(call) + ": " + minkq_last_error_message());
+}
+
 // A box grown by g, as floats rounded outward: what the bvh tests compare exactly.
 void grown_corners(const Box& b, double g, float* lo, float* hi) {
   for (int k = 0; k < 3; ++k) {
@@ -153,11 +157,8 @@ std::vector<std::vector<uint32_t>> select(minkq_device* device, const std::vecto
   if (reach_dest.empty() || boxes.empty()) return chosen;
   std::vector<float> lo(3 * boxes.size()), hi(3 * boxes.size());
   for (size_t i = 0; i < boxes.size(); ++i) grown_corners(boxes[i], g, &lo[3 * i], &hi[3 * i]);
-  auto check = [](minkq_status status, const char* call) {
-    if (status) fail(status, std::string(call) + ": " + minkq_last_error_message());
-  };
   minkq_bvh* bvh = nullptr;
-  check(minkq_bvh_create(device, minkq_buffer{reach.data(), 0, reach_dest.size(), MINKQ_MEMORY_HOST}, &bvh),
+  check_local(minkq_bvh_create(device, minkq_buffer{reach.data(), 0, reach_dest.size(), MINKQ_MEMORY_HOST}, &bvh),
         "minkq_bvh_create");
   std::unique_ptr<minkq_bvh, void (*)(minkq_bvh*)> owned(bvh, minkq_bvh_release);
   minkq_bvh_query_desc q{MINKQ_SHAPE_BOX, MINKQ_MODE_BOX, 0, 0.0f,
@@ -170,7 +171,7 @@ std::vector<std::vector<uint32_t>> select(minkq_device* device, const std::vecto
     pairs.resize(2 * size_t(info.count));
     status = minkq_bvh_query(bvh, &q, pairs.data(), pairs.size() / 2, MINKQ_MEMORY_HOST, &info);
   }
-  check(status, "minkq_bvh_query");
+  check_local(status, "minkq_bvh_query");
   std::vector<uint64_t> keys(size_t(info.count));  // (destination, element), deduplicated
   for (size_t i = 0; i < keys.size(); ++i)
     keys[i] = uint64_t(reach_dest[size_t(pairs[2 * i + 1])]) << 32 | uint32_t(pairs[2 * i]);
@@ -188,18 +189,30 @@ struct Assembly {
   std::vector<int64_t> element_ids;
   std::vector<uint8_t> owned;
   std::vector<int64_t> signature;
+  std::vector<std::vector<int32_t>> targets;  // per source: the scene vertex of each position
   uint64_t ghosts = 0;
   std::unordered_map<int64_t, int32_t> index;  // global vertex id -> scene vertex
 
   explicit Assembly(const SceneState& s) : xyz(s.xyz), vertex_ids(s.vertex_ids) {
     for (size_t v = 0; v < vertex_ids.size(); ++v) index.emplace(vertex_ids[v], int32_t(v));
   }
+  // The scene vertex of a ghost's vertex (received from the last source begun), added once.
   int32_t vertex(int64_t id, const float* p) {
     const auto [it, added] = index.emplace(id, int32_t(vertex_ids.size()));
     if (added) vertex_ids.push_back(id), xyz.insert(xyz.end(), p, p + 3);
+    targets.back().push_back(it->second);
     return it->second;
   }
+  void begin_source(int rank) { signature.push_back(-1 - rank), targets.emplace_back(); }
 };
+
+// Refits or rebuilds the local trees for new positions, as the last move asks.
+void move_trees(SceneState& s, LocalScene& local, const minkq_buffer& vertices) {
+  if (local.rebuild)
+    check_local(minkq_scene_rebuild(local.scene, vertices), "minkq_scene_rebuild"), ++s.builds;
+  else if (local.refit)
+    check_local(minkq_scene_refit(local.scene, vertices), "minkq_scene_refit"), ++s.refits;
+}
 
 void require_local_size(size_t n, const char* what) {
   require(n <= size_t(INT32_MAX) - 1, MINKQ_ERROR_SIZE_OVERFLOW,
@@ -214,16 +227,10 @@ void update(SceneState& s, LocalScene& local, minkq_query_kind kind, Assembly& a
   require_local_size(a.vertex_ids.size(), "vertices");
   require_local_size(n, kind == MINKQ_QUERY_VT ? "triangles" : "edges");
   const minkq_buffer vertices{a.xyz.data(), 12, a.vertex_ids.size(), MINKQ_MEMORY_HOST};
-  auto check = [&](minkq_status status, const char* call) {
-    if (status) fail(status, std::string(call) + ": " + minkq_last_error_message());
-  };
   const bool same = local.scene && a.signature == local.signature;
-  if (same && (local.rebuild || local.refit)) {
-    if (local.rebuild)
-      check(minkq_scene_rebuild(local.scene, vertices), "minkq_scene_rebuild"), ++s.builds;
-    else
-      check(minkq_scene_refit(local.scene, vertices), "minkq_scene_refit"), ++s.refits;
-  } else if (!same) {
+  if (same) {
+    move_trees(s, local, vertices);
+  } else {
     minkq_scene* fresh = nullptr;
     if (n > 0) {
       minkq_scene_desc desc{};
@@ -231,13 +238,15 @@ void update(SceneState& s, LocalScene& local, minkq_query_kind kind, Assembly& a
       desc.vertices = vertices;
       const minkq_buffer elements{a.elements.data(), 4 * per, n, MINKQ_MEMORY_HOST};
       (kind == MINKQ_QUERY_VT ? desc.triangles : desc.edges) = elements;
-      check(minkq_scene_create(s.device, &desc, &fresh), "minkq_scene_create");
+      check_local(minkq_scene_create(s.device, &desc, &fresh), "minkq_scene_create");
       ++s.builds;
     }
     minkq_scene_release(local.scene);
     local.scene = fresh;
     local.signature = std::move(a.signature);
   }
+  local.pattern.targets = std::move(a.targets);
+  local.pattern.xyz = std::move(a.xyz);
   local.vertex_ids = std::move(a.vertex_ids);
   local.element_ids = std::move(a.element_ids);
   local.owned = std::move(a.owned);
@@ -247,7 +256,54 @@ void update(SceneState& s, LocalScene& local, minkq_query_kind kind, Assembly& a
 
 }  // namespace
 
+namespace {
+
+// With a skin: whether the last exchange's pattern still holds, every vertex having moved at
+// most skin / 2 on each axis since (so two elements' boxes came at most one skin closer).
+bool pattern_holds(const SceneState& s, const LocalScene& local, float radius) {
+  if (!(s.skin > 0)) return false;
+  double moved = local.pattern.valid && local.pattern.radius == radius ? 0.0 : INFINITY;
+  for (size_t v = 0; v < s.vertex_owned.size() && moved <= s.skin; ++v)
+    if (s.vertex_owned[v])
+      for (int k = 0; k < 3; ++k)
+        moved = std::max(moved, std::fabs(double(s.xyz[3 * v + k]) - double(local.pattern.reference[3 * v + k])));
+  mpi_check(MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, s.comm), "MPI_Allreduce");
+  return moved <= 0.5 * s.skin;
+}
+
+// The ghosts' new positions along the pattern's messages, then the trees refit (or rebuilt).
+minkq_status move_ghosts(SceneState& s, LocalScene& local, minkq_query_kind kind) {
+  LocalScene::Pattern& p = local.pattern;
+  const float* x = s.xyz.data();
+  std::vector<std::vector<float>> send(p.dests.size());
+  for (size_t i = 0; i < p.dests.size(); ++i)
+    for (int32_t k : p.sent[i]) {
+      if (kind == MINKQ_QUERY_VT) {
+        send[i].insert(send[i].end(), x + 3 * size_t(k), x + 3 * size_t(k) + 3);
+      } else {
+        const OwnedEdge& e = s.edges[size_t(k)];
+        send[i].insert(send[i].end(), x + 3 * size_t(e.a), x + 3 * size_t(e.a) + 3);
+        send[i].insert(send[i].end(), x + 3 * size_t(e.b), x + 3 * size_t(e.b) + 3);
+      }
+    }
+  const auto in = neighbour_exchange(s.comm, p.dests, send, p.sources);
+  return phase(s.comm, [&] {
+    std::copy(s.xyz.begin(), s.xyz.end(), p.xyz.begin());
+    for (size_t j = 0; j < in.size(); ++j)
+      for (size_t t = 0; t < p.targets[j].size(); ++t)
+        std::copy(in[j].begin() + 3 * t, in[j].begin() + 3 * t + 3, p.xyz.begin() + 3 * size_t(p.targets[j][t]));
+    if (local.scene) move_trees(s, local, minkq_buffer{p.xyz.data(), 12, p.xyz.size() / 3, MINKQ_MEMORY_HOST});
+    local.refit = local.rebuild = false;
+    ++s.updates;
+  });
+}
+
+}  // namespace
+
 minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float radius) {
+  LocalScene& local = kind == MINKQ_QUERY_VT ? s.vt : s.ee;
+  if (pattern_holds(s, local, radius)) return move_ghosts(s, local, kind);
+  local.pattern.valid = false;
   // Every rank's reach and sources, and the mesh's magnitude, in one all-gather.
   const Extent mine = extent(s, kind);
   std::vector<double> packed;
@@ -270,7 +326,8 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
     }
     magnitude = std::max(magnitude, e[kExtentDoubles - 1]);
   }
-  const double grow = double(radius) * (1 + 0x1p-12) + 0x1p-12 * magnitude;
+  // With a skin s the layer is s wider, and the margin covers coordinates up to s / 2 larger.
+  const double grow = double(radius) * (1 + 0x1p-12) + 0x1p-12 * (magnitude + 0.5 * s.skin) + s.skin;
   std::vector<int> dests, sources;
   for (int p = 0; p < s.size; ++p) {
     if (p == s.rank) continue;
@@ -282,72 +339,76 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
   std::sort(partners.begin(), partners.end());
   s.neighbours = uint64_t(std::unique(partners.begin(), partners.end()) - partners.begin());
 
+  // The elements this rank may send (local vertex or owned edge indices) and their boxes.
   const float* x = s.xyz.data();
+  std::vector<int32_t> candidates;
+  std::vector<Box> boxes;
   if (kind == MINKQ_QUERY_VT) {
-    std::vector<uint32_t> owned;
-    std::vector<Box> boxes;
     for (size_t v = 0; v < s.vertex_owned.size(); ++v)
-      if (s.vertex_owned[v]) {
-        Box b;
-        b.add(x + 3 * v);
-        owned.push_back(uint32_t(v)), boxes.push_back(b);
-      }
-    std::vector<std::vector<GhostVertex>> send(dests.size());
-    const minkq_status status = phase(s.comm, [&] {
-      const auto chosen = select(s.device, boxes, grow, dests, extents);
-      for (size_t i = 0; i < dests.size(); ++i)
-        for (uint32_t k : chosen[i]) {
-          const size_t v = owned[k];
-          send[i].push_back({s.vertex_ids[v], {x[3 * v], x[3 * v + 1], x[3 * v + 2]}, 0});
+      if (s.vertex_owned[v]) candidates.push_back(int32_t(v)), boxes.push_back(box_of(x, &candidates.back(), 1));
+  } else {
+    for (size_t k = 0; k < s.edges.size(); ++k) {
+      const int32_t ends[2] = {s.edges[k].a, s.edges[k].b};
+      candidates.push_back(int32_t(k)), boxes.push_back(box_of(x, ends, 2));
+    }
+  }
+  std::vector<std::vector<int32_t>> sent(dests.size());
+  std::vector<std::vector<GhostVertex>> vertices(kind == MINKQ_QUERY_VT ? dests.size() : 0);
+  std::vector<std::vector<GhostEdge>> edges(kind == MINKQ_QUERY_EE ? dests.size() : 0);
+  minkq_status status = phase(s.comm, [&] {
+    const auto chosen = select(s.device, boxes, grow, dests, extents);
+    for (size_t i = 0; i < dests.size(); ++i)
+      for (uint32_t c : chosen[i]) {
+        const int32_t k = candidates[c];
+        sent[i].push_back(k);
+        if (kind == MINKQ_QUERY_VT) {
+          vertices[i].push_back({s.vertex_ids[size_t(k)], {x[3 * k], x[3 * k + 1], x[3 * k + 2]}, 0});
+          continue;
         }
-    });
-    if (status) return status;
-    const auto in = neighbour_exchange(s.comm, dests, send, sources);
-    return phase(s.comm, [&] {
-      Assembly a(s);
+        const OwnedEdge& e = s.edges[size_t(k)];
+        GhostEdge g{e.id, {s.vertex_ids[e.a], s.vertex_ids[e.b]}, {}};
+        std::copy(x + 3 * size_t(e.a), x + 3 * size_t(e.a) + 3, g.p[0]);
+        std::copy(x + 3 * size_t(e.b), x + 3 * size_t(e.b) + 3, g.p[1]);
+        edges[i].push_back(g);
+      }
+  });
+  if (status) return status;
+  Assembly a(s);
+  if (kind == MINKQ_QUERY_VT) {
+    const auto in = neighbour_exchange(s.comm, dests, vertices, sources);
+    status = phase(s.comm, [&] {
       for (size_t j = 0; j < in.size(); ++j) {
-        a.signature.push_back(-1 - sources[j]);
+        a.begin_source(sources[j]);
         for (const GhostVertex& g : in[j]) a.vertex(g.id, g.p), a.signature.push_back(g.id), ++a.ghosts;
       }
       a.elements = s.triangles;
       a.element_ids = s.triangle_ids;
-      update(s, s.vt, kind, a);
+      update(s, local, kind, a);
+    });
+  } else {
+    const auto in = neighbour_exchange(s.comm, dests, edges, sources);
+    status = phase(s.comm, [&] {
+      for (const OwnedEdge& e : s.edges) a.elements.push_back(e.a), a.elements.push_back(e.b), a.element_ids.push_back(e.id);
+      a.owned.assign(s.edges.size(), 1);
+      for (size_t j = 0; j < in.size(); ++j) {
+        a.begin_source(sources[j]);
+        for (const GhostEdge& g : in[j]) {
+          a.elements.push_back(a.vertex(g.v[0], g.p[0]));
+          a.elements.push_back(a.vertex(g.v[1], g.p[1]));
+          a.element_ids.push_back(g.id), a.owned.push_back(0);
+          a.signature.push_back(g.id), ++a.ghosts;
+        }
+      }
+      update(s, local, kind, a);
     });
   }
-  std::vector<Box> boxes;
-  for (const OwnedEdge& e : s.edges) {
-    const int32_t ends[2] = {e.a, e.b};
-    boxes.push_back(box_of(x, ends, 2));
-  }
-  std::vector<std::vector<GhostEdge>> send(dests.size());
-  const minkq_status status = phase(s.comm, [&] {
-    const auto chosen = select(s.device, boxes, grow, dests, extents);
-    for (size_t i = 0; i < dests.size(); ++i)
-      for (uint32_t k : chosen[i]) {
-        const OwnedEdge& e = s.edges[k];
-        GhostEdge g{e.id, {s.vertex_ids[e.a], s.vertex_ids[e.b]}, {}};
-        std::copy(x + 3 * size_t(e.a), x + 3 * size_t(e.a) + 3, g.p[0]);
-        std::copy(x + 3 * size_t(e.b), x + 3 * size_t(e.b) + 3, g.p[1]);
-        send[i].push_back(g);
-      }
-  });
   if (status) return status;
-  const auto in = neighbour_exchange(s.comm, dests, send, sources);
-  return phase(s.comm, [&] {
-    Assembly a(s);
-    for (const OwnedEdge& e : s.edges) a.elements.push_back(e.a), a.elements.push_back(e.b), a.element_ids.push_back(e.id);
-    a.owned.assign(s.edges.size(), 1);
-    for (size_t j = 0; j < in.size(); ++j) {
-      a.signature.push_back(-1 - sources[j]);
-      for (const GhostEdge& g : in[j]) {
-        a.elements.push_back(a.vertex(g.v[0], g.p[0]));
-        a.elements.push_back(a.vertex(g.v[1], g.p[1]));
-        a.element_ids.push_back(g.id), a.owned.push_back(0);
-        a.signature.push_back(g.id), ++a.ghosts;
-      }
-    }
-    update(s, s.ee, kind, a);
-  });
+  ++s.exchanges;
+  LocalScene::Pattern& p = local.pattern;
+  p.valid = true, p.radius = radius;
+  p.dests = std::move(dests), p.sources = std::move(sources), p.sent = std::move(sent);
+  p.reference = s.xyz;
+  return MINKQ_SUCCESS;
 }
 
 }  // namespace minkq::mpi

@@ -39,6 +39,17 @@ struct LocalScene {
   std::vector<int64_t> signature;    // the ghost layer's members, in arrival order
   bool refit = false, rebuild = false;  // what the positions' last move asks of the trees
   uint64_t ghosts = 0;
+  // The last exchange's pattern, which a skin lets later queries reuse: then only the ghosts'
+  // positions travel, along the same messages, and the trees are refit.
+  struct Pattern {
+    bool valid = false;
+    float radius = 0;
+    std::vector<int> dests, sources;
+    std::vector<std::vector<int32_t>> sent;     // per dest: local vertices (VT) or owned edges (EE)
+    std::vector<std::vector<int32_t>> targets;  // per source: the scene vertex of each position
+    std::vector<float> reference;               // the local positions at the exchange
+    std::vector<float> xyz;                     // the local scene's positions
+  } pattern;
 };
 
 struct SceneState {
@@ -56,7 +67,8 @@ struct SceneState {
   uint64_t owned_vertices = 0, copied_vertices = 0, global_edges = 0;
   Halo halo;
   LocalScene vt, ee;
-  uint64_t neighbours = 0, builds = 0, refits = 0;
+  double skin = 0;  // minkq_mpi_scene_set_skin
+  uint64_t neighbours = 0, builds = 0, refits = 0, exchanges = 0, updates = 0;
   minkq_result* local_result = nullptr;
 };
 

@@ -201,7 +201,6 @@ void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, d
     }
 }
 
-// ---- Errors --------------------------------------------------------------------------------
 void expect_error(minkq_status got, minkq_status want, const std::string& fragment, const std::string& what) {
   expect_same_everywhere(got, what);
   const std::string message = minkq_mpi_last_error_message();
@@ -209,6 +208,62 @@ void expect_error(minkq_status got, minkq_status want, const std::string& fragme
   expect(message.find(fragment) != std::string::npos, what + ": message '" + message + "' lacks '" + fragment + "'");
 }
 
+// A skin keeps the ghost layer while the vertices move less than half of it: small steps
+// reuse it (positions only), a larger one chooses it afresh; the pairs stay the single-process
+// ones throughout. Stacked sheets moving towards each other make new pairs across the ranks.
+void skin_cases(minkq_device* device) {
+  const ref::Mesh mesh = ref::stacked_sheets(14, 3, 0.05);
+  const float r = float(0.6 * ref::mean_edge_length(mesh));
+  const double skin = 2.0 * r;
+  for (tools::Partition kind : {tools::Partition::kSlab, tools::Partition::kRandom}) {
+    const std::string what = std::string("skin, stacked sheets, ") + tools::partition_name(kind);
+    const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, kind, seed);
+    const tools::Part part = tools::part_of(mesh.xyz, mesh.tris, owners, rank, true, true, seed);
+    const uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
+    Scene scene;
+    expect(create(device, part, flags, scene) == MINKQ_SUCCESS, what + ": " + minkq_mpi_last_error_message());
+    if (!scene.s) continue;
+    expect(minkq_mpi_scene_set_skin(scene.s, skin) == MINKQ_SUCCESS, what + ": set_skin");
+    compare(device, scene.s, mesh, flags, r, what + ", step 0");
+    minkq_mpi_rank_info before{}, after{};
+    minkq_mpi_scene_rank_info(scene.s, &before);
+    // Each step moves every vertex by 0.3 r at most (the layers towards each other, and
+    // sideways): three steps stay within s / 2 = r, the fourth passes it.
+    ref::Mesh moved = mesh;
+    for (int step = 1; step <= 4; ++step) {
+      moved = mesh;
+      for (size_t v = 0; v < moved.vertex_count(); ++v) {
+        const float layer = moved.xyz[3 * v + 2];
+        moved.xyz[3 * v + 2] -= float(0.3 * r * step * (layer > 0 ? 1 : 0));
+        moved.xyz[3 * v] += float(0.3 * r * step * std::sin(3.0 * v));
+      }
+      const std::vector<float> xyz = local_positions(moved, part);
+      expect(minkq_mpi_scene_refit(scene.s, host(xyz)) == MINKQ_SUCCESS, what + ": refit");
+      compare(device, scene.s, moved, flags, r, what + ", step " + std::to_string(step));
+      minkq_mpi_scene_rank_info(scene.s, &after);
+      const uint64_t queries = 3 * 2 * std::size(kQueries);  // steps 1-3, each query with its count
+      if (step == 3)  // every query of steps 1-3 kept its layer
+        expect(after.ghost_updates - before.ghost_updates == queries && after.ghost_exchanges == before.ghost_exchanges,
+               what + ": " + std::to_string(after.ghost_updates - before.ghost_updates) + " updates and " +
+                   std::to_string(after.ghost_exchanges - before.ghost_exchanges) + " exchanges in 3 small steps");
+    }
+    expect(after.ghost_exchanges > before.ghost_exchanges, what + ": the fourth step kept the layer");
+    // A different radius chooses the layer afresh.
+    compare(device, scene.s, moved, flags, 1.5f * r, what + ", another radius");
+  }
+  Scene scene;
+  const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, tools::Partition::kSlab, seed);
+  expect(create(device, tools::part_of(mesh.xyz, mesh.tris, owners, rank), MINKQ_SCENE_VT, scene) == MINKQ_SUCCESS,
+         "skin errors: create");
+  expect_error(minkq_mpi_scene_set_skin(scene.s, rank == 0 ? -1.0 : 1.0), MINKQ_ERROR_INVALID_ARGUMENT,
+               "rank 0: the skin -1", "a negative skin on rank 0");
+  if (size > 1)
+    expect_error(minkq_mpi_scene_set_skin(scene.s, rank == size - 1 ? 2.0 : 1.0), MINKQ_ERROR_INVALID_ARGUMENT,
+                 "the skins differ between the ranks", "skins that differ");
+  expect_error(minkq_mpi_scene_set_skin(scene.s, NAN), MINKQ_ERROR_NON_FINITE, "not finite", "a NaN skin");
+}
+
+// ---- Errors --------------------------------------------------------------------------------
 void error_cases(minkq_device* device) {
   const ref::Mesh mesh = ref::twisted_sheet(12, 1.0);
   const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, tools::Partition::kSlab, seed);
@@ -325,6 +380,7 @@ int main(int argc, char** argv) {
     mesh_cases(device.get(), "stacked sheets", ref::stacked_sheets(12, 3, 0.02), 1.0, false);
     mesh_cases(device.get(), "random soup", ref::random_soup(300, seed, 1.0), 0.3, false);
     mesh_cases(device.get(), "bear.obj", ref::load_mesh(dir + "/newton/bear.obj"), 0.5, false);
+    skin_cases(device.get());
     error_cases(device.get());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "FAIL rank %d: %s\n", rank, e.what());

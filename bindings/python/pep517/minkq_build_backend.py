@@ -60,7 +60,7 @@ def _library_from_sdist_sources() -> None:
     cuda = os.environ.get("MINKQ_WITH_CUDA", "OFF")
     subprocess.run(
         ["cmake", "-S", str(sources), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release", f"-DMINKQ_WITH_CUDA={cuda}",
-         "-DMINKQ_BUILD_TESTS=OFF", "-DMINKQ_BUILD_EXAMPLES=OFF"],
+         "-DMINKQ_BUILD_TESTS=OFF", "-DMINKQ_BUILD_EXAMPLES=OFF", "-DMINKQ_WITH_MPI=OFF"],
         check=True,
     )
     jobs = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL") or str(os.cpu_count() or 2)

@@ -3,7 +3,7 @@
 A wavy grid sheet, split at random over the ranks (every triangle and every vertex on a
 random rank, each rank holding the corners of its triangles as copies), queried through
 minkq.mpi; rank 0 gathers the pairs and compares them, pair by pair, with the single-process
-query of the wheel's minkq.Scene. Also after a refit, and a collective error. Exits non-zero
+query of the wheel's minkq.Scene. Also after a refit, a collective error, and with a skin. Exits non-zero
 on any difference.
 """
 
@@ -83,6 +83,15 @@ with minkq.mpi.Scene(comm, xyz[local_v], index[tris[mine_t]], local_v, mine_t, v
         if f"rank {size - 1}: vertex 0" not in str(e):
             failures.append(f"message {e}")
     check(scene, moved, "after a failed refit")
+    # A skin keeps the ghost layer over a small move: the pairs are the same.
+    scene.set_skin(2 * r)
+    check(scene, moved, "skin chosen")
+    nudged, _ = sheet(n, 1.301)
+    scene.refit(nudged[local_v])
+    before = scene.rank_info()["ghost_updates"]
+    check(scene, nudged, "skin kept")
+    if scene.rank_info()["ghost_updates"] == before:
+        failures.append(f"rank {rank}: the skin did not keep the ghost layer")
 
 everyone = comm.allgather(failures)
 if rank == 0:

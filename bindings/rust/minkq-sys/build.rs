@@ -74,6 +74,7 @@ fn build_with_cmake() -> PathBuf {
         &format!("-DMINKQ_WITH_CUDA={cuda}"),
         "-DMINKQ_BUILD_TESTS=OFF",
         "-DMINKQ_BUILD_EXAMPLES=OFF",
+        "-DMINKQ_WITH_MPI=OFF", // libminkq only: its MPI component is not the crate's
     ]));
     let jobs = env::var("NUM_JOBS").unwrap_or_else(|_| "2".into());
     run(Command::new("cmake").arg("--build").arg(&build).args(["--target", "minkq", "-j", &jobs]));

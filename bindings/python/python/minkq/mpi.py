@@ -64,7 +64,7 @@ class _Stats(ctypes.Structure):
 class _RankInfo(ctypes.Structure):
     _fields_ = [(name, ctypes.c_uint64) for name in (
         "owned_vertices", "owned_triangles", "owned_edges", "copied_vertices", "ghost_vertices", "ghost_edges",
-        "neighbours", "global_edges", "local_builds", "local_refits")]
+        "neighbours", "global_edges", "local_builds", "local_refits", "ghost_exchanges", "ghost_updates")]
 
 
 _lib: Optional[ctypes.CDLL] = None
@@ -111,8 +111,10 @@ def _load() -> ctypes.CDLL:
     lib.minkq_mpi_result_stats.restype = _Stats
     lib.minkq_mpi_scene_query.argtypes = [P, ctypes.POINTER(_QueryDesc), P]
     lib.minkq_mpi_scene_rank_info.argtypes = [P, ctypes.POINTER(_RankInfo)]
+    lib.minkq_mpi_scene_set_skin.argtypes = [P, ctypes.c_double]
     for f in ("minkq_mpi_scene_create", "minkq_mpi_scene_refit", "minkq_mpi_scene_rebuild",
-              "minkq_mpi_result_create", "minkq_mpi_scene_query", "minkq_mpi_scene_rank_info"):
+              "minkq_mpi_result_create", "minkq_mpi_scene_query", "minkq_mpi_scene_rank_info",
+              "minkq_mpi_scene_set_skin"):
         getattr(lib, f).restype = S
     core.minkq_device_create.argtypes = [ctypes.c_char_p, ctypes.POINTER(P)]
     core.minkq_device_create.restype = S
@@ -214,6 +216,12 @@ class Scene:
         """Moves this rank's vertices; the next query builds the local trees afresh. Collective."""
         self._move(vertices, True)
 
+    def set_skin(self, skin: float) -> None:
+        """Chooses the ghost layer ``skin`` wider and keeps it until a vertex has moved more than
+        ``skin / 2``: queries in between send only the ghosts' positions (0: choose it at every
+        query). The pairs do not depend on it. Collective (the same skin on every rank)."""
+        _check(_lib.minkq_mpi_scene_set_skin(self._scene, float(skin)), _lib.minkq_mpi_last_error_message())
+
     def _run(self, kind: str, mode: str, radius: float, flags: int) -> None:
         if kind not in _KINDS:
             raise ValueError(f"kind must be one of {tuple(_KINDS)}, not {kind!r}")
@@ -242,7 +250,8 @@ class Scene:
 
     def rank_info(self) -> Dict[str, int]:
         """This rank's figures: owned vertices, triangles and edges, copies, the ghosts of the
-        last VT and EE queries, neighbours, the global edge count, local builds and refits."""
+        last VT and EE queries, neighbours, the global edge count, local builds and refits, and
+        how often the ghost layer was chosen afresh or, with a skin, kept and moved."""
         info = _RankInfo()
         _check(_lib.minkq_mpi_scene_rank_info(self._scene, ctypes.byref(info)), _lib.minkq_mpi_last_error_message())
         return {name: int(getattr(info, name)) for name, _ in _RankInfo._fields_}
