@@ -45,8 +45,11 @@
  * Calling collectives in different orders on different ranks deadlocks, as with MPI.
  *
  * Not yet distributed: MINKQ_SCENE_FLOAT64, VV and EV scenes, swept queries, the asynchronous
- * calls and MINKQ_QUERY_DIGEST (UNSUPPORTED). Buffers are host memory; a rank's device (such as
- * "cuda:N" for its local rank) runs its local trees and queries.
+ * calls and MINKQ_QUERY_DIGEST (UNSUPPORTED). A rank's device (such as "cuda:N" for its local
+ * rank) runs its local trees and queries. Buffers are host memory, or device memory on a CUDA
+ * rank: the library reads every input on the host (it checks it and sends parts of it to other
+ * ranks), so device buffers are copied down first (also with a CUDA-aware MPI); results are
+ * host memory.
  */
 #ifndef MINKQ_MPI_H
 #define MINKQ_MPI_H
@@ -70,7 +73,8 @@ typedef struct minkq_mpi_scene minkq_mpi_scene;
 
 typedef struct minkq_mpi_scene_desc {
   uint32_t flags;              /* MINKQ_SCENE_VT, MINKQ_SCENE_EE (at least one), DROP_INCIDENT */
-  minkq_buffer vertices;       /* 3 floats per local vertex; host memory; stride >= 12 */
+  minkq_buffer vertices;       /* 3 floats per local vertex; stride >= 12 (every buffer: host memory,
+                                  or device memory on a CUDA device) */
   minkq_buffer triangles;      /* 3 int32 local vertex indices per local triangle; stride >= 12 */
   minkq_buffer vertex_ids;     /* one int64 >= 0 per local vertex, distinct on the rank */
   minkq_buffer triangle_ids;   /* one int64 >= 0 per local triangle, distinct on the rank */
@@ -82,7 +86,7 @@ typedef struct minkq_mpi_scene_desc {
  * communicator) with its local trees on `device`, and stores it in *out_scene (NULL on
  * failure, on every rank). Checks every rank's part and their agreement, then numbers the
  * global edges. Errors: INVALID_ARGUMENT (NULL pointer; unknown flag bits or none of VT and
- * EE; a count that differs from the vertices' or triangles'; device memory; an owned flag
+ * EE; a count that differs from the vertices' or triangles'; device memory on a CPU device; an owned flag
  * other than 0 and 1; a negative id; a global id twice on one rank; a vertex or triangle owned
  * by two ranks; a copy nobody owns; a triangle copy whose global vertex ids differ from the
  * owner's), UNSUPPORTED (FLOAT64, VV, EV), NON_FINITE, INDEX_OUT_OF_RANGE, SIZE_OVERFLOW, and
@@ -92,7 +96,7 @@ minkq_status minkq_mpi_scene_create(MPI_Comm comm, minkq_device* device, const m
 /* Releases a distributed scene (collective: frees its communicator). NULL is ignored. */
 void minkq_mpi_scene_release(minkq_mpi_scene* scene);
 
-/* Moves the rank's local vertices (its vertex count, host memory, finite) and fetches its
+/* Moves the rank's local vertices (its vertex count, a buffer as at creation, finite) and fetches its
  * copies' positions from their owners. The next query refits the local trees (rebuild: builds
  * them afresh), or builds them when its ghost layer changed. Errors: INVALID_ARGUMENT (NULL
  * scene, another vertex count, a bad buffer), NON_FINITE; the scene then keeps its positions

@@ -6,16 +6,23 @@
 #include <unordered_map>
 
 #include "collective.h"
+#include "staging.h"
 #include "scene.h"
 
 using namespace minkq::mpi;
 
 namespace {
 
-// A host buffer of `count` records of `size` bytes, checked; `name` in messages.
-const char* checked_buffer(const minkq_buffer& b, size_t size, size_t count, const char* name, const char* of) {
-  require(b.memory == MINKQ_MEMORY_HOST, MINKQ_ERROR_INVALID_ARGUMENT,
-          std::string(name) + " must be host memory (MINKQ_MEMORY_HOST): minkq_mpi reads every buffer on the host");
+// A buffer of `count` records of `size` bytes, checked; `name` in messages. Device memory is
+// for CUDA devices, whose buffers are staged through the host.
+void check_buffer(const minkq_device* device, const minkq_buffer& b, size_t size, size_t count, const char* name,
+                  const char* of) {
+  require(b.memory == MINKQ_MEMORY_HOST || b.memory == MINKQ_MEMORY_DEVICE, MINKQ_ERROR_INVALID_ARGUMENT,
+          std::string(name) + ".memory is not a minkq_memory");
+  require(b.memory == MINKQ_MEMORY_HOST || minkq_device_backend(device) == MINKQ_BACKEND_CUDA,
+          MINKQ_ERROR_INVALID_ARGUMENT,
+          std::string(name) + " is device memory (MINKQ_MEMORY_DEVICE) but the rank's device " +
+              minkq_device_name(device) + " is not a CUDA device");
   require(b.count == count, MINKQ_ERROR_INVALID_ARGUMENT,
           std::string(name) + " has " + std::to_string(b.count) + " entries but there are " + std::to_string(count) + " " +
               of);
@@ -23,14 +30,20 @@ const char* checked_buffer(const minkq_buffer& b, size_t size, size_t count, con
           std::string(name) + ".byte_stride " + std::to_string(b.byte_stride) + " is under the element's " +
               std::to_string(size) + " bytes");
   require(b.data != nullptr || count == 0, MINKQ_ERROR_INVALID_ARGUMENT, std::string(name) + ".data is NULL");
-  return static_cast<const char*>(b.data);
 }
 
+// A buffer's records, packed, on the host.
 template <class T, int N>
-std::vector<T> read(const minkq_buffer& b, size_t count, const char* name, const char* of) {
-  const char* p = checked_buffer(b, N * sizeof(T), count, name, of);
+std::vector<T> read(const minkq_device* device, const minkq_buffer& b, size_t count, const char* name, const char* of) {
+  check_buffer(device, b, N * sizeof(T), count, name, of);
   const size_t stride = b.byte_stride ? b.byte_stride : N * sizeof(T);
   std::vector<T> out(N * count);
+  if (count == 0) return out;
+  if (b.memory == MINKQ_MEMORY_DEVICE) {
+    stage_from_device(out.data(), N * sizeof(T), b.data, stride, count, name);
+    return out;
+  }
+  const char* p = static_cast<const char*>(b.data);
   for (size_t i = 0; i < count; ++i) std::memcpy(out.data() + N * i, p + i * stride, N * sizeof(T));
   return out;
 }
@@ -44,7 +57,7 @@ std::vector<float> checked_positions(const SceneState& s, minkq_buffer vertices,
   require(vertices.count == s.vertex_ids.size(), MINKQ_ERROR_INVALID_ARGUMENT,
           std::string(call) + " with " + std::to_string(vertices.count) + " vertices but the rank has " +
               std::to_string(s.vertex_ids.size()));
-  std::vector<float> xyz = read<float, 3>(vertices, vertices.count, "vertices", "vertices");
+  std::vector<float> xyz = read<float, 3>(s.device, vertices, vertices.count, "vertices", "vertices");
   for (size_t v = 0; v < vertices.count; ++v)
     if (!std::isfinite(xyz[3 * v]) || !std::isfinite(xyz[3 * v + 1]) || !std::isfinite(xyz[3 * v + 2]))
       fail(MINKQ_ERROR_NON_FINITE, vertex_name(s, v) + " has a non-finite coordinate (" + std::to_string(xyz[3 * v]) +
@@ -140,11 +153,11 @@ minkq_status minkq_mpi_scene_create(MPI_Comm comm, minkq_device* device, const m
       const size_t nv = desc->vertices.count, nt = desc->triangles.count;
       require(nv <= size_t(INT32_MAX) - 1 && nt <= size_t(INT32_MAX) - 1, MINKQ_ERROR_SIZE_OVERFLOW,
               "over 2^31 - 2 local vertices or triangles");
-      s->vertex_ids = read<int64_t, 1>(desc->vertex_ids, nv, "vertex_ids", "vertices");
-      s->vertex_owned = read<uint8_t, 1>(desc->vertex_owned, nv, "vertex_owned", "vertices");
-      triangles = read<int32_t, 3>(desc->triangles, nt, "triangles", "triangles");
-      triangle_ids = read<int64_t, 1>(desc->triangle_ids, nt, "triangle_ids", "triangles");
-      triangle_owned = read<uint8_t, 1>(desc->triangle_owned, nt, "triangle_owned", "triangles");
+      s->vertex_ids = read<int64_t, 1>(device, desc->vertex_ids, nv, "vertex_ids", "vertices");
+      s->vertex_owned = read<uint8_t, 1>(device, desc->vertex_owned, nv, "vertex_owned", "vertices");
+      triangles = read<int32_t, 3>(device, desc->triangles, nt, "triangles", "triangles");
+      triangle_ids = read<int64_t, 1>(device, desc->triangle_ids, nt, "triangle_ids", "triangles");
+      triangle_owned = read<uint8_t, 1>(device, desc->triangle_owned, nt, "triangle_owned", "triangles");
       std::unordered_map<int64_t, size_t> seen;
       for (size_t v = 0; v < nv; ++v) {
         require(s->vertex_ids[v] >= 0, MINKQ_ERROR_INVALID_ARGUMENT,

@@ -32,6 +32,7 @@ using minkq::cxx::check;
 
 int rank = 0, size = 1, failures = 0, checks = 0;
 uint64_t seed = 0;
+minkq_device* cpu = nullptr;  // the single-process reference's device, whatever the ranks use
 
 // A check on this rank: reported with the rank and the case.
 void expect(bool ok, const std::string& what) {
@@ -99,7 +100,7 @@ tools::GlobalPairs single_process(minkq_device* device, const ref::Mesh& m, uint
 }
 
 // The distributed query against the single-process one, pair by pair, on rank 0.
-void compare(minkq_device* device, minkq_mpi_scene* scene, const ref::Mesh& whole, uint32_t scene_flags, float r,
+void compare(minkq_mpi_scene* scene, const ref::Mesh& whole, uint32_t scene_flags, float r,
              const std::string& name) {
   Result result;
   for (const Query& q : kQueries) {
@@ -122,7 +123,7 @@ void compare(minkq_device* device, minkq_mpi_scene* scene, const ref::Mesh& whol
     expect(minkq_mpi_result_pairs(result.r) == nullptr, what + " COUNT kept pairs");
     MPI_Reduce(&counted, &total, 1, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
     if (rank != 0) continue;
-    const tools::GlobalPairs want = single_process(device, whole, scene_flags, q, r);
+    const tools::GlobalPairs want = single_process(cpu, whole, scene_flags, q, r);
     size_t twice = 0;
     for (size_t i = 1; i < all.size(); ++i) twice += all[i] == all[i - 1];
     expect(twice == 0, what + ": " + std::to_string(twice) + " pairs reported by two ranks");
@@ -174,7 +175,7 @@ void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, d
       minkq_mpi_scene_rank_info(scene.s, &info);
       expect(info.global_edges == mesh.edge_count(), what + ": " + std::to_string(info.global_edges) +
                                                          " global edges, not " + std::to_string(mesh.edge_count()));
-      compare(device, scene.s, mesh, flags, r, what);
+      compare(scene.s, mesh, flags, r, what);
       if (!steps) continue;
       // Move: a fresh random wave each step, refit then rebuild; the whole mesh moves alike.
       std::mt19937_64 rng(seed + 17);
@@ -187,7 +188,7 @@ void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, d
         const minkq_status moved_status =
             step == 0 ? minkq_mpi_scene_refit(scene.s, host(xyz)) : minkq_mpi_scene_rebuild(scene.s, host(xyz));
         expect(moved_status == MINKQ_SUCCESS, what + ": move: " + minkq_mpi_last_error_message());
-        compare(device, scene.s, moved, flags, r, what + (step == 0 ? ", refit" : ", rebuild"));
+        compare(scene.s, moved, flags, r, what + (step == 0 ? ", refit" : ", rebuild"));
         // The growth is every rank's largest, so the same on all of them; 1 right after builds.
         double growth = 0;
         expect_same_everywhere(minkq_mpi_scene_tree_growth(scene.s, &growth), what + ": growth");
@@ -224,7 +225,7 @@ void skin_cases(minkq_device* device) {
     expect(create(device, part, flags, scene) == MINKQ_SUCCESS, what + ": " + minkq_mpi_last_error_message());
     if (!scene.s) continue;
     expect(minkq_mpi_scene_set_skin(scene.s, skin) == MINKQ_SUCCESS, what + ": set_skin");
-    compare(device, scene.s, mesh, flags, r, what + ", step 0");
+    compare(scene.s, mesh, flags, r, what + ", step 0");
     minkq_mpi_rank_info before{}, after{};
     minkq_mpi_scene_rank_info(scene.s, &before);
     // Each step moves every vertex by 0.3 r at most (the layers towards each other, and
@@ -239,7 +240,7 @@ void skin_cases(minkq_device* device) {
       }
       const std::vector<float> xyz = local_positions(moved, part);
       expect(minkq_mpi_scene_refit(scene.s, host(xyz)) == MINKQ_SUCCESS, what + ": refit");
-      compare(device, scene.s, moved, flags, r, what + ", step " + std::to_string(step));
+      compare(scene.s, moved, flags, r, what + ", step " + std::to_string(step));
       minkq_mpi_scene_rank_info(scene.s, &after);
       const uint64_t queries = 3 * 2 * std::size(kQueries);  // steps 1-3, each query with its count
       if (step == 3)  // every query of steps 1-3 kept its layer
@@ -249,7 +250,7 @@ void skin_cases(minkq_device* device) {
     }
     expect(after.ghost_exchanges > before.ghost_exchanges, what + ": the fourth step kept the layer");
     // A different radius chooses the layer afresh.
-    compare(device, scene.s, moved, flags, 1.5f * r, what + ", another radius");
+    compare(scene.s, moved, flags, 1.5f * r, what + ", another radius");
   }
   Scene scene;
   const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, tools::Partition::kSlab, seed);
@@ -329,7 +330,7 @@ void error_cases(minkq_device* device) {
   expect(create(device, good, flags, scene) == MINKQ_SUCCESS, std::string("create: ") + minkq_mpi_last_error_message());
   if (!scene.s) return;
   const float r = float(0.5 * ref::mean_edge_length(mesh));
-  compare(device, scene.s, mesh, flags, r, "before failed moves");
+  compare(scene.s, mesh, flags, r, "before failed moves");
   std::vector<float> xyz = local_positions(mesh, good);
   for (float& x : xyz) x *= 2;
   if (rank == last) xyz[3 * 1] = INFINITY;
@@ -339,7 +340,14 @@ void error_cases(minkq_device* device) {
   if (rank == 0) fewer.resize(fewer.size() - 3);
   expect_error(minkq_mpi_scene_rebuild(scene.s, host(fewer)), MINKQ_ERROR_INVALID_ARGUMENT,
                "rank 0: minkq_mpi_scene_rebuild with", "a rebuild with a vertex short on rank 0");
-  compare(device, scene.s, mesh, flags, r, "after failed moves");
+  if (minkq_device_backend(device) == MINKQ_BACKEND_CPU) {
+    minkq_buffer on_device = host(fewer.size() == xyz.size() ? fewer : xyz);
+    on_device.memory = rank == 0 ? MINKQ_MEMORY_DEVICE : MINKQ_MEMORY_HOST;
+    expect_error(minkq_mpi_scene_refit(scene.s, on_device), MINKQ_ERROR_INVALID_ARGUMENT,
+                 "rank 0: vertices is device memory (MINKQ_MEMORY_DEVICE) but the rank's device",
+                 "device memory on a CPU rank");
+  }
+  compare(scene.s, mesh, flags, r, "after failed moves");
   Result result;
   const minkq_query_desc digest{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_DIGEST, r};
   expect_error(minkq_mpi_scene_query(scene.s, &digest, result.r), MINKQ_ERROR_UNSUPPORTED, "MINKQ_QUERY_DIGEST",
@@ -369,7 +377,19 @@ int main(int argc, char** argv) {
   MPI_Bcast(&seed, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
   if (rank == 0) std::printf("test_mpi: %d ranks, seed %" PRIu64 " (MINKQ_TEST_SEED replays it)\n", size, seed);
   try {
-    minkq::cxx::Device device = minkq::cxx::open_device("cpu");
+    // MINKQ_TEST_DEVICE=cuda runs the ranks' trees on the GPU (ctest's gpu-labelled run),
+    // against the CPU's single-process pairs; it skips (77) where there is no GPU.
+    const char* spec = std::getenv("MINKQ_TEST_DEVICE");
+    const std::string device_spec = spec && *spec ? spec : "cpu";
+    if (device_spec.rfind("cuda", 0) == 0 && minkq_cuda_device_count() == 0) {
+      if (rank == 0) std::printf("test_mpi: skipped: MINKQ_TEST_DEVICE=%s but no CUDA device\n", spec);
+      MPI_Finalize();
+      return 77;
+    }
+    minkq::cxx::Device cpu_device = minkq::cxx::open_device("cpu");
+    cpu = cpu_device.get();
+    minkq::cxx::Device device = minkq::cxx::open_device(device_spec);
+    if (rank == 0) std::printf("test_mpi: the ranks' device: %s\n", minkq_device_name(device.get()));
     const std::string dir = argv[1];
     mesh_cases(device.get(), "twisted sheet 24", ref::twisted_sheet(24, 2.0), 0.5, true);
     for (double scale : {1e-3, 1e3}) {
