@@ -42,6 +42,27 @@ def test_union_over_ranks_is_the_single_process_pair_set(ranks):
     assert f"{ranks} ranks, seed {seed}, 0 failures" in run.stdout
 
 
+def test_the_example_runs_on_three_ranks():
+    reason = _skip_reason()
+    if reason:
+        pytest.skip(reason)
+    example = os.path.join(HERE, "..", "..", "..", "examples", "python", "distributed.py")
+    if not os.path.exists(example):
+        pytest.skip("examples/python/distributed.py is not beside these tests (an installed copy)")
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    run = subprocess.run(["mpirun", "-n", "3", sys.executable, example, "--size", "40"], env=env,
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, f"{run.stdout}\n{run.stderr}"
+    assert "vt: " in run.stdout and "ee: " in run.stdout and "DIFFERENT" not in run.stdout
+    # The device helper: this machine's GPUs, or the CPU.
+    from mpi4py import MPI
+
+    import minkq.mpi
+
+    assert minkq.mpi.local_device(MPI.COMM_WORLD) in {"cpu"} | {f"cuda:{i}" for i in range(16)}
+
+
 def test_a_missing_library_is_a_clear_import_error(monkeypatch, tmp_path):
     import minkq.mpi
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from ._errors import _from_status
 
-__all__ = ["Scene", "library_path"]
+__all__ = ["Scene", "library_path", "local_device"]
 
 _KINDS = {"vt": 0, "ee": 1}
 _MODES = {"box": 0, "sphere": 1, "capsule_ray": 2, "capsule_exact": 3}
@@ -122,6 +122,23 @@ def _load() -> ctypes.CDLL:
     core.minkq_last_error_message.restype = ctypes.c_char_p
     _lib, _core = lib, core
     return lib
+
+
+def local_device(comm: Any) -> str:
+    """One GPU per rank: "cuda:N" for this rank's index among the ranks of its node (modulo the
+    GPUs minkq sees there), or "cpu" where it sees none. Collective."""
+    from mpi4py import MPI
+
+    node = comm.Split_type(MPI.COMM_TYPE_SHARED)
+    try:
+        local = node.Get_rank()
+    finally:
+        node.Free()
+    _load()
+    assert _core is not None
+    _core.minkq_cuda_device_count.restype = ctypes.c_int
+    gpus = _core.minkq_cuda_device_count()
+    return f"cuda:{local % gpus}" if gpus > 0 else "cpu"
 
 
 def _check(status: int, message: bytes) -> None:
