@@ -142,7 +142,8 @@ minkq_query_stats minkq_mpi_result_stats(const minkq_mpi_result* result);
  * rank's result holds no pairs. */
 minkq_status minkq_mpi_scene_query(minkq_mpi_scene* scene, const minkq_query_desc* query, minkq_mpi_result* result);
 
-/* A rank's figures: what it owns, its copies, and the ghost layer of its last query. */
+/* A rank's figures: what it owns, its copies, the ghost layer of its last query, and where that
+ * query's time went. */
 typedef struct minkq_mpi_rank_info {
   uint64_t owned_vertices, owned_triangles, owned_edges;
   uint64_t copied_vertices;     /* local vertices owned by other ranks */
@@ -154,6 +155,12 @@ typedef struct minkq_mpi_rank_info {
   uint64_t local_refits;        /* local trees refit so far */
   uint64_t ghost_exchanges;     /* ghost layers chosen and sent so far, VT and EE */
   uint64_t ghost_updates;       /* queries that kept their ghost layer (a skin), moving it only */
+  uint64_t bytes_sent;          /* payload this rank sent (ghosts, positions for copies) so far */
+  /* The last query on this rank: bytes of ghosts (or their positions) sent, and where its time
+   * went, in ms: the ranks' reach boxes (one all-gather), the ghost layer (choosing, sending,
+   * receiving, assembling), the local trees (build, rebuild or refit), the local query. */
+  uint64_t last_bytes_sent;
+  double last_reach_ms, last_ghost_ms, last_trees_ms, last_query_ms;
 } minkq_mpi_rank_info;
 /* Not collective. Errors: INVALID_ARGUMENT (NULL scene or out_info). */
 minkq_status minkq_mpi_scene_rank_info(const minkq_mpi_scene* scene, minkq_mpi_rank_info* out_info);

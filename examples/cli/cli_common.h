@@ -68,11 +68,17 @@ inline double parse_number(const std::string& option, const std::string& text) {
   return v;
 }
 
-// The --radius of `query`: finite, >= 0, a float.
-inline float parse_radius(const Args& args) {
-  if (!args.get("--radius")) throw UsageError("query needs --radius R");
-  const double radius = parse_number("--radius", *args.get("--radius"));
-  if (radius < 0) throw UsageError("--radius: must be >= 0");
+// The radius of `query`: --radius R, or --radius-factor F for F x the mesh's mean edge length
+// (mean_edge() computes it); finite, >= 0, a float.
+template <class MeanEdge>
+float query_radius(const Args& args, MeanEdge&& mean_edge) {
+  const std::string* given = args.get("--radius");
+  const std::string* factor = args.get("--radius-factor");
+  if (!given && !factor) throw UsageError("query needs --radius R (or --radius-factor F)");
+  if (given && factor) throw UsageError("--radius and --radius-factor: give one of them");
+  double radius = parse_number(given ? "--radius" : "--radius-factor", given ? *given : *factor);
+  if (radius < 0) throw UsageError(given ? "--radius: must be >= 0" : "--radius-factor: must be >= 0");
+  if (factor) radius *= mean_edge();
   if (!std::isfinite(float(radius))) throw UsageError("--radius: too large for a float");
   return float(radius);
 }

@@ -34,8 +34,9 @@ commands:
       with the double-precision reference oracle and prints candidates, true contacts,
       false-positive ratio, false negatives, query time (median of 3) and speedup over box
       (the box query of the same kind).
-  query MESH [--to MESH1] --radius R [--mode M] [--backend B] [--out PREFIX] [--stats]
-      Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) in mode M:
+  query MESH [--to MESH1] --radius R | --radius-factor F [--mode M] [--backend B] [--out PREFIX] [--stats]
+      Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) within R
+      (or F x the mesh's mean edge length) in mode M:
         box            r-padded boxes
         sphere         VT sphere, EE capsule_exact (the exact Minkowski node test of each)
         capsule_ray    VT box (a point's ray test), EE capsule slab test
@@ -62,7 +63,7 @@ options:
 exit status: 0 success, 1 false negatives found (demo), 2 bad arguments, 3 failure (file, API)
 )";
 
-using namespace minkq::cli;  // Args, UsageError, parse_number, parse_radius, query_modes
+using namespace minkq::cli;  // Args, UsageError, parse_number, query_radius, query_modes
 
 // Owning handles, check(), open_device(), new_result() and new_mesh_scene() (capi/minkq.hpp).
 using namespace minkq::cxx;
@@ -212,7 +213,7 @@ Scene query_scene(minkq_device* device, const std::string& first, const std::str
 
 int query(const Args& args) {
   if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
-  const float radius = parse_radius(args);
+  const float radius = query_radius(args, [&] { return ref::mean_edge_length(ref::load_mesh(args.positional[0])); });
   const std::string* to = args.get("--to");
   const std::string mode = args.get("--mode") ? *args.get("--mode") : (to ? "box" : "leaf_exact");
   const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";
@@ -259,7 +260,7 @@ int main(int argc, char** argv) {
     if (command == "version" || command == "--version") return version();
     if (command == "demo") return demo(Args(argc, argv, 2, {"--backend", "--size", "--radius-factor"}));
     if (command == "query")
-      return query(Args(argc, argv, 2, {"--radius", "--mode", "--backend", "--out", "--to"}, {"--stats"}));
+      return query(Args(argc, argv, 2, {"--radius", "--radius-factor", "--mode", "--backend", "--out", "--to"}, {"--stats"}));
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "minkq: %s\n(run 'minkq --help' for usage)\n", e.what());

@@ -27,16 +27,18 @@ namespace tools = minkq::mpi_tools;
 
 constexpr int kExitUsage = 2, kExitFailure = 3;
 
-const char* const kUsage = R"(usage: mpirun -n K minkq-mpi query MESH --radius R [options]
+const char* const kUsage = R"(usage: mpirun -n K minkq-mpi query MESH --radius R | --radius-factor F [options]
 
   Loads an OBJ or PLY mesh on every rank, splits it over the K ranks, and runs the distributed
-  VT and EE queries (incident pairs dropped) in mode M. Rank 0 prints
+  VT and EE queries (incident pairs dropped) within R (or F x the mesh's mean edge length) in
+  mode M. Rank 0 prints
   "vt candidates N digest HEX" and "ee candidates N digest HEX" for the union of the ranks'
   pairs, equal to `minkq query MESH --radius R --mode M`, then one line of figures per rank.
   It fails (exit 3) when a pair is reported by two ranks.
 
 options:
-  --mode M        box, sphere, capsule_ray, capsule_exact, leaf_exact (default), as minkq query
+  --mode M        box, sphere, capsule_ray, capsule_exact, leaf_exact (default), as minkq query;
+                  a comma-separated list runs each in turn, each after a line "mode M"
   --partition P   slab (triangles by centroid x), morton (chunks of the centroids' Morton
                   order), random (every triangle and every vertex on a random rank); default slab
   --seed S        the random partition's seed (default 1)
@@ -111,15 +113,20 @@ void agreed(int rank, Work&& work) {
 
 int query(const Args& args, int rank, int size) {
   float radius = 0;
-  QueryModes modes{};
+  std::vector<std::pair<std::string, QueryModes>> modes;
   minkq::reference::Mesh mesh;
   tools::Part part;
   minkq::cxx::Device device;
   const int local_rank = node_rank();
   agreed(rank, [&] {
     if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
-    radius = parse_radius(args);
-    modes = query_modes(args.get("--mode") ? *args.get("--mode") : "leaf_exact", false);
+    const std::string list = args.get("--mode") ? *args.get("--mode") : "leaf_exact";
+    for (size_t at = 0; at <= list.size();) {
+      const size_t comma = std::min(list.find(',', at), list.size());
+      const std::string name = list.substr(at, comma - at);
+      modes.emplace_back(name, query_modes(name, false));
+      at = comma + 1;
+    }
     tools::Partition partition;
     try {
       partition = tools::parse_partition(args.get("--partition") ? *args.get("--partition") : "slab");
@@ -129,6 +136,7 @@ int query(const Args& args, int rank, int size) {
     const double seed = args.get("--seed") ? parse_number("--seed", *args.get("--seed")) : 1;
     if (seed < 0 || seed != double(uint64_t(seed))) throw UsageError("--seed: a non-negative integer");
     mesh = minkq::reference::load_mesh(args.positional[0]);
+    radius = query_radius(args, [&] { return minkq::reference::mean_edge_length(mesh); });
     const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, partition, uint64_t(seed));
     part = tools::part_of(mesh.xyz, mesh.tris, owners, rank);
     device = minkq::cxx::open_device(device_spec(args.get("--backend") ? *args.get("--backend") : "cpu", local_rank));
@@ -141,19 +149,20 @@ int query(const Args& args, int rank, int size) {
   check(minkq_mpi_result_create(&result), "minkq_mpi_result_create");
   uint64_t local_pairs[2] = {0, 0};
   bool twice = false;
-  for (const auto& [kind, name, mode] :
-       {std::tuple{MINKQ_QUERY_VT, "vt", modes.vt}, std::tuple{MINKQ_QUERY_EE, "ee", modes.ee}}) {
-    const minkq_query_desc q{kind, mode, modes.flags, radius};
-    check(minkq_mpi_scene_query(scene, &q, result), "minkq_mpi_scene_query");
-    local_pairs[kind == MINKQ_QUERY_EE] = minkq_mpi_result_count(result);
-    const tools::GlobalPairs all = tools::gather_pairs(MPI_COMM_WORLD, result);
-    if (rank == 0) {
+  for (const auto& [mode_name, m] : modes) {
+    if (rank == 0 && modes.size() > 1) std::printf("mode %s\n", mode_name.c_str());
+    for (const auto& [kind, name, mode] : {std::tuple{MINKQ_QUERY_VT, "vt", m.vt}, std::tuple{MINKQ_QUERY_EE, "ee", m.ee}}) {
+      const minkq_query_desc q{kind, mode, m.flags, radius};
+      check(minkq_mpi_scene_query(scene, &q, result), "minkq_mpi_scene_query");
+      local_pairs[kind == MINKQ_QUERY_EE] = minkq_mpi_result_count(result);
+      const tools::GlobalPairs all = tools::gather_pairs(MPI_COMM_WORLD, result);
+      if (rank != 0) continue;
       tools::GlobalPairs distinct = all;
       distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
       std::printf("%s candidates %zu digest %016" PRIx64 "\n", name, distinct.size(), digest(distinct));
       if (distinct.size() != all.size()) {
-        std::fprintf(stderr, "minkq-mpi: %zu %s pairs were reported by more than one rank\n",
-                     all.size() - distinct.size(), name);
+        std::fprintf(stderr, "minkq-mpi: %zu %s pairs were reported by more than one rank\n", all.size() - distinct.size(),
+                     name);
         twice = true;
       }
     }
@@ -195,7 +204,7 @@ int main(int argc, char** argv) {
     } else if (command == "query") {
       std::unique_ptr<Args> args;
       agreed(rank, [&] {
-        args = std::make_unique<Args>(argc, argv, 2, std::vector<std::string>{"--radius", "--mode", "--partition", "--seed", "--backend"});
+        args = std::make_unique<Args>(argc, argv, 2, std::vector<std::string>{"--radius", "--radius-factor", "--mode", "--partition", "--seed", "--backend"});
       });
       code = query(*args, rank, size);
     } else {

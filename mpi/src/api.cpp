@@ -305,6 +305,7 @@ minkq_status minkq_mpi_scene_query(minkq_mpi_scene* scene, const minkq_query_des
     if (status) return status;
     if ((status = prepare_local_scene(*scene, query->kind, query->radius))) return status;
     const LocalScene& local = query->kind == MINKQ_QUERY_VT ? scene->vt : scene->ee;
+    const auto started = std::chrono::steady_clock::now();
     status = checked_phase(*scene, [&] {
       if (!local.scene) {
         result->has_pairs = !(query->flags & MINKQ_QUERY_COUNT);
@@ -349,6 +350,7 @@ minkq_status minkq_mpi_scene_query(minkq_mpi_scene* scene, const minkq_query_des
         for (size_t i = 0; i < sorted.size(); ++i) out[2 * i] = sorted[i].first, out[2 * i + 1] = sorted[i].second;
       }
     });
+    scene->last.query_ms = elapsed_ms(started);
     if (status) result->pairs.clear(), result->count = 0, result->has_pairs = false, result->stats = {};
     return status;
   });
@@ -370,6 +372,12 @@ minkq_status minkq_mpi_scene_rank_info(const minkq_mpi_scene* scene, minkq_mpi_r
   i.local_refits = scene->refits;
   i.ghost_exchanges = scene->exchanges;
   i.ghost_updates = scene->updates;
+  i.bytes_sent = scene->bytes_sent;
+  i.last_bytes_sent = scene->last.bytes;
+  i.last_reach_ms = scene->last.reach_ms;
+  i.last_ghost_ms = scene->last.ghost_ms;
+  i.last_trees_ms = scene->last.trees_ms;
+  i.last_query_ms = scene->last.query_ms;
   set_last_error("");
   return MINKQ_SUCCESS;
 }

@@ -74,27 +74,33 @@ struct Extent {
 };
 constexpr int kExtentDoubles = 6 * (kReachBoxes + 1) + 1;
 
-// The boxes of elements (each the box of its `per` vertices) grouped into kReachBoxes runs of
-// their centres' Morton order.
-void group_boxes(const std::vector<Box>& boxes, Box* out) {
-  Box bounds;
-  for (const Box& b : boxes)
-    for (int k = 0; k < 3; ++k) bounds.lo[k] = std::min(bounds.lo[k], b.lo[k]), bounds.hi[k] = std::max(bounds.hi[k], b.hi[k]);
-  std::vector<std::pair<uint64_t, uint32_t>> order(boxes.size());
-  for (size_t i = 0; i < boxes.size(); ++i) {
-    uint64_t code = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double extent = bounds.hi[k] - bounds.lo[k];
-      const double centre = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
-      const double unit = extent > 0 ? (centre - bounds.lo[k]) / extent : 0.0;
-      code |= minkq::spread_bits_21(uint32_t(std::min(std::max(unit, 0.0), 1.0) * 2097151.0)) << k;
+// The boxes of elements grouped into kReachBoxes runs of `order`: their centres' Morton order,
+// found at the first query and kept (the elements stay; a grouping that has moved since stays
+// correct, only looser).
+void group_boxes(const std::vector<Box>& boxes, std::vector<uint32_t>& order, Box* out) {
+  if (order.size() != boxes.size()) {
+    Box bounds;
+    for (const Box& b : boxes)
+      for (int k = 0; k < 3; ++k)
+        bounds.lo[k] = std::min(bounds.lo[k], b.lo[k]), bounds.hi[k] = std::max(bounds.hi[k], b.hi[k]);
+    std::vector<std::pair<uint64_t, uint32_t>> coded(boxes.size());
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      uint64_t code = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double extent = bounds.hi[k] - bounds.lo[k];
+        const double centre = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
+        const double unit = extent > 0 ? (centre - bounds.lo[k]) / extent : 0.0;
+        code |= minkq::spread_bits_21(uint32_t(std::min(std::max(unit, 0.0), 1.0) * 2097151.0)) << k;
+      }
+      coded[i] = {code, uint32_t(i)};
     }
-    order[i] = {code, uint32_t(i)};
+    std::sort(coded.begin(), coded.end());
+    order.resize(boxes.size());
+    for (size_t i = 0; i < coded.size(); ++i) order[i] = coded[i].second;
   }
-  std::sort(order.begin(), order.end());
   for (size_t i = 0; i < order.size(); ++i) {
     Box& group = out[i * kReachBoxes / order.size()];
-    const Box& b = boxes[order[i].second];
+    const Box& b = boxes[order[i]];
     for (int k = 0; k < 3; ++k) group.lo[k] = std::min(group.lo[k], b.lo[k]), group.hi[k] = std::max(group.hi[k], b.hi[k]);
   }
 }
@@ -105,7 +111,7 @@ Box box_of(const float* x, const int32_t* v, int per) {
   return b;
 }
 
-Extent extent(const SceneState& s, minkq_query_kind kind) {
+Extent extent(SceneState& s, minkq_query_kind kind) {
   Extent e;
   const float* x = s.xyz.data();
   for (size_t v = 0; v < s.vertex_owned.size(); ++v)
@@ -123,7 +129,7 @@ Extent extent(const SceneState& s, minkq_query_kind kind) {
       e.source.add(x + 3 * size_t(edge.a)), e.source.add(x + 3 * size_t(edge.b));
     }
   }
-  group_boxes(elements, e.reach);
+  group_boxes(elements, (kind == MINKQ_QUERY_VT ? s.vt : s.ee).reach_order, e.reach);
   return e;
 }
 
@@ -208,10 +214,12 @@ struct Assembly {
 
 // Refits or rebuilds the local trees for new positions, as the last move asks.
 void move_trees(SceneState& s, LocalScene& local, const minkq_buffer& vertices) {
+  const auto t0 = std::chrono::steady_clock::now();
   if (local.rebuild)
     check_local(minkq_scene_rebuild(local.scene, vertices), "minkq_scene_rebuild"), ++s.builds;
   else if (local.refit)
     check_local(minkq_scene_refit(local.scene, vertices), "minkq_scene_refit"), ++s.refits;
+  s.last.trees_ms += elapsed_ms(t0);
 }
 
 void require_local_size(size_t n, const char* what) {
@@ -238,7 +246,9 @@ void update(SceneState& s, LocalScene& local, minkq_query_kind kind, Assembly& a
       desc.vertices = vertices;
       const minkq_buffer elements{a.elements.data(), 4 * per, n, MINKQ_MEMORY_HOST};
       (kind == MINKQ_QUERY_VT ? desc.triangles : desc.edges) = elements;
+      const auto t0 = std::chrono::steady_clock::now();
       check_local(minkq_scene_create(s.device, &desc, &fresh), "minkq_scene_create");
+      s.last.trees_ms += elapsed_ms(t0);
       ++s.builds;
     }
     minkq_scene_release(local.scene);
@@ -286,6 +296,7 @@ minkq_status move_ghosts(SceneState& s, LocalScene& local, minkq_query_kind kind
         send[i].insert(send[i].end(), x + 3 * size_t(e.b), x + 3 * size_t(e.b) + 3);
       }
     }
+  s.last.bytes += payload(send);
   const auto in = neighbour_exchange(s.comm, p.dests, send, p.sources);
   return phase(s.comm, [&] {
     std::copy(s.xyz.begin(), s.xyz.end(), p.xyz.begin());
@@ -300,9 +311,15 @@ minkq_status move_ghosts(SceneState& s, LocalScene& local, minkq_query_kind kind
 
 }  // namespace
 
-minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float radius) {
+namespace {
+
+minkq_status exchange_and_update(SceneState& s, minkq_query_kind kind, float radius) {
+  const auto t0 = std::chrono::steady_clock::now();
   LocalScene& local = kind == MINKQ_QUERY_VT ? s.vt : s.ee;
-  if (pattern_holds(s, local, radius)) return move_ghosts(s, local, kind);
+  if (pattern_holds(s, local, radius)) {
+    s.last.reach_ms = elapsed_ms(t0);
+    return move_ghosts(s, local, kind);
+  }
   local.pattern.valid = false;
   // Every rank's reach and sources, and the mesh's magnitude, in one all-gather.
   const Extent mine = extent(s, kind);
@@ -326,6 +343,7 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
     }
     magnitude = std::max(magnitude, e[kExtentDoubles - 1]);
   }
+  s.last.reach_ms = elapsed_ms(t0);
   // With a skin s the layer is s wider, and the margin covers coordinates up to s / 2 larger.
   const double grow = double(radius) * (1 + 0x1p-12) + 0x1p-12 * (magnitude + 0.5 * s.skin) + s.skin;
   std::vector<int> dests, sources;
@@ -375,6 +393,7 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
   if (status) return status;
   Assembly a(s);
   if (kind == MINKQ_QUERY_VT) {
+    s.last.bytes += payload(vertices);
     const auto in = neighbour_exchange(s.comm, dests, vertices, sources);
     status = phase(s.comm, [&] {
       for (size_t j = 0; j < in.size(); ++j) {
@@ -386,6 +405,7 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
       update(s, local, kind, a);
     });
   } else {
+    s.last.bytes += payload(edges);
     const auto in = neighbour_exchange(s.comm, dests, edges, sources);
     status = phase(s.comm, [&] {
       for (const OwnedEdge& e : s.edges) a.elements.push_back(e.a), a.elements.push_back(e.b), a.element_ids.push_back(e.id);
@@ -409,6 +429,18 @@ minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float rad
   p.dests = std::move(dests), p.sources = std::move(sources), p.sent = std::move(sent);
   p.reference = s.xyz;
   return MINKQ_SUCCESS;
+}
+
+}  // namespace
+
+minkq_status prepare_local_scene(SceneState& s, minkq_query_kind kind, float radius) {
+  const auto t0 = std::chrono::steady_clock::now();
+  s.last = {};
+  const minkq_status status = exchange_and_update(s, kind, radius);
+  // The ghost phase is what neither the reach boxes nor the trees took.
+  s.last.ghost_ms = elapsed_ms(t0) - s.last.reach_ms - s.last.trees_ms;
+  s.bytes_sent += s.last.bytes;
+  return status;
 }
 
 }  // namespace minkq::mpi

@@ -7,6 +7,7 @@
 
 #include <mpi.h>
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -39,6 +40,7 @@ struct LocalScene {
   std::vector<int64_t> signature;    // the ghost layer's members, in arrival order
   bool refit = false, rebuild = false;  // what the positions' last move asks of the trees
   uint64_t ghosts = 0;
+  std::vector<uint32_t> reach_order;  // the owned elements' Morton order, for the reach boxes
   // The last exchange's pattern, which a skin lets later queries reuse: then only the ghosts'
   // positions travel, along the same messages, and the trees are refit.
   struct Pattern {
@@ -68,9 +70,26 @@ struct SceneState {
   Halo halo;
   LocalScene vt, ee;
   double skin = 0;  // minkq_mpi_scene_set_skin
+  // Where the last query's time went (minkq_mpi_rank_info), and the bytes sent.
+  struct Phases {
+    double reach_ms = 0, ghost_ms = 0, trees_ms = 0, query_ms = 0;
+    uint64_t bytes = 0;
+  } last;
+  uint64_t bytes_sent = 0;
   uint64_t neighbours = 0, builds = 0, refits = 0, exchanges = 0, updates = 0;
   minkq_result* local_result = nullptr;
 };
+
+inline double elapsed_ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+// The bytes of a set of messages.
+template <class T>
+uint64_t payload(const std::vector<std::vector<T>>& messages) {
+  uint64_t bytes = 0;
+  for (const auto& m : messages) bytes += m.size() * sizeof(T);
+  return bytes;
+}
 
 // setup.cpp: the collective phases of minkq_mpi_scene_create after the local checks. Each
 // returns the agreed status; triangles/triangle_ids hold every local triangle on entry (with

@@ -202,6 +202,7 @@ void exchange_halo(SceneState& s) {
   std::vector<std::vector<std::array<float, 3>>> send(s.halo.dests.size());
   for (size_t i = 0; i < send.size(); ++i)
     for (int32_t v : s.halo.send[i]) send[i].push_back({s.xyz[3 * v], s.xyz[3 * v + 1], s.xyz[3 * v + 2]});
+  s.bytes_sent += payload(send);
   const auto in = neighbour_exchange(s.comm, s.halo.dests, send, s.halo.sources);
   for (size_t j = 0; j < in.size(); ++j)
     for (size_t k = 0; k < in[j].size(); ++k)

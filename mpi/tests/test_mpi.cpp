@@ -176,6 +176,10 @@ void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, d
       expect(info.global_edges == mesh.edge_count(), what + ": " + std::to_string(info.global_edges) +
                                                          " global edges, not " + std::to_string(mesh.edge_count()));
       compare(scene.s, mesh, flags, r, what);
+      minkq_mpi_scene_rank_info(scene.s, &info);
+      expect(info.last_reach_ms >= 0 && info.last_ghost_ms >= 0 && info.last_trees_ms >= 0 && info.last_query_ms >= 0 &&
+                 info.bytes_sent >= info.last_bytes_sent && (size > 1 || info.bytes_sent == 0),
+             what + ": phase figures");
       if (!steps) continue;
       // Move: a fresh random wave each step, refit then rebuild; the whole mesh moves alike.
       std::mt19937_64 rng(seed + 17);

@@ -64,7 +64,9 @@ class _Stats(ctypes.Structure):
 class _RankInfo(ctypes.Structure):
     _fields_ = [(name, ctypes.c_uint64) for name in (
         "owned_vertices", "owned_triangles", "owned_edges", "copied_vertices", "ghost_vertices", "ghost_edges",
-        "neighbours", "global_edges", "local_builds", "local_refits", "ghost_exchanges", "ghost_updates")]
+        "neighbours", "global_edges", "local_builds", "local_refits", "ghost_exchanges", "ghost_updates",
+        "bytes_sent", "last_bytes_sent")] + [
+        (name, ctypes.c_double) for name in ("last_reach_ms", "last_ghost_ms", "last_trees_ms", "last_query_ms")]
 
 
 _lib: Optional[ctypes.CDLL] = None
@@ -267,8 +269,9 @@ class Scene:
 
     def rank_info(self) -> Dict[str, int]:
         """This rank's figures: owned vertices, triangles and edges, copies, the ghosts of the
-        last VT and EE queries, neighbours, the global edge count, local builds and refits, and
-        how often the ghost layer was chosen afresh or, with a skin, kept and moved."""
+        last VT and EE queries, neighbours, the global edge count, local builds and refits, how
+        often the ghost layer was chosen afresh or, with a skin, kept and moved, the bytes sent,
+        and the last query's bytes and time per phase (ms: floats)."""
         info = _RankInfo()
         _check(_lib.minkq_mpi_scene_rank_info(self._scene, ctypes.byref(info)), _lib.minkq_mpi_last_error_message())
-        return {name: int(getattr(info, name)) for name, _ in _RankInfo._fields_}
+        return {name: getattr(info, name) for name, _ in _RankInfo._fields_}
