@@ -41,8 +41,10 @@ for mesh in $(find "$data" -name '*.obj' -o -name '*.ply' | sort); do
     want+="mode $m"$'\n'"$("$build/bin/minkq" query "$mesh" --radius-factor "$factor" --mode "$m" --backend cpu | lines)"$'\n'
   done
   count() { echo "$want" | sed -n "/^mode $1\$/,/^mode /p" | sed -n "s/^$2 candidates \([0-9]*\).*/\1/p" | head -1; }
-  triangles=$(grep -c '^f ' "$mesh" 2>/dev/null || true)
-  [ "$triangles" = 0 ] && triangles=$(head -c 2000 "$mesh" | sed -n 's/^element face \([0-9]*\).*/\1/p' | head -1)
+  case "$mesh" in
+    *.ply) triangles=$(head -c 4096 "$mesh" | tr -c '[:print:]\n' '\n' | sed -n 's/^element face \([0-9]*\).*/\1/p' | head -1) ;;
+    *) triangles=$(grep -c '^f ' "$mesh" || true) ;;
+  esac
   row="| $name | $triangles | $(count leaf_exact vt) / $(count leaf_exact ee) | $(count box vt) / $(count box ee) |"
   for k in 1 2 3 4; do
     cell=""

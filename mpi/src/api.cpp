@@ -158,19 +158,20 @@ minkq_status minkq_mpi_scene_create(MPI_Comm comm, minkq_device* device, const m
       triangles = read<int32_t, 3>(device, desc->triangles, nt, "triangles", "triangles");
       triangle_ids = read<int64_t, 1>(device, desc->triangle_ids, nt, "triangle_ids", "triangles");
       triangle_owned = read<uint8_t, 1>(device, desc->triangle_owned, nt, "triangle_owned", "triangles");
-      std::unordered_map<int64_t, size_t> seen;
+      std::unordered_map<int64_t, int32_t>& seen = s->local_index;
+      seen.reserve(nv);
       for (size_t v = 0; v < nv; ++v) {
         require(s->vertex_ids[v] >= 0, MINKQ_ERROR_INVALID_ARGUMENT,
                 "vertex " + std::to_string(v) + " has a negative global id " + std::to_string(s->vertex_ids[v]));
         require(s->vertex_owned[v] <= 1, MINKQ_ERROR_INVALID_ARGUMENT,
                 "vertex_owned[" + std::to_string(v) + "] is " + std::to_string(s->vertex_owned[v]) + ", not 0 or 1");
-        const auto [it, added] = seen.emplace(s->vertex_ids[v], v);
+        const auto [it, added] = seen.emplace(s->vertex_ids[v], int32_t(v));
         require(added, MINKQ_ERROR_INVALID_ARGUMENT,
                 "vertices " + std::to_string(it->second) + " and " + std::to_string(v) + " have the same global id " +
                     std::to_string(s->vertex_ids[v]));
       }
       s->xyz = checked_positions(*s, desc->vertices, "minkq_mpi_scene_create");
-      seen.clear();
+      std::unordered_map<int64_t, size_t> triangle_seen;
       for (size_t t = 0; t < nt; ++t) {
         for (int k = 0; k < 3; ++k)
           require(triangles[3 * t + k] >= 0 && size_t(triangles[3 * t + k]) < nv, MINKQ_ERROR_INDEX_OUT_OF_RANGE,
@@ -180,7 +181,7 @@ minkq_status minkq_mpi_scene_create(MPI_Comm comm, minkq_device* device, const m
                 "triangle " + std::to_string(t) + " has a negative global id " + std::to_string(triangle_ids[t]));
         require(triangle_owned[t] <= 1, MINKQ_ERROR_INVALID_ARGUMENT,
                 "triangle_owned[" + std::to_string(t) + "] is " + std::to_string(triangle_owned[t]) + ", not 0 or 1");
-        const auto [it, added] = seen.emplace(triangle_ids[t], t);
+        const auto [it, added] = triangle_seen.emplace(triangle_ids[t], t);
         require(added, MINKQ_ERROR_INVALID_ARGUMENT,
                 "triangles " + std::to_string(it->second) + " and " + std::to_string(t) + " have the same global id " +
                     std::to_string(triangle_ids[t]));

@@ -118,6 +118,7 @@ Extent extent(SceneState& s, minkq_query_kind kind) {
     if (s.vertex_owned[v])
       for (int k = 0; k < 3; ++k) e.magnitude = std::max(e.magnitude, std::fabs(double(x[3 * v + k])));
   std::vector<Box> elements;
+  elements.reserve(kind == MINKQ_QUERY_VT ? s.triangle_ids.size() : s.edges.size());
   if (kind == MINKQ_QUERY_VT) {
     for (size_t t = 0; t < s.triangle_ids.size(); ++t) elements.push_back(box_of(x, &s.triangles[3 * t], 3));
     for (size_t v = 0; v < s.vertex_owned.size(); ++v)
@@ -197,17 +198,22 @@ struct Assembly {
   std::vector<int64_t> signature;
   std::vector<std::vector<int32_t>> targets;  // per source: the scene vertex of each position
   uint64_t ghosts = 0;
-  std::unordered_map<int64_t, int32_t> index;  // global vertex id -> scene vertex
+  const std::unordered_map<int64_t, int32_t>& local;  // the rank's own vertices (SceneState)
+  std::unordered_map<int64_t, int32_t> added;         // ghost vertices it does not hold
 
-  explicit Assembly(const SceneState& s) : xyz(s.xyz), vertex_ids(s.vertex_ids) {
-    for (size_t v = 0; v < vertex_ids.size(); ++v) index.emplace(vertex_ids[v], int32_t(v));
-  }
+  explicit Assembly(const SceneState& s) : xyz(s.xyz), vertex_ids(s.vertex_ids), local(s.local_index) {}
   // The scene vertex of a ghost's vertex (received from the last source begun), added once.
   int32_t vertex(int64_t id, const float* p) {
-    const auto [it, added] = index.emplace(id, int32_t(vertex_ids.size()));
-    if (added) vertex_ids.push_back(id), xyz.insert(xyz.end(), p, p + 3);
-    targets.back().push_back(it->second);
-    return it->second;
+    int32_t v;
+    if (const auto mine = local.find(id); mine != local.end()) {
+      v = mine->second;
+    } else {
+      const auto [it, is_new] = added.emplace(id, int32_t(vertex_ids.size()));
+      if (is_new) vertex_ids.push_back(id), xyz.insert(xyz.end(), p, p + 3);
+      v = it->second;
+    }
+    targets.back().push_back(v);
+    return v;
   }
   void begin_source(int rank) { signature.push_back(-1 - rank), targets.emplace_back(); }
 };
@@ -361,7 +367,9 @@ minkq_status exchange_and_update(SceneState& s, minkq_query_kind kind, float rad
   const float* x = s.xyz.data();
   std::vector<int32_t> candidates;
   std::vector<Box> boxes;
-  if (kind == MINKQ_QUERY_VT) {
+  if (dests.empty()) {
+    // Nothing to send: no candidates.
+  } else if (kind == MINKQ_QUERY_VT) {
     for (size_t v = 0; v < s.vertex_owned.size(); ++v)
       if (s.vertex_owned[v]) candidates.push_back(int32_t(v)), boxes.push_back(box_of(x, &candidates.back(), 1));
   } else {

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "minkq.h"
@@ -61,6 +62,7 @@ struct SceneState {
   uint32_t flags = 0;
   // The rank's part.
   std::vector<int64_t> vertex_ids;
+  std::unordered_map<int64_t, int32_t> local_index;  // global vertex id -> local vertex
   std::vector<uint8_t> vertex_owned;
   std::vector<float> xyz;  // 3 per local vertex; a copy holds its owner's position
   std::vector<int32_t> triangles;    // owned triangles, 3 local vertex indices each
