@@ -133,15 +133,13 @@ minkq_status setup_ownership(SceneState& s, const std::vector<int32_t>& local_tr
   }
   const std::vector<int64_t> asked = alltoallv(s.comm, asks, &counts);
   status = phase(s.comm, [&] {
-    std::unordered_map<int64_t, int32_t> owned_index;
-    for (size_t i = 0; i < s.vertex_ids.size(); ++i)
-      if (s.vertex_owned[i]) owned_index.emplace(s.vertex_ids[i], int32_t(i));
     size_t k = 0;
     for (int q = 0; q < size; ++q) {
       if (!counts[q]) continue;
       std::vector<int32_t> send{};
       send.resize(size_t(counts[q]));
-      for (int32_t& v : send) v = owned_index.at(asked[k++]);  // the home checked the owner
+      // The rank's index of its own vertices; the home checked that this rank owns each one asked.
+      for (int32_t& v : send) v = s.local_index.at(asked[k++]);
       s.halo.dests.push_back(q), s.halo.send.push_back(std::move(send));
     }
   });
