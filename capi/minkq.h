@@ -429,7 +429,9 @@ minkq_status minkq_result_create(minkq_result** out_result);
 /* Releases a result and its pairs. NULL is ignored. */
 void minkq_result_release(minkq_result* result);
 /* Like minkq_scene_query, into a result (host memory): when its buffer is too small it grows to
- * the exact count and the query runs again, so the call does not return CAPACITY. On failure
+ * the exact count and an eighth more, and the query runs again, so the call does not return
+ * CAPACITY. A count that grows by less than that from one call to the next (a moving mesh's
+ * contacts, step to step) fits: the buffer stays where it is and the query runs once. On failure
  * the result holds no pairs. Errors: those of minkq_scene_query, INVALID_ARGUMENT for a NULL
  * result, OUT_OF_MEMORY when it cannot grow. */
 minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query, minkq_result* result);

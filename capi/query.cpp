@@ -51,8 +51,17 @@ std::array<minkq::QueryRequest, 2> checked_vt_ee_requests(const minkq_scene* sce
   return {vt, ee};
 }
 
+// The pairs a result makes room for when a query finds `count`: an eighth more (and 64), so that
+// a count that grows a little from one query to the next, as the contacts of a moving mesh do
+// from step to step, fits without growing the buffer and running the query a second time.
+uint64_t result_room(uint64_t count) {
+  const uint64_t limit = uint64_t(SIZE_MAX / (2 * sizeof(int32_t)));
+  return count >= limit ? count : std::min(limit, count + count / 8 + 64);
+}
+
 // Runs query(infos), a call writing into the results' buffers, so that the results grow as
-// needed: on CAPACITY each short buffer grows to its exact count and the call runs again.
+// needed: on CAPACITY each short buffer grows to result_room(its exact count) and the call runs
+// again.
 template <size_t N, class Query>
 minkq_status query_into_results(const std::array<minkq_result*, N>& results, Query&& query) {
   std::array<minkq_query_info, N> info{};
@@ -60,7 +69,10 @@ minkq_status query_into_results(const std::array<minkq_result*, N>& results, Que
   if (status == MINKQ_ERROR_CAPACITY) {
     const minkq_status grown = guarded([&] {
       for (size_t k = 0; k < N; ++k)
-        if (results[k]->pairs.size() / 2 < info[k].count) results[k]->pairs.resize(size_t(info[k].count) * 2);
+        if (results[k]->pairs.size() / 2 < info[k].count) {
+          results[k]->pairs.clear();  // nothing to keep: no copy of the old pairs
+          results[k]->pairs.resize(size_t(result_room(info[k].count)) * 2);
+        }
     });
     if (grown != MINKQ_SUCCESS) return grown;
     status = query(info);

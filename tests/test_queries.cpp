@@ -428,5 +428,39 @@ TEST_F(Queries, vt_and_ee_in_one_call_report_capacity_per_query) {
   minkq_result_release(ee_result);
 }
 
+// A result grows to the count and an eighth more, so that a count that grows a little from one
+// query to the next (a moving mesh's contacts) fits where it is: no second run, no new buffer.
+TEST_F(Queries, a_result_keeps_its_buffer_while_the_count_grows_by_less_than_an_eighth) {
+  const Mesh mesh = reference::twisted_sheet(40 + int(seed % 20), 3.0);
+  test::Device device;
+  test::Scene scene(device.get(), mesh, kBoth);
+  const float r0 = float(0.25 * reference::mean_edge_length(mesh));
+  const cxx::Result result = test::new_result();
+  auto query = [&](float r) {
+    const minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, r};
+    EXPECT_EQ(minkq_scene_query_result(scene.get(), &q, result.get()), MINKQ_SUCCESS) << minkq_last_error_message();
+    const Pairs expected = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r);
+    EXPECT_EQ(minkq_result_count(result.get()), expected.size());
+    const int32_t* p = minkq_result_pairs(result.get());
+    Pairs got(minkq_result_count(result.get()));
+    for (size_t i = 0; i < got.size(); ++i) got[i] = {p[2 * i], p[2 * i + 1]};
+    std::sort(got.begin(), got.end());
+    EXPECT_TRUE(got == expected);
+    return expected.size();
+  };
+  const size_t c0 = query(r0);
+  ASSERT_GT(c0, 100u);
+  const int32_t* buffer = minkq_result_pairs(result.get());
+  // A radius a little larger: more pairs, fewer than an eighth more.
+  float r1 = r0;
+  size_t c1 = c0;
+  while (c1 == c0) c1 = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r1 *= 1.002f).size();
+  ASSERT_LE(c1, c0 + c0 / 8);
+  EXPECT_EQ(query(r1), c1);
+  EXPECT_EQ(minkq_result_pairs(result.get()), buffer) << c0 << " pairs, then " << c1;
+  // Twice as many pairs: it grows again, and holds them all.
+  EXPECT_GT(query(2.5f * r0), 2 * c0);
+}
+
 }  // namespace
 }  // namespace minkq

@@ -508,7 +508,8 @@ impl Bvh {
         self.query_raw(query, out.data(), out.capacity(), out.memory())
     }
 
-    /// Pairs (query, box) into a `Vec`, grown to the exact count when too small.
+    /// Pairs (query, box) into a `Vec`, grown when too small to the exact count and an eighth
+    /// more (as [`Scene::query_vec`](crate::Scene::query_vec)).
     ///
     /// ```
     /// # use minkq::*;

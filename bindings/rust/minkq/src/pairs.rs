@@ -176,8 +176,10 @@ impl fmt::Debug for PairBuffer {
     }
 }
 
-/// Runs `query(out_pairs, capacity)` into `out`, growing it once to the exact count on
-/// CAPACITY; on success `out` holds exactly the pairs.
+/// Runs `query(out_pairs, capacity)` into `out`, growing it once on CAPACITY to room for the
+/// exact count and an eighth more (at least 64; the exact count where that does not fit), as
+/// `minkq_scene_query_result` does, so that a count that grows a little from one step to the next
+/// fits without a second run; on success `out` holds exactly the pairs.
 pub(crate) fn query_vec(
     out: &mut Vec<[i32; 2]>,
     mut query: impl FnMut(*mut i32, usize) -> Result<crate::QueryInfo>,
@@ -193,8 +195,11 @@ pub(crate) fn query_vec(
             Err(Error::Capacity { needed, .. }) => {
                 let needed = usize::try_from(needed)
                     .map_err(|_| Error::SizeOverflow(format!("{needed} pairs do not fit in memory")))?;
-                out.try_reserve_exact(needed)
-                    .map_err(|e| Error::OutOfMemory(format!("cannot hold {needed} pairs: {e}")))?;
+                let room = needed.saturating_add(needed / 8).saturating_add(64);
+                if out.try_reserve_exact(room).is_err() {
+                    out.try_reserve_exact(needed)
+                        .map_err(|e| Error::OutOfMemory(format!("cannot hold {needed} pairs: {e}")))?;
+                }
             }
             Err(e) => return Err(e),
         }

@@ -85,8 +85,9 @@ impl Scene {
         self.query_raw(query, out.data(), out.capacity(), out.memory())
     }
 
-    /// Runs a query into a `Vec`, growing it to the exact count when it is too small (the
-    /// query then runs twice); on success the `Vec` holds exactly the pairs.
+    /// Runs a query into a `Vec`, growing it when it is too small (the query then runs twice)
+    /// to the exact count and an eighth more, so that a count that grows a little from one step
+    /// to the next fits; on success the `Vec` holds exactly the pairs.
     ///
     /// ```
     /// # use minkq::*;
@@ -98,6 +99,7 @@ impl Scene {
     /// let info = scene.query_vec(&Query::ee(Mode::Box, 0.2).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
     /// assert_eq!(info.count as usize, pairs.len());
     /// assert!(pairs.windows(2).all(|w| w[0] < w[1]));
+    /// assert!(pairs.capacity() >= pairs.len() + pairs.len() / 8 + 64); // room to grow
     /// # Ok::<(), minkq::Error>(())
     /// ```
     pub fn query_vec(&self, query: &Query, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
