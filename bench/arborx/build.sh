@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Builds the ArborX peer benchmark (issue 27, item 4): Kokkos 4.6.01 (OpenMP backend, C++20) and
 # ArborX v2.1 from their public sources into a prefix, then bench/arborx/arborx_bench against them
-# and against minkq (its own build of the library, CPU backend only, tests and examples off).
+# and against minkq (its own build of the library, CPU backend only, tests and examples off), and
+# where Open MPI is installed arborx_mpi_bench too (ArborX's DistributedTree beside minkq_mpi;
+# bench/arborx/run_mpi.sh runs it).
 # Not part of ./build.sh test, not in the default CMake build. Debian's Kokkos (3.x, in Trilinos
 # 13.2) is too old for ArborX 2.x, which needs Kokkos >= 4.5 and C++20.
 #
@@ -25,7 +27,8 @@
 #   git clone --depth 1 --branch v2.1   https://github.com/arborx/ArborX.git
 # Everything lands in build-bench/arborx/ (gitignored): src/, build/, prefix/ (Kokkos and ArborX
 # installed), minkq-src/ (with --minkq-rev), data/cgal/, bench/ (the program's CMake build) and
-# bin/arborx_bench. A second run reuses what is built (delete build-bench/arborx to start over).
+# bin/arborx_bench (and bin/arborx_mpi_bench). A second run reuses what is built (delete
+# build-bench/arborx to start over).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 work=$root/build-bench/arborx
@@ -41,7 +44,7 @@ while [ $# -gt 0 ]; do
     --no-cgal-data) cgal=0 ;;
     --jobs) jobs=$2; shift ;;
     --run) run=1; shift; break ;;
-    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,31p' "$0"; exit 0 ;;
     *) echo "build.sh: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -109,13 +112,17 @@ if [ ! -f "$prefix/.kokkos-$kokkos_version" ]; then
   cmake --install "$work/build/kokkos" >>"$work/build/kokkos.log"
   touch "$prefix/.kokkos-$kokkos_version"
 fi
-# ArborX: header-only; configure and install its headers and CMake package.
-if [ ! -f "$prefix/.arborx-$arborx_version" ]; then
-  say "configuring ArborX $arborx_version"
+# ArborX: header-only; configure and install its headers and CMake package, with its MPI part
+# (DistributedTree, for arborx_mpi_bench) where Open MPI is installed.
+mpi=OFF
+command -v mpicxx >/dev/null 2>&1 && mpi=ON
+if [ ! -f "$prefix/.arborx-$arborx_version-mpi-$mpi" ]; then
+  say "configuring ArborX $arborx_version (MPI $mpi)"
+  rm -f "$prefix"/.arborx-*
   cmake -S "$arborx_dir" -B "$work/build/arborx" -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX="$prefix" \
-    -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_EXTENSIONS=OFF -DARBORX_ENABLE_MPI=OFF >"$work/build/arborx.log"
+    -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_EXTENSIONS=OFF -DARBORX_ENABLE_MPI=$mpi >"$work/build/arborx.log"
   cmake --install "$work/build/arborx" >>"$work/build/arborx.log"
-  touch "$prefix/.arborx-$arborx_version"
+  touch "$prefix/.arborx-$arborx_version-mpi-$mpi"
 fi
 
 # CGAL's elephant-with-holes.off (REFERENCES.md's second scene), from CGAL's data set as Debian
@@ -151,7 +158,9 @@ say "building arborx_bench"
 cmake -S "$root/bench/arborx" -B "$work/bench" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
   -DMINKQ_SOURCE_DIR="$minkq_dir" -DMINKQ_WITH_CUDA=OFF -DARBORX_BENCH_BIN_DIR="$work/bin" \
   -DARBORX_BENCH_CGAL_DIR="$work/data/cgal" >"$work/build/bench.log"
-compile cmake --build "$work/bench" -j "$jobs" --target arborx_bench >>"$work/build/bench.log" ||
+targets=arborx_bench
+[ $mpi = ON ] && targets="arborx_bench arborx_mpi_bench"
+compile cmake --build "$work/bench" -j "$jobs" --target $targets >>"$work/build/bench.log" ||
   { tail -40 "$work/build/bench.log" >&2; exit 1; }
-say "built $work/bin/arborx_bench"
+say "built $work/bin/{${targets// /,}}"
 if [ $run = 1 ]; then exec "$work/bin/arborx_bench" "$@"; fi

@@ -15,7 +15,6 @@
 #include <mpi.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -23,10 +22,10 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "distributed.h"
+#include "mpi_common.h"
 #include "minkq.hpp"
 #include "minkq_mpi.h"
 #include "minkq_reference.h"
@@ -36,63 +35,9 @@ namespace {
 namespace ref = minkq::reference;
 namespace tools = minkq::mpi_tools;
 using minkq::cxx::check;
+using namespace minkq::mpi_bench;
 
 int rank = 0, size = 1;
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-// The slowest rank's value.
-double slowest(double ms) {
-  double all = 0;
-  MPI_Allreduce(&ms, &all, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return all;
-}
-// The other ranks wait for rank 0's one-process timing asleep (polling every millisecond), not
-// in a barrier that spins on the cores rank 0 is timing with.
-void wait_for_rank_0() {
-  int token = 0;
-  if (rank == 0) {
-    for (int p = 1; p < size; ++p) MPI_Send(&token, 1, MPI_INT, p, 99, MPI_COMM_WORLD);
-    return;
-  }
-  MPI_Request request;
-  MPI_Irecv(&token, 1, MPI_INT, 0, 99, MPI_COMM_WORLD, &request);
-  for (int done = 0; !done;) {
-    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
-    if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-}
-
-void mpi_check(minkq_status s, const char* call) {
-  if (s != MINKQ_SUCCESS) {
-    std::fprintf(stderr, "rank %d: %s failed: %s\n", rank, call, minkq_mpi_last_error_message());
-    MPI_Abort(MPI_COMM_WORLD, 3);
-  }
-}
-
-// The scene at step k: the sheet twisted further, or the mesh moved by a wave.
-struct Motion {
-  int n = 0;          // sheet size, or 0 for the mesh
-  ref::Mesh mesh;     // the mesh at step 0
-  double per_step = 0;
-  ref::Mesh at(int step) const {
-    if (n) return ref::twisted_sheet(n, 3.0 + per_step * step);
-    ref::Mesh m = mesh;
-    for (size_t v = 0; v < m.vertex_count(); ++v)
-      m.xyz[3 * v + 2] += float(per_step * step * std::sin(0.37 * double(v)));
-    return m;
-  }
-};
-double displacement(const ref::Mesh& a, const ref::Mesh& b) {
-  double d = 0;
-  for (size_t i = 0; i < a.xyz.size(); ++i) d = std::max(d, std::fabs(double(a.xyz[i]) - double(b.xyz[i])));
-  return d;
-}
 
 struct Row {
   std::string partition;
@@ -108,30 +53,13 @@ int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  int n = 301, steps = 10;
-  double factor = 0.25, motion_factor = 0.2;
-  std::string out, mesh_path, partitions = "slab,morton,random";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--size") n = std::atoi(argv[i + 1]);
-    else if (a == "--mesh") mesh_path = argv[i + 1];
-    else if (a == "--steps") steps = std::atoi(argv[i + 1]);
-    else if (a == "--radius-factor") factor = std::atof(argv[i + 1]);
-    else if (a == "--motion") motion_factor = std::atof(argv[i + 1]);
-    else if (a == "--partitions") partitions = argv[i + 1];
-    else if (a == "--out") out = argv[i + 1];
-  }
+  const Options opt = parse_options(argc, argv, Options{}, false);
+  const int steps = opt.steps;
   minkq::cxx::Device device = minkq::cxx::open_device("cpu");
-  Motion motion;
-  if (mesh_path.empty()) motion.n = n;
-  else motion.mesh = ref::load_mesh(mesh_path);
-  const ref::Mesh first = motion.at(0);
-  const float r = float(factor * ref::mean_edge_length(first));
-  // Scale a probe step so that a step moves a vertex M x r at most.
-  motion.per_step = motion.n ? 1e-3 : double(r);
-  motion.per_step *= motion_factor * r / displacement(first, motion.at(1));
-  const std::string scene_name = motion.n ? "twisted sheet " + std::to_string(n) + "x" + std::to_string(n)
-                                          : mesh_path.substr(mesh_path.find_last_of('/') + 1);
+  const Scene sc = make_scene(opt);
+  const Motion& motion = sc.motion;
+  const ref::Mesh& first = sc.first;
+  const float r = sc.r;
   const uint32_t flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
   const minkq_query_desc queries[2] = {{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT, r},
                                        {MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT, r}};
@@ -150,11 +78,7 @@ int main(int argc, char** argv) {
       check(minkq_scene_refit(scene.get(), minkq::cxx::host_buffer(m.xyz.data(), m.vertex_count())), "refit");
       for (int q = 0; q < 2; ++q) {
         check(minkq_scene_query_result(scene.get(), &queries[q], result.get()), "query");
-        if (step == steps) {
-          const int32_t* p = minkq_result_pairs(result.get());
-          for (size_t i = 0; i < minkq_result_count(result.get()); ++i) single_pairs[q].push_back({p[2 * i], p[2 * i + 1]});
-          std::sort(single_pairs[q].begin(), single_pairs[q].end());
-        }
+        if (step == steps) single_pairs[q] = result_pairs(result.get());
       }
       times.push_back(now_ms() - t0);
     }
@@ -165,10 +89,7 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   minkq_mpi_result* result = nullptr;
   mpi_check(minkq_mpi_result_create(&result), "minkq_mpi_result_create");
-  for (size_t at = 0; at < partitions.size();) {
-    const size_t comma = std::min(partitions.find(',', at), partitions.size());
-    const tools::Partition kind = tools::parse_partition(partitions.substr(at, comma - at));
-    at = comma + 1;
+  for (const tools::Partition kind : partition_list(opt.partitions)) {
     const tools::Owners owners = tools::partition(first.xyz, first.tris, size, kind, 1);
     const tools::Part part = tools::part_of(first.xyz, first.tris, owners, rank);
     const minkq_mpi_scene_desc desc = tools::desc_of(part, flags);
@@ -238,7 +159,7 @@ int main(int argc, char** argv) {
     std::snprintf(line, sizeof line,
                   "### %d rank%s: %s (%zu triangles), r = %.3g x mean edge, %d steps of at most %.2g r, "
                   "leaf-exact VT + EE\n\n",
-                  size, size > 1 ? "s" : "", scene_name.c_str(), first.triangle_count(), factor, steps, motion_factor);
+                  size, size > 1 ? "s" : "", sc.name.c_str(), first.triangle_count(), opt.factor, steps, opt.motion);
     md << line;
     md << "| partition | skin | create ms | step ms | over one process | refit | reach boxes | ghost layer | local "
           "trees | local query | hand-back | KiB sent / rank / step | ghost vertices / owned | ghost edges / owned | "
@@ -261,7 +182,7 @@ int main(int argc, char** argv) {
                   single_ms);
     md << line;
     std::fputs(md.str().c_str(), stdout);
-    if (!out.empty()) std::ofstream(out, std::ios::app) << md.str();
+    if (!opt.out.empty()) std::ofstream(opt.out, std::ios::app) << md.str();
   }
   MPI_Bcast(&failed, 1, MPI_INT, 0, MPI_COMM_WORLD);
   MPI_Finalize();
