@@ -105,8 +105,15 @@ minkq_status move(minkq_mpi_scene* scene, minkq_buffer vertices, bool rebuild) {
     const minkq_status status = checked_phase(
         *scene, [&] { xyz = checked_positions(*scene, vertices, rebuild ? "minkq_mpi_scene_rebuild" : "minkq_mpi_scene_refit"); });
     if (status) return status;
-    scene->xyz = std::move(xyz);
-    exchange_halo(*scene);
+    // The copies' positions from their owners; a failed exchange (every rank fails it together)
+    // leaves the positions as they were.
+    std::swap(scene->xyz, xyz);
+    try {
+      exchange_halo(*scene);
+    } catch (...) {
+      std::swap(scene->xyz, xyz);
+      throw;
+    }
     for (LocalScene* local : {&scene->vt, &scene->ee}) (rebuild ? local->rebuild : local->refit) = true;
     return MINKQ_SUCCESS;
   });

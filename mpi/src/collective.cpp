@@ -40,4 +40,9 @@ minkq_status agree(MPI_Comm comm, minkq_status local, const std::string& message
   return minkq_status(header[0]);
 }
 
+void fail_together(MPI_Comm comm, const std::string& problem) {
+  const minkq_status status = agree(comm, problem.empty() ? MINKQ_SUCCESS : MINKQ_ERROR_SIZE_OVERFLOW, problem);
+  if (status != MINKQ_SUCCESS) fail(status, last_error);
+}
+
 }  // namespace minkq::mpi
