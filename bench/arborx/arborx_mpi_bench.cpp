@@ -33,7 +33,6 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -96,7 +95,6 @@ struct EeRemote {
 // One rank's share for ArborX: owned triangles and edges over the rank's local vertices, with
 // their global ids, and the owned vertices.
 struct ArborxPart {
-  std::vector<AxPoint> points;  // the rank's local vertices (positions of the step)
   std::vector<peer::Tri> tris;
   std::vector<peer::Seg> edges;
   std::vector<int64_t> tri_ids, corner_ids, edge_ids, end_ids;
@@ -105,7 +103,6 @@ struct ArborxPart {
 };
 ArborxPart arborx_part(const tools::Part& part, const GlobalEdges& g, size_t global_vertices) {
   ArborxPart a;
-  a.points.resize(part.vertex_count());
   std::vector<int32_t> local(global_vertices, -1);
   for (size_t v = 0; v < part.vertex_count(); ++v) {
     local[size_t(part.vertex_ids[v])] = int32_t(v);
@@ -131,14 +128,17 @@ Borrowed<T> borrow(const std::vector<T>& v) {
   return Borrowed<T>(v.data(), v.size());
 }
 
-// ArborX's step: both trees built, both queries run; returns the phase times (build VT tree,
-// build EE tree, VT, EE), each this rank's; the CSR results stay in the views.
+// ArborX's step at the rank's local positions xyz (3 floats a vertex, AxPoint's layout): both
+// trees built, both queries run; returns the phase times (build VT tree, build EE tree, VT, EE),
+// each this rank's; the CSR results stay in the views.
 struct ArborxResults {
   View<int> vt_offsets{"vt offsets", 0}, ee_offsets{"ee offsets", 0};
   View<int64_t> vt_values{"vt values", 0}, ee_values{"ee values", 0};
 };
-std::vector<double> arborx_step(const Exec& space, ArborxPart& a, float r, ArborxResults& out) {
-  const peer::AxMesh m{decltype(peer::AxMesh::points)(a.points.data(), a.points.size()), borrow(a.tris), borrow(a.edges)};
+std::vector<double> arborx_step(const Exec& space, const ArborxPart& a, std::vector<float>& xyz, float r,
+                                ArborxResults& out) {
+  const peer::AxMesh m{decltype(peer::AxMesh::points)(reinterpret_cast<AxPoint*>(xyz.data()), xyz.size() / 3),
+                       borrow(a.tris), borrow(a.edges)};
   std::vector<double> ms;
   double t0 = now_ms();
   DTree tri_tree(MPI_COMM_WORLD, space, ArborX::Experimental::attach_indices<int>(peer::triangle_boxes(space, m)));
@@ -236,21 +236,16 @@ int main(int argc, char** argv) {
     for (const tools::Partition kind : partition_list(opt.partitions)) {
       const tools::Owners owners = tools::partition(first.xyz, first.tris, size, kind, 1);
       const tools::Part part = tools::part_of(first.xyz, first.tris, owners, rank);
-      ArborxPart apart = arborx_part(part, global_edges(first.tris, owners), first.vertex_count());
+      const ArborxPart apart = arborx_part(part, global_edges(first.tris, owners), first.vertex_count());
       const minkq_mpi_scene_desc desc = tools::desc_of(part, flags);
       minkq_mpi_scene* scene = nullptr;
       mpi_check(minkq_mpi_scene_create(MPI_COMM_WORLD, device.get(), &desc, &scene), "minkq_mpi_scene_create");
       Row row;
       row.partition = tools::partition_name(kind);
       std::vector<std::vector<double>> ms(10);  // the Row's phases, in its order
-      std::vector<float> xyz(part.xyz.size());
       ArborxResults ax;
       for (int step = 1; step <= steps; ++step) {
-        const ref::Mesh m = motion.at(step);
-        for (size_t v = 0; v < part.vertex_count(); ++v) {
-          std::memcpy(&xyz[3 * v], &m.xyz[3 * size_t(part.vertex_ids[v])], 12);
-          apart.points[v] = AxPoint{xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]};
-        }
+        std::vector<float> xyz = tools::local_positions(motion.at(step).xyz, part);
         const minkq_buffer positions{xyz.data(), 0, part.vertex_count(), MINKQ_MEMORY_HOST};
         // minkq: update (refit or rebuild), VT, EE; phases 0-2 and 3-5.
         // Before each contestant, a few idle milliseconds in which the other runtime's workers
@@ -277,7 +272,7 @@ int main(int argc, char** argv) {
         auto arborx = [&] {
           gap();
           MPI_Barrier(MPI_COMM_WORLD);
-          const std::vector<double> t = arborx_step(space, apart, r, ax);
+          const std::vector<double> t = arborx_step(space, apart, xyz, r, ax);
           for (size_t k = 0; k < t.size(); ++k) ms[6 + k].push_back(slowest(t[k]));
         };
         // The order turns each step, so that neither library always runs first.

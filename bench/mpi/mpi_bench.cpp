@@ -18,7 +18,6 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -103,11 +102,8 @@ int main(int argc, char** argv) {
       row.single = single_ms;
       mpi_check(minkq_mpi_scene_set_skin(scene, skin), "minkq_mpi_scene_set_skin");
       std::vector<double> refit, reach, ghosts, trees, query, handback, kb;
-      std::vector<float> xyz(part.xyz.size());
       for (int step = 1; step <= steps; ++step) {
-        const ref::Mesh m = motion.at(step);
-        for (size_t v = 0; v < part.vertex_count(); ++v)
-          std::memcpy(&xyz[3 * v], &m.xyz[3 * size_t(part.vertex_ids[v])], 12);
+        const std::vector<float> xyz = tools::local_positions(motion.at(step).xyz, part);
         minkq_mpi_rank_info info{};
         minkq_mpi_scene_rank_info(scene, &info);
         const uint64_t bytes_before = info.bytes_sent;

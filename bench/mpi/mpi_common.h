@@ -77,8 +77,7 @@ struct Motion {
       m.xyz[3 * v + 2] += float(per_step * step * std::sin(0.37 * double(v)));
     return m;
   }
-  void scale(float r, double motion) {
-    const ref::Mesh first = at(0);
+  void scale(const ref::Mesh& first, float r, double motion) {  // first: at(0)
     per_step = n ? 1e-3 : double(r);
     const ref::Mesh probe = at(1);
     double d = 0;
@@ -154,7 +153,7 @@ inline Scene make_scene(const Options& o) {
   else s.motion.mesh = ref::load_mesh(o.mesh_path);
   s.first = s.motion.at(0);
   s.r = float(o.factor * ref::mean_edge_length(s.first));
-  s.motion.scale(s.r, o.motion);
+  s.motion.scale(s.first, s.r, o.motion);
   s.name = s.motion.n ? "twisted sheet " + std::to_string(o.n) + "x" + std::to_string(o.n)
                       : o.mesh_path.substr(o.mesh_path.find_last_of('/') + 1);
   return s;

@@ -73,6 +73,12 @@ std::vector<std::vector<T>> neighbour_exchange(MPI_Comm comm, const std::vector<
 
 // ---- Definitions ---------------------------------------------------------------------------
 
+// The problem of a message over the limit, `where` naming its partner ("to rank 2").
+inline std::string over_limit(uint64_t bytes, const std::string& where, uint64_t limit) {
+  return "a message of " + std::to_string(bytes) + " bytes " + where + " is over the limit of " + std::to_string(limit) +
+         " (MPI counts are int)";
+}
+
 template <class Work>
 minkq_status phase(MPI_Comm comm, Work&& work) {
   minkq_status status = MINKQ_SUCCESS;
@@ -101,8 +107,7 @@ std::vector<T> alltoallv(MPI_Comm comm, const std::vector<std::vector<T>>& send,
     const uint64_t bytes = uint64_t(send[q].size()) * sizeof(T);
     total += bytes;
     if (bytes > limit)
-      problem = "a message of " + std::to_string(bytes) + " bytes to rank " + std::to_string(q) + " is over the limit of " +
-                std::to_string(limit) + " (MPI counts are int)";
+      problem = over_limit(bytes, "to rank " + std::to_string(q), limit);
     else if (total > limit)
       problem = "messages of over " + std::to_string(limit) + " bytes in all to send (MPI displacements are int)";
   }
@@ -154,12 +159,10 @@ std::vector<std::vector<T>> neighbour_exchange(MPI_Comm comm, const std::vector<
   std::string problem;
   for (size_t i = 0; i < dests.size() && problem.empty(); ++i)
     if (out_sizes[i] > limit / sizeof(T))
-      problem = "a message of " + std::to_string(out_sizes[i] * sizeof(T)) + " bytes to rank " + std::to_string(dests[i]) +
-                " is over the limit of " + std::to_string(limit) + " (MPI counts are int)";
+      problem = over_limit(out_sizes[i] * sizeof(T), "to rank " + std::to_string(dests[i]), limit);
   for (size_t j = 0; j < sources.size() && problem.empty(); ++j)
     if (in_sizes[j] > limit / sizeof(T))
-      problem = "a message of " + std::to_string(in_sizes[j] * sizeof(T)) + " bytes from rank " +
-                std::to_string(sources[j]) + " is over the limit of " + std::to_string(limit) + " (MPI counts are int)";
+      problem = over_limit(in_sizes[j] * sizeof(T), "from rank " + std::to_string(sources[j]), limit);
   fail_together(comm, problem);
   std::vector<std::vector<T>> in(sources.size());
   for (size_t j = 0; j < sources.size(); ++j) {

@@ -147,13 +147,6 @@ minkq_status create(minkq_device* device, const tools::Part& part, uint32_t flag
   return minkq_mpi_scene_create(MPI_COMM_WORLD, device, &desc, &scene.s);
 }
 
-// A mesh's local positions on this rank, in its part's order.
-std::vector<float> local_positions(const ref::Mesh& m, const tools::Part& part) {
-  std::vector<float> xyz;
-  for (int64_t v : part.vertex_ids) xyz.insert(xyz.end(), m.xyz.begin() + 3 * v, m.xyz.begin() + 3 * v + 3);
-  return xyz;
-}
-
 minkq_buffer host(const std::vector<float>& xyz) { return {xyz.data(), 0, xyz.size() / 3, MINKQ_MEMORY_HOST}; }
 
 void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, double radius_factor, bool steps) {
@@ -188,7 +181,7 @@ void mesh_cases(minkq_device* device, const std::string& name, ref::Mesh mesh, d
         const double amplitude = 3 * r * std::uniform_real_distribution<double>(0.5, 1.5)(rng);
         for (size_t v = 0; v < moved.vertex_count(); ++v)
           moved.xyz[3 * v + 2] += float(amplitude * std::sin(7.0 * moved.xyz[3 * v] + step));
-        const std::vector<float> xyz = local_positions(moved, part);
+        const std::vector<float> xyz = tools::local_positions(moved.xyz, part);
         const minkq_status moved_status =
             step == 0 ? minkq_mpi_scene_refit(scene.s, host(xyz)) : minkq_mpi_scene_rebuild(scene.s, host(xyz));
         expect(moved_status == MINKQ_SUCCESS, what + ": move: " + minkq_mpi_last_error_message());
@@ -242,7 +235,7 @@ void skin_cases(minkq_device* device) {
         moved.xyz[3 * v + 2] -= float(0.3 * r * step * (layer > 0 ? 1 : 0));
         moved.xyz[3 * v] += float(0.3 * r * step * std::sin(3.0 * v));
       }
-      const std::vector<float> xyz = local_positions(moved, part);
+      const std::vector<float> xyz = tools::local_positions(moved.xyz, part);
       expect(minkq_mpi_scene_refit(scene.s, host(xyz)) == MINKQ_SUCCESS, what + ": refit");
       compare(scene.s, moved, flags, r, what + ", step " + std::to_string(step));
       minkq_mpi_scene_rank_info(scene.s, &after);
@@ -335,12 +328,12 @@ void error_cases(minkq_device* device) {
   if (!scene.s) return;
   const float r = float(0.5 * ref::mean_edge_length(mesh));
   compare(scene.s, mesh, flags, r, "before failed moves");
-  std::vector<float> xyz = local_positions(mesh, good);
+  std::vector<float> xyz = tools::local_positions(mesh.xyz, good);
   for (float& x : xyz) x *= 2;
   if (rank == last) xyz[3 * 1] = INFINITY;
   expect_error(minkq_mpi_scene_refit(scene.s, host(xyz)), MINKQ_ERROR_NON_FINITE,
                "rank " + std::to_string(last) + ": vertex 1", "a refit with an infinity on the last rank");
-  std::vector<float> fewer = local_positions(mesh, good);
+  std::vector<float> fewer = tools::local_positions(mesh.xyz, good);
   if (rank == 0) fewer.resize(fewer.size() - 3);
   expect_error(minkq_mpi_scene_rebuild(scene.s, host(fewer)), MINKQ_ERROR_INVALID_ARGUMENT,
                "rank 0: minkq_mpi_scene_rebuild with", "a rebuild with a vertex short on rank 0");

@@ -148,4 +148,13 @@ inline Part part_of(const std::vector<float>& xyz, const std::vector<int32_t>& t
   return p;
 }
 
+// A rank's local positions in its part's order, from the whole mesh's positions `xyz` (a step's
+// positions of the mesh the part was cut from).
+inline std::vector<float> local_positions(const std::vector<float>& xyz, const Part& part) {
+  std::vector<float> local;
+  local.reserve(3 * part.vertex_count());
+  for (int64_t v : part.vertex_ids) local.insert(local.end(), xyz.begin() + 3 * v, xyz.begin() + 3 * v + 3);
+  return local;
+}
+
 }  // namespace minkq::mpi_tools
