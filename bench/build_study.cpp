@@ -34,8 +34,8 @@ struct Row {
   int32_t n = 0;
   size_t nodes = 0;
   double cost = 0;
-  Timing retired, library, kept, boxes, sort, hierarchy, refit, area, one_pass;
-  bool one_pass_same = false;
+  Timing retired, library, kept, boxes, sort, hierarchy, karras, refit, area, one_pass;
+  bool one_pass_same = false, karras_same = false;
   double retired_faults = 0, library_faults = 0, kept_faults = 0;  // minor page faults per whole build
 };
 
@@ -140,7 +140,10 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
   row.boxes = measure(warmup, repeats, [&] { centres = element_boxes(boxes, n, element); });
   row.sort = measure(warmup, repeats, [&] { sort_by_morton(element, centres, keys, order); });
   std::vector<BvhNode> nodes;
-  row.hierarchy = measure(warmup, repeats, [&] { build_hierarchy(keys.data(), n, kLeafSize, nodes); });
+  std::vector<BoxGroup> groups(size_t(box_group_count(n)));
+  row.hierarchy = measure(warmup, repeats, [&] {
+    build_nodes(keys.data(), n, kLeafSize, GivenBoxes{element.data()}, order.data(), nodes, groups.data());
+  });
   CpuTree tree;
   tree.build(boxes, n);
   row.refit = measure(warmup, repeats, [&] { tree.refit(GivenBoxes{element.data()}); });
@@ -148,17 +151,30 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
     volatile double c = tree.area_cost();
     (void)c;
   });
-  // The one-pass study: hierarchy and boxes together, against the hierarchy + refit columns.
+  auto same_as_library = [&](const std::vector<BvhNode>& built) {
+    return same_bytes(built, tree.nodes()) &&
+           std::memcmp(groups.data(), tree.leaf_groups(), groups.size() * sizeof(BoxGroup)) == 0;
+  };
+  // The hierarchy as the library built it before (and the CUDA build still does): every Karras
+  // node, the scan, the records, then the refit.
+  std::vector<BvhNode> karras;
+  test::build_nodes_karras(keys.data(), n, element.data(), order.data(), kLeafSize, karras, groups.data());
+  row.karras_same = same_as_library(karras);
+  row.karras = measure(warmup, repeats, [&] {
+    test::build_nodes_karras(keys.data(), n, element.data(), order.data(), kLeafSize, karras, groups.data());
+  });
+  // The one-pass study: hierarchy and boxes together, bottom-up.
   std::vector<BvhNode> one_pass;
-  std::vector<BoxGroup> groups(size_t(box_group_count(n)));
   build_nodes_one_pass(keys.data(), n, element.data(), order.data(), kLeafSize, one_pass, groups.data());
-  row.one_pass_same = same_bytes(one_pass, tree.nodes()) &&
-                      std::memcmp(groups.data(), tree.leaf_groups(), groups.size() * sizeof(BoxGroup)) == 0;
+  row.one_pass_same = same_as_library(one_pass);
   row.one_pass = measure(warmup, repeats, [&] {
     build_nodes_one_pass(keys.data(), n, element.data(), order.data(), kLeafSize, one_pass, groups.data());
   });
   rows.push_back(row);
-  return true;
+  if (!row.karras_same)
+    std::fprintf(stderr, "FAIL %s %s: Karras + refit differs from the library's nodes + boxes\n", scene.c_str(),
+                 tree_name);
+  return row.karras_same;
 }
 
 bool study_scene(const SceneFrames& sc, int warmup, int repeats, std::vector<Row>& rows) {
@@ -191,30 +207,36 @@ int main(int argc, char** argv) {
       << written_by(opt, "minkq_build_study", load_start)
       << "**retired** = the build before issue 27 (bench/studies/karras_build.h: the box functor evaluated in three "
       << "passes, a comparison sort of (key, id) pairs, a serial scan of the kept nodes); **library** = "
-      << "`CpuTree::build` (each box evaluated once, a parallel radix sort, a parallel scan). Both give the same "
+      << "`CpuTree::build` (each box evaluated once, a parallel radix sort, the kept nodes and their boxes top-down: "
+      << "cpu/tree.h's TopDownBuild). Both give the same "
       << "tree, record for record (checked first: nodes, leaf order, leaf boxes, area cost). Whole builds run into "
       << "fresh trees, alternately, " << warmup << " untimed and " << repeats
       << " timed rounds; ms = median (range); speed-up = retired / library. The phase columns time each step of "
       << "the library's build alone (medians): element boxes and their centre bounds, Morton codes and the sort, "
-      << "the hierarchy (Karras nodes, scan, node records), the refit from the element boxes, the area cost. "
-      << "**one-pass** (bench/studies/one_pass_build.h, not kept) builds the hierarchy and its boxes together, "
-      << "bottom-up (Apetrei 2014, as ArborX does): compare it with hierarchy + refit; **same**: its nodes and leaf "
-      << "boxes equal the library's, byte for byte. **kept** = rebuilds of one tree that keeps its build scratch "
+      << "**nodes + boxes** (the kept node records with their boxes and the leaf groups, top-down), "
+      << "then a refit of the built tree from the element boxes (what a refit costs; no longer part of a build) "
+      << "and the area cost. Beside the nodes + boxes column, two other ways to the same records: **Karras + "
+      << "refit** (bench/studies/karras_build.h: every Karras node, a parallel scan of the kept ones, the records, "
+      << "then the refit: the library's build before the top-down one, and the CUDA build's steps) and "
+      << "**one-pass** (bench/studies/one_pass_build.h, not kept: hierarchy and boxes together, bottom-up, "
+      << "Apetrei 2014, as ArborX builds); **same**: Karras + refit / one-pass nodes and leaf boxes equal the "
+      << "library's, byte for byte. **kept** = rebuilds of one tree that keeps its build scratch "
       << "(`CpuTree::reserve_build`, as a scene reserved with MINKQ_RESERVE_REBUILD does; checked equal to a fresh "
       << "build), in the same rounds; kept speed-up = retired / kept. **faults**: minor page faults per whole build "
       << "(getrusage), the first touches of memory the allocator had to map afresh.\n\n"
       << "| scene | tree | elements | nodes | area cost | retired ms | library ms | speed-up | kept ms | kept speed-up | "
-         "faults retired / library / kept | boxes | sort | hierarchy | refit | area | one-pass | same |\n"
-         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "faults retired / library / kept | boxes | sort | nodes + boxes | Karras + refit | one-pass | same | refit | "
+         "area |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows)
       o << "| " << r.scene << " | " << r.tree << " | " << r.n << " | " << r.nodes << " | " << fmt(r.cost, 5) << " | "
         << r.retired.text() << " | " << r.library.text() << " | " << fmt(r.retired.median / r.library.median, 3)
         << "x | " << r.kept.text() << " | " << fmt(r.retired.median / r.kept.median, 3) << "x | "
         << fmt(r.retired_faults, 4) << " / " << fmt(r.library_faults, 4) << " / " << fmt(r.kept_faults, 4) << " | "
         << fmt(r.boxes.median)
-        << " | " << fmt(r.sort.median) << " | " << fmt(r.hierarchy.median) << " | "
-        << fmt(r.refit.median) << " | " << fmt(r.area.median) << " | " << fmt(r.one_pass.median) << " | "
-        << (r.one_pass_same ? "yes" : "NO") << " |\n";
+        << " | " << fmt(r.sort.median) << " | " << fmt(r.hierarchy.median) << " | " << fmt(r.karras.median) << " | "
+        << fmt(r.one_pass.median) << " | " << (r.karras_same ? "yes" : "NO") << " / "
+        << (r.one_pass_same ? "yes" : "NO") << " | " << fmt(r.refit.median) << " | " << fmt(r.area.median) << " |\n";
     const std::string file = out + "/build.md";
     std::ofstream(file) << o.str();
     std::fprintf(stderr, "%swrote %s\n", o.str().c_str(), file.c_str());

@@ -11,6 +11,7 @@
 #include "cpu/runtime.h"
 #include "cpu/tree.h"
 #include "minkq/tree.h"
+#include "karras_tree.h"
 
 namespace minkq::bench {
 
@@ -70,7 +71,7 @@ inline void set_child_boxes(int32_t i, const KarrasNode* karras, const int32_t* 
 }
 
 // The node records over n >= 2 sorted keys, their boxes and the leaf groups (what
-// build_hierarchy() and a refit give together): the climb from every leaf in parallel, the kept
+// CpuTree::build gives): the climb from every leaf in parallel, the kept
 // nodes numbered by the library's scan, then each written once with its child boxes.
 inline void build_nodes_one_pass(const uint64_t* keys, int32_t n, const Box* element, const int32_t* order,
                                  int32_t leaf_size, std::vector<BvhNode>& nodes, BoxGroup* leaf_groups) {
@@ -81,7 +82,7 @@ inline void build_nodes_one_pass(const uint64_t* keys, int32_t n, const Box* ele
     climb_from_leaf(int32_t(p), keys, n, element, order, leaf_groups, ends.data(), karras.data(), node_boxes.data());
   });
   std::vector<int32_t> new_index;
-  nodes.assign(size_t(index_kept_nodes(karras, leaf_size, new_index)), BvhNode{});
+  nodes.assign(size_t(test::index_kept_nodes(karras, leaf_size, new_index)), BvhNode{});
   parallel_for_each(n - 1, [&](int64_t i) {
     if (!keeps_node(int32_t(i), karras[size_t(i)], leaf_size)) return;
     collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes.data());

@@ -139,6 +139,21 @@ MINKQ_HD KarrasNode karras_node(int32_t i, const uint64_t* keys, int32_t n) {
   return {i < j ? i : j, i < j ? j : i, split};
 }
 
+// The Karras split of the range [first, last] (first < last) of sorted keys: its last position
+// whose key shares more than the range's common prefix with keys[first] (the next key bit
+// parts the range there). karras_node() finds the same split from the node's own end; a
+// top-down build that knows each range from its parent needs only this one binary search.
+MINKQ_HD int32_t split_position(const uint64_t* keys, int32_t n, int32_t first, int32_t last) {
+  const int delta = common_prefix(keys, n, first, last);
+  int32_t split = first, step = last - first;
+  do {
+    step = (step + 1) >> 1;
+    const int32_t probe = split + step;
+    if (probe < last && common_prefix(keys, n, first, probe) > delta) split = probe;
+  } while (step > 1);
+  return split;
+}
+
 // The root of a one-primitive tree: a single leaf range [0, 0] on the left, no right child.
 MINKQ_HD BvhNode one_leaf_root() {
   BvhNode root{};
@@ -151,8 +166,9 @@ MINKQ_HD BvhNode one_leaf_root() {
 
 // Whether Karras node i stays an internal node: it covers more than leaf_size leaves (the root
 // always stays). Kept nodes form the top of the tree: a parent covers more than its child.
+MINKQ_HD bool keeps_range(int32_t first, int32_t last, int32_t leaf_size) { return last - first + 1 > leaf_size; }
 MINKQ_HD bool keeps_node(int32_t i, const KarrasNode& k, int32_t leaf_size) {
-  return i == 0 || k.last - k.first + 1 > leaf_size;
+  return i == 0 || keeps_range(k.first, k.last, leaf_size);
 }
 
 // The most node records a build over n primitives can keep, at any leaf size: n - 1 for
@@ -215,10 +231,23 @@ MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
   if (slot & 1) parent.right_box = box; else parent.left_box = box;
 }
 
+// A leaf range's box: the boxes of the primitives at sorted positions [first, last], each
+// written into its group lane on the way (two ranges may share a group, never a lane).
+template <class Boxes>
+MINKQ_HD Box leaf_range_box(int32_t first, int32_t last, const Boxes& boxes, const int32_t* sorted_prims,
+                            BoxGroup* leaf_groups) {
+  Box box = Box::empty();
+  for (int32_t q = first; q <= last; ++q) {
+    const Box b = boxes(sorted_prims[q]);
+    set_group_box(leaf_groups[q >> 2], q & 3, b);
+    box = box_union(box, b);
+  }
+  return box;
+}
+
 // Refit from child slot `slot` = (node << 1) | side (a thread per slot, 2 per node; a slot
 // holding an internal node or no child returns at once): a leaf range writes its primitives'
-// boxes in leaf order (into their group lanes: two ranges may share a group, never a lane) and
-// merges them into the node's child box. The second of two children to arrive at a node
+// boxes (leaf_range_box) into the node's child box. The second of two children to arrive at a node
 // (counters zeroed before the pass) merges both boxes and climbs on. Unions are exact.
 template <class Boxes>
 MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
@@ -227,13 +256,7 @@ MINKQ_HD void refit_from_slot(int32_t slot, const Boxes& boxes, const int32_t* s
   const int32_t child = (slot & 1) ? parent.right : parent.left;
   if (child >= 0 || child == kNoChild) return;
   const int32_t first = (slot & 1) ? parent.split + 1 : ~child, last = (slot & 1) ? ~child : parent.split;
-  Box box = Box::empty();
-  for (int32_t q = first; q <= last; ++q) {
-    const Box b = boxes(sorted_prims[q]);
-    set_group_box(leaf_groups[q >> 2], q & 3, b);
-    box = box_union(box, b);
-  }
-  store_child_box(nodes, slot, box);
+  store_child_box(nodes, slot, leaf_range_box(first, last, boxes, sorted_prims, leaf_groups));
   int32_t node = slot >> 1;
   while (true) {
     if (nodes[node].right == kNoChild) return;  // one-primitive tree: nothing to merge

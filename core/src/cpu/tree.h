@@ -5,8 +5,8 @@
 #pragma once
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_scan.h>
 
 #include <algorithm>
 #include <utility>
@@ -92,60 +92,109 @@ void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids, SortScrat
   sort_by_morton(s.element, centres, s.keys, ids, s.radix);
 }
 
-// The scratch of a build over n elements, about 64 B per element: the sort's, the ids in key
-// order, the Karras nodes and their new numbers. A tree keeps it once reserved
-// (CpuTree::reserve_build), so that rebuilds of the same size allocate nothing; otherwise each
-// build makes and frees its own.
+// The scratch of a build over n elements, about 48 B per element: the sort's and the ids in key
+// order (the sort's second key buffer, free once the keys are sorted, then holds the top-down
+// build's per-node record: TopDownBuild). A tree keeps it once reserved (CpuTree::reserve_build),
+// so that rebuilds of the same size allocate nothing; otherwise each build makes and frees its own.
 struct BuildScratch {
   SortScratch sort;
   std::vector<int32_t> order;
-  std::vector<KarrasNode> karras;
-  std::vector<int32_t> new_index;
   void reserve(int32_t n) {
-    const size_t count = size_t(std::max(n, 0)), inner = size_t(std::max(n - 1, 0));
-    sort.reserve(n), order.reserve(count), karras.reserve(inner), new_index.reserve(inner);
+    sort.reserve(n);
+    order.reserve(size_t(std::max(n, 0)));
   }
-  size_t bytes() const {
-    return sort.bytes() + order.capacity() * sizeof(int32_t) + karras.capacity() * sizeof(KarrasNode) +
-           new_index.capacity() * sizeof(int32_t);
+  size_t bytes() const { return sort.bytes() + order.capacity() * sizeof(int32_t); }
+};
+
+// The tree over n >= 2 sorted keys, top-down from the root through the kept nodes only (those
+// over more than leaf_size leaves; about one Karras node in ten at the default size): each
+// range comes from its parent, so a node costs one split search (split_position) instead of
+// karras_node()'s three, and the nodes below the kept ones are never computed. The records
+// equal those of the CUDA build (every Karras node, a scan of the kept ones, collapse_node, the
+// refit), numbered the same: in Karras order, where the root and every right child (node
+// `first` of its range) precede their subtrees and every left child (node `last`) follows its
+// own. Two passes, subtrees over many leaves split into parallel tasks:
+//   count: per kept Karras node i, its split and the kept nodes in its subtree, packed into
+//          info[i] (a node's two children sit side by side there, split and split + 1);
+//   emit:  each kept node's record, with its number, links, child boxes and the leaf groups,
+//          the boxes returned upwards (unions are exact: the same boxes as a refit's).
+template <class Boxes>
+struct TopDownBuild {
+  static constexpr int32_t kTaskLeaves = 4096;  // a subtree over more leaves forks its children
+  const uint64_t* keys;
+  int32_t n, leaf_size;
+  Boxes boxes;
+  const int32_t* sorted_prims;
+  uint64_t* info;  // n - 1 entries: (kept nodes in the subtree << 32) | split, at kept nodes only
+  BvhNode* nodes;
+  BoxGroup* leaf_groups;
+
+  static int32_t split_of(uint64_t info) { return int32_t(uint32_t(info)); }
+  static int32_t nodes_of(uint64_t info) { return int32_t(info >> 32); }
+
+  template <class Left, class Right>
+  static void both(int32_t first, int32_t last, const Left& left, const Right& right) {
+    if (last - first + 1 > kTaskLeaves) tbb::parallel_invoke(left, right);
+    else left(), right();
+  }
+
+  // Kept node i over [first, last]: how many kept nodes its subtree holds, itself included.
+  int32_t count(int32_t i, int32_t first, int32_t last) const {
+    const int32_t split = split_position(keys, n, first, last);
+    int32_t left = 0, right = 0;
+    both(first, last, [&] { if (keeps_range(first, split, leaf_size)) left = count(split, first, split); },
+         [&] { if (keeps_range(split + 1, last, leaf_size)) right = count(split + 1, split + 1, last); });
+    const int32_t below = 1 + left + right;
+    info[i] = uint64_t(uint32_t(below)) << 32 | uint32_t(split);
+    return below;
+  }
+
+  // Writes kept node i over [first, last] and its subtree; base: the kept nodes before the
+  // subtree's Karras indices, parent: its link. Returns the subtree's box.
+  Box emit(int32_t i, int32_t first, int32_t last, int32_t base, int32_t parent) const {
+    const int32_t split = split_of(info[i]);
+    const bool left_kept = keeps_range(first, split, leaf_size), right_kept = keeps_range(split + 1, last, leaf_size);
+    const int32_t below_left = left_kept ? nodes_of(info[split]) : 0;
+    const int32_t below_right = right_kept ? nodes_of(info[split + 1]) : 0;
+    const bool precedes = i == first;
+    const int32_t self = precedes ? base : base + below_left + below_right;
+    const int32_t left_base = precedes ? base + 1 : base, right_base = left_base + below_left;
+    BvhNode node;
+    node.left = left_kept ? left_base + below_left - 1 : ~first;  // a left child follows its subtree
+    node.right = right_kept ? right_base : ~last;                  // a right child precedes its own
+    node.parent = parent;
+    node.split = split;
+    both(
+        first, last,
+        [&] {
+          node.left_box = left_kept ? emit(split, first, split, left_base, self << 1)
+                                    : leaf_range_box(first, split, boxes, sorted_prims, leaf_groups);
+        },
+        [&] {
+          node.right_box = right_kept ? emit(split + 1, split + 1, last, right_base, self << 1 | 1)
+                                      : leaf_range_box(split + 1, last, boxes, sorted_prims, leaf_groups);
+        });
+    nodes[self] = node;
+    return box_union(node.left_box, node.right_box);
   }
 };
 
-// new_index[i] = the kept Karras nodes before node i (an exclusive scan in parallel); returns
-// how many are kept.
-inline int32_t index_kept_nodes(const std::vector<KarrasNode>& karras, int32_t leaf_size,
-                                std::vector<int32_t>& new_index) {
-  const int32_t count = int32_t(karras.size());
-  new_index.resize(size_t(count));
-  return tbb::parallel_scan(
-      tbb::blocked_range<int32_t>(0, count, 16384), 0,
-      [&](const tbb::blocked_range<int32_t>& range, int32_t kept, bool is_final) {
-        for (int32_t i = range.begin(); i != range.end(); ++i) {
-          if (is_final) new_index[size_t(i)] = kept;
-          kept += keeps_node(i, karras[size_t(i)], leaf_size) ? 1 : 0;
-        }
-        return kept;
-      },
-      [](int32_t a, int32_t b) { return a + b; });
+// The node records of the tree over n >= 2 sorted keys with their boxes, and the leaf groups
+// (box_group_count(n) of them): TopDownBuild's two passes, its per-node records in `info`.
+template <class Boxes>
+void build_nodes(const uint64_t* keys, int32_t n, int32_t leaf_size, Boxes boxes, const int32_t* sorted_prims,
+                 std::vector<BvhNode>& nodes, BoxGroup* leaf_groups, std::vector<uint64_t>& info) {
+  info.resize(size_t(n - 1));
+  TopDownBuild<Boxes> build{keys, n, leaf_size, boxes, sorted_prims, info.data(), nullptr, leaf_groups};
+  nodes.resize(size_t(build.count(0, 0, n - 1)));
+  build.nodes = nodes.data();
+  build.emit(0, 0, n - 1, 0, -1);
 }
-
-// The node records of the tree over n >= 2 sorted keys, links and splits without boxes: the
-// Karras nodes in parallel (into karras), those kept numbered by the scan (into new_index), then
-// each written once.
-inline void build_hierarchy(const uint64_t* keys, int32_t n, int32_t leaf_size, std::vector<BvhNode>& nodes,
-                            std::vector<KarrasNode>& karras, std::vector<int32_t>& new_index) {
-  karras.resize(size_t(n - 1));
-  parallel_for_each(n - 1, [&](int64_t i) { karras[size_t(i)] = karras_node(int32_t(i), keys, n); });
-  nodes.assign(size_t(index_kept_nodes(karras, leaf_size, new_index)), BvhNode{});
-  parallel_for_each(n - 1, [&](int64_t i) {
-    if (keeps_node(int32_t(i), karras[size_t(i)], leaf_size))
-      collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes.data());
-  });
-}
-inline void build_hierarchy(const uint64_t* keys, int32_t n, int32_t leaf_size, std::vector<BvhNode>& nodes) {
-  std::vector<KarrasNode> karras;
-  std::vector<int32_t> new_index;
-  build_hierarchy(keys, n, leaf_size, nodes, karras, new_index);
+template <class Boxes>
+void build_nodes(const uint64_t* keys, int32_t n, int32_t leaf_size, Boxes boxes, const int32_t* sorted_prims,
+                 std::vector<BvhNode>& nodes, BoxGroup* leaf_groups) {
+  std::vector<uint64_t> info;
+  build_nodes(keys, n, leaf_size, boxes, sorted_prims, nodes, leaf_groups, info);
 }
 
 // tree.h's bottom-up refit from every child slot of `nodes` in parallel (the arrival counters,
@@ -166,7 +215,7 @@ class CpuTree {
   const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
   // Builds the tree over boxes(0..n-1): each box evaluated once, the primitives sorted by
-  // the Morton codes of the box centres, then the hierarchy over the sorted codes and its boxes.
+  // the Morton codes of the box centres, then the kept nodes with their boxes (build_nodes).
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
     BuildScratch local;
@@ -226,16 +275,17 @@ class CpuTree {
     const int32_t n = int32_t(s.sort.element.size());
     n_ = n;
     cost_at_build_ = 0.0;
-    nodes_.clear();
     sorted_prims_.swap(sorted_prims);
     if (n <= 1) sorted_prims_.assign(size_t(n), 0);
-    leaf_groups_.assign(size_t(box_group_count(n)), BoxGroup{});
-    arrivals_.clear();
-    if (n == 0) return;
-    if (n == 1) nodes_.assign(1, one_leaf_root());
-    else build_hierarchy(keys.data(), n, config.leaf_size, nodes_, s.karras, s.new_index);
+    // Every lane below n is written below; the lanes past the last primitive stay zero.
+    leaf_groups_.resize(size_t(box_group_count(n)));
+    if (n > 0) leaf_groups_.back() = BoxGroup{};
+    const GivenBoxes boxes{s.sort.element.data()};
+    if (n <= 1) nodes_.assign(size_t(n), one_leaf_root());
+    else build_nodes(keys.data(), n, config.leaf_size, boxes, sorted_prims_.data(), nodes_, leaf_groups_.data(),
+                     s.sort.radix.keys);
     arrivals_.assign(nodes_.size(), 0);
-    refit(GivenBoxes{s.sort.element.data()});
+    if (n == 1) refit(boxes);
     cost_at_build_ = area_cost();
   }
 
