@@ -71,8 +71,8 @@ inline void set_child_boxes(int32_t i, const KarrasNode* karras, const int32_t* 
 }
 
 // The node records over n >= 2 sorted keys, their boxes and the leaf groups (what
-// CpuTree::build gives): the climb from every leaf in parallel, the kept
-// nodes numbered by the library's scan, then each written once with its child boxes.
+// CpuTree::build gives): the climb from every leaf in parallel, the kept nodes numbered by the
+// CUDA build's scan (testing/karras_tree.h), then each written once with its child boxes.
 inline void build_nodes_one_pass(const uint64_t* keys, int32_t n, const Box* element, const int32_t* order,
                                  int32_t leaf_size, std::vector<BvhNode>& nodes, BoxGroup* leaf_groups) {
   std::vector<KarrasNode> karras(static_cast<size_t>(n - 1));
