@@ -19,7 +19,6 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <mutex>
@@ -138,7 +137,6 @@ int main(int argc, char** argv) {
      << "| sleep before each run | one thread | TBB parallel_for, 2 threads | speed-up | std::thread pair | speed-up |\n"
      << "|---|---|---|---|---|---|\n";
   Partner partner(steps);
-  auto cell = [](const mb::Timing& t) { return t.text(); };
   auto ratio = [](double a, double b) {
     char r[32];
     std::snprintf(r, sizeof r, "%.2fx", a / b);
@@ -150,8 +148,8 @@ int main(int argc, char** argv) {
       tbb::parallel_for(0, kChunks, [&](int c) { run_chunks(c, c + 1, steps); });
     });
     const mb::Timing pair = rounds(n, sleep_ms, [&] { partner.run(); });
-    md << "| " << sleep_ms << " ms | " << cell(one) << " | " << cell(tbb2) << " | " << ratio(one.median, tbb2.median)
-       << " | " << cell(pair) << " | " << ratio(one.median, pair.median) << " |\n";
+    md << "| " << sleep_ms << " ms | " << one.text() << " | " << tbb2.text() << " | " << ratio(one.median, tbb2.median)
+       << " | " << pair.text() << " | " << ratio(one.median, pair.median) << " |\n";
   }
   std::cout << md.str();
   if (!out.empty()) {
