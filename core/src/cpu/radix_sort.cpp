@@ -16,27 +16,36 @@ constexpr uint32_t kBuckets = 1u << kDigitBits;
 constexpr int64_t kMinBlock = 16384;
 
 // The LSD passes over bits [lo, hi) of one range, on one thread: ping-pong between the two
-// buffers; returns whether the sorted range ended in the second (b) buffer.
+// buffers; returns whether the sorted range ended in the second (b) buffer. Every digit's
+// histogram comes from one read of the keys (a permutation keeps each digit's counts), so a
+// pass costs one scatter; a digit that all keys share is skipped.
 bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_t n, int lo, int hi) {
-  uint32_t count[kBuckets];
+  constexpr int kMaxDigits = (64 + kDigitBits - 1) / kDigitBits;
+  const int digits = (hi - lo + kDigitBits - 1) / kDigitBits;
+  uint32_t count[kMaxDigits][kBuckets] = {};
+  const uint64_t below_hi = hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1;
+  for (int64_t i = 0; i < n; ++i) {
+    const uint64_t key = (a_k[i] & below_hi) >> lo;
+    for (int d = 0; d < digits; ++d) ++count[d][(key >> (d * kDigitBits)) & (kBuckets - 1)];
+  }
   bool in_b = false;
-  for (int shift = lo; shift < hi; shift += kDigitBits) {
+  for (int d = 0; d < digits; ++d) {
+    const int shift = lo + d * kDigitBits;
     uint64_t *src_k = in_b ? b_k : a_k, *dst_k = in_b ? a_k : b_k;
     int32_t *src_v = in_b ? b_v : a_v, *dst_v = in_b ? a_v : b_v;
     const uint64_t mask = (uint64_t(1) << std::min(kDigitBits, hi - shift)) - 1;
-    std::fill(count, count + kBuckets, 0u);
-    for (int64_t i = 0; i < n; ++i) ++count[(src_k[i] >> shift) & mask];
+    uint32_t* next = count[d];
     uint32_t running = 0;
     bool shared = false;
-    for (uint32_t d = 0; d < kBuckets; ++d) {
-      shared = shared || count[d] == uint32_t(n);
-      const uint32_t c = count[d];
-      count[d] = running;
+    for (uint32_t b = 0; b < kBuckets; ++b) {
+      shared = shared || next[b] == uint32_t(n);
+      const uint32_t c = next[b];
+      next[b] = running;
       running += c;
     }
     if (shared) continue;
     for (int64_t i = 0; i < n; ++i) {
-      const uint32_t p = count[(src_k[i] >> shift) & mask]++;
+      const uint32_t p = next[(src_k[i] >> shift) & mask]++;
       dst_k[p] = src_k[i];
       dst_v[p] = src_v[i];
     }
