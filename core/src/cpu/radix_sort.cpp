@@ -24,16 +24,15 @@ bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_
   const int digits = (hi - lo + kDigitBits - 1) / kDigitBits;
   uint32_t count[kMaxDigits][kBuckets] = {};
   const uint64_t below_hi = hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1;
-  for (int64_t i = 0; i < n; ++i) {
-    const uint64_t key = (a_k[i] & below_hi) >> lo;
-    for (int d = 0; d < digits; ++d) ++count[d][(key >> (d * kDigitBits)) & (kBuckets - 1)];
-  }
+  auto digit = [&](uint64_t key, int d) {  // digit d of bits [lo, hi)
+    return uint32_t(((key & below_hi) >> (lo + d * kDigitBits)) & (kBuckets - 1));
+  };
+  for (int64_t i = 0; i < n; ++i)
+    for (int d = 0; d < digits; ++d) ++count[d][digit(a_k[i], d)];
   bool in_b = false;
   for (int d = 0; d < digits; ++d) {
-    const int shift = lo + d * kDigitBits;
     uint64_t *src_k = in_b ? b_k : a_k, *dst_k = in_b ? a_k : b_k;
     int32_t *src_v = in_b ? b_v : a_v, *dst_v = in_b ? a_v : b_v;
-    const uint64_t mask = (uint64_t(1) << std::min(kDigitBits, hi - shift)) - 1;
     uint32_t* next = count[d];
     uint32_t running = 0;
     bool shared = false;
@@ -45,7 +44,7 @@ bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_
     }
     if (shared) continue;
     for (int64_t i = 0; i < n; ++i) {
-      const uint32_t p = next[(src_k[i] >> shift) & mask]++;
+      const uint32_t p = next[digit(src_k[i], d)]++;
       dst_k[p] = src_k[i];
       dst_v[p] = src_v[i];
     }
