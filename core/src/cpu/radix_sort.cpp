@@ -15,6 +15,9 @@ constexpr uint32_t kBuckets = 1u << kDigitBits;
 // top digit; fewer pairs are sorted on one thread.
 constexpr int64_t kMinBlock = 16384;
 
+// The digit of `key` at bits [shift, shift + kDigitBits).
+uint32_t digit_at(uint64_t key, int shift) { return uint32_t(key >> shift) & (kBuckets - 1); }
+
 // The LSD passes over bits [lo, hi) of one range, on one thread: ping-pong between the two
 // buffers; returns whether the sorted range ended in the second (b) buffer. Every digit's
 // histogram comes from one read of the keys (a permutation keeps each digit's counts), so a
@@ -24,9 +27,8 @@ bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_
   const int digits = (hi - lo + kDigitBits - 1) / kDigitBits;
   uint32_t count[kMaxDigits][kBuckets] = {};
   const uint64_t below_hi = hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1;
-  auto digit = [&](uint64_t key, int d) {  // digit d of bits [lo, hi)
-    return uint32_t(((key & below_hi) >> (lo + d * kDigitBits)) & (kBuckets - 1));
-  };
+  // Digit d of bits [lo, hi).
+  auto digit = [&](uint64_t key, int d) { return digit_at(key & below_hi, lo + d * kDigitBits); };
   for (int64_t i = 0; i < n; ++i)
     for (int d = 0; d < digits; ++d) ++count[d][digit(a_k[i], d)];
   bool in_b = false;
@@ -79,11 +81,10 @@ void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values,
   const int64_t block = (n + blocks - 1) / blocks;
   std::vector<uint32_t>& offsets = scratch.offsets;
   offsets.resize(size_t(blocks * kBuckets));
-  auto digit = [top](uint64_t key) { return uint32_t(key >> top) & (kBuckets - 1); };
   tbb::parallel_for(int64_t(0), blocks, [&](int64_t b) {
     uint32_t* count = offsets.data() + b * kBuckets;
     std::fill(count, count + kBuckets, 0u);
-    for (int64_t i = b * block, end = std::min(n, i + block); i < end; ++i) ++count[digit(keys[size_t(i)])];
+    for (int64_t i = b * block, end = std::min(n, i + block); i < end; ++i) ++count[digit_at(keys[size_t(i)], top)];
   });
   // Where each block's keys of each digit go: digits in order, blocks in order within one.
   std::vector<uint32_t> bucket_start(kBuckets + 1);
@@ -100,7 +101,7 @@ void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values,
   tbb::parallel_for(int64_t(0), blocks, [&](int64_t b) {
     uint32_t* next = offsets.data() + b * kBuckets;
     for (int64_t i = b * block, end = std::min(n, i + block); i < end; ++i) {
-      const uint32_t p = next[digit(keys[size_t(i)])]++;
+      const uint32_t p = next[digit_at(keys[size_t(i)], top)]++;
       other_keys[p] = keys[size_t(i)];
       other_values[p] = values[size_t(i)];
     }
