@@ -192,6 +192,10 @@ int main(int argc, char** argv) {
         << " | " << r.t_top_down.text() << " | " << r.t_half.text() << " | " << r.t_grouped.text() << " | "
         << fmt(r.t_top_down.median / r.t_half.median, 3) << "x | " << fmt(r.t_top_down.median / r.t_grouped.median, 3)
         << "x |\n";
+    if (rows.empty()) {  // no scene produced a row: nothing to write over the last table with
+      std::fprintf(stderr, "FAIL: no scene was studied\n");
+      return 1;
+    }
     if (!quick) {
       const std::string file = out + "/traversal.md";
       std::ofstream(file) << o.str();
