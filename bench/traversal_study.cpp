@@ -166,6 +166,10 @@ int main(int argc, char** argv) {
     const bool ok = for_each_study_scene(opt, true, [&](const SceneFrames& sc) {
       return study_scene(sc, warmup, repeats, rows);
     });
+    if (rows.empty()) {  // no table to write over the last one
+      std::fprintf(stderr, ok ? "FAIL: no scene was studied\n" : "FAIL: the walks differ\n");
+      return 1;
+    }
     std::ostringstream o;
     o << "# Queries: the half traversal beside the top-down walk, and grouped queries (issue 27)\n\n"
       << written_by(opt, "minkq_traversal_study", load_start)
@@ -192,10 +196,6 @@ int main(int argc, char** argv) {
         << " | " << r.t_top_down.text() << " | " << r.t_half.text() << " | " << r.t_grouped.text() << " | "
         << fmt(r.t_top_down.median / r.t_half.median, 3) << "x | " << fmt(r.t_top_down.median / r.t_grouped.median, 3)
         << "x |\n";
-    if (rows.empty()) {  // no scene produced a row: nothing to write over the last table with
-      std::fprintf(stderr, "FAIL: no scene was studied\n");
-      return 1;
-    }
     if (!quick) {
       const std::string file = out + "/traversal.md";
       std::ofstream(file) << o.str();
