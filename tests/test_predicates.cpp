@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
+#include <type_traits>
 
 #include "minkq/predicates.h"
 #include "minkq_reference.h"
@@ -13,6 +16,42 @@ namespace minkq {
 namespace {
 
 using LD = long double;
+
+template <class T>
+auto bits_of(T v) {
+  using U = std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>;
+  U u;
+  std::memcpy(&u, &v, sizeof u);
+  return u;
+}
+
+// min_num / max_num (hd.h) are fmin / fmax with the second operand on ties: a NaN operand
+// yields the other one, equal operands (+0 and -0 among them) yield b. Bit for bit, over every
+// pair of special values, in float and double (the boxes, trees and predicates rely on it, and
+// the host's branch-free selects must keep it).
+template <class T>
+void expect_min_max_num_semantics() {
+  const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+  const T values[] = {T(0),  -T(0), std::numeric_limits<T>::denorm_min(), std::numeric_limits<T>::min(), T(1),
+                      T(-1), T(2.5), std::numeric_limits<T>::max(), -std::numeric_limits<T>::max(), inf, -inf, nan,
+                      -nan};
+  for (T a : values)
+    for (T b : values) {
+      const T lo = std::isnan(b) || (!std::isnan(a) && a < b) ? a : b;
+      const T hi = std::isnan(b) || (!std::isnan(a) && a > b) ? a : b;
+      EXPECT_EQ(bits_of(min_num(a, b)), bits_of(lo)) << "min_num(" << a << ", " << b << ")";
+      EXPECT_EQ(bits_of(max_num(a, b)), bits_of(hi)) << "max_num(" << a << ", " << b << ")";
+      if (!std::isnan(a) && !std::isnan(b) && a != b) {
+        EXPECT_EQ(min_num(a, b), std::fmin(a, b));
+        EXPECT_EQ(max_num(a, b), std::fmax(a, b));
+      }
+    }
+}
+
+TEST(PredicateEdgeCases, min_num_and_max_num_are_fmin_and_fmax_keeping_b_on_ties) {
+  expect_min_max_num_semantics<float>();
+  expect_min_max_num_semantics<double>();
+}
 
 LD exact_point_box_distance(Vec3 p, const Box& b) {
   LD d2 = 0;

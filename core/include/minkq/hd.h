@@ -41,10 +41,19 @@ MINKQ_HD float max_num(float a, float b) { return fmaxf(a, b); }
 MINKQ_HD double min_num(double a, double b) { return fmin(a, b); }
 MINKQ_HD double max_num(double a, double b) { return fmax(a, b); }
 #else
+// Written as two selects, not as (a < b || b != b) ? a : b: g++ compiles that `||` into a
+// branch on the data, which a real mesh's coordinates leave unpredictable; these two become
+// minss/maxss and a conditional move (the same results, bit for bit).
 template <class T>
-MINKQ_HD T min_num(T a, T b) { return (a < b || b != b) ? a : b; }
+MINKQ_HD T min_num(T a, T b) {
+  const T m = a < b ? a : b;
+  return b != b ? a : m;
+}
 template <class T>
-MINKQ_HD T max_num(T a, T b) { return (a > b || b != b) ? a : b; }
+MINKQ_HD T max_num(T a, T b) {
+  const T m = a > b ? a : b;
+  return b != b ? a : m;
+}
 #endif
 
 MINKQ_HD Vec3 vmin(Vec3 a, Vec3 b) { return {min_num(a.x, b.x), min_num(a.y, b.y), min_num(a.z, b.z)}; }
