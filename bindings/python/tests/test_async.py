@@ -342,6 +342,50 @@ def test_warp_graph_capture_replays_refit_and_queries_over_moved_vertices(wp, me
     assert np.array_equal(vt_pairs.numpy()[: int(vt_count.numpy()[0])], vt)
 
 
+class _ProducedOn:
+    """A Warp CUDA array behind a version-3 CUDA array interface that names another stream as
+    its producer's, as CuPy and Numba arrays do."""
+
+    def __init__(self, array, stream: int):
+        self._array = array  # keeps the memory alive
+        self.__cuda_array_interface__ = dict(array.__cuda_array_interface__, version=3, stream=stream)
+
+
+@pytest.mark.gpu
+def test_warp_capture_of_an_array_produced_on_a_stream_outside_the_capture(wp, mesh):
+    # Issue 30, item 4: waiting on an event recorded on the producer's stream, outside the
+    # capture, would invalidate the capture (ScopedCapture's end would raise); the caller has
+    # finished the producer's work before capture began, as the module's docstring asks.
+    _needs_cuda(wp)
+    xyz, tris = mesh
+    positions = wp.array(xyz, dtype=wp.vec3, device="cuda:0")
+    scene = minkq.Scene(minkq.Device("cuda:0"), positions, wp.array(tris, dtype=wp.int32, device="cuda:0"))
+    capacity = 8192
+    scene.reserve(refit=True, canonical_capacity=capacity)
+    producer = wp.Stream("cuda:0")
+    assert int(producer.cuda_stream) != int(wp.get_stream("cuda:0").cuda_stream)
+    pairs = wp.zeros((capacity, 2), dtype=wp.int32, device="cuda:0")
+    count = wp.zeros(1, dtype=wp.uint64, device="cuda:0")
+    wp.synchronize_device("cuda:0")
+    with wp.ScopedCapture(device="cuda:0") as capture:
+        scene.refit_async(_ProducedOn(positions, int(producer.cuda_stream)))
+        scene.query_async(pairs, count, "vt", "box", R, leaf_exact=True, canonical=True)
+    reference = minkq.Scene(minkq.Device("cpu"), xyz, tris)
+    for step in range(1, 4):
+        vertices = moved(xyz, step)
+        positions.assign(vertices)
+        wp.capture_launch(capture.graph)
+        scene.async_status(wp.get_stream("cuda:0"))
+        reference.refit(vertices)
+        expected = reference.query("vt", "box", R, leaf_exact=True, canonical=True)
+        assert int(count.numpy()[0]) == len(expected), step
+        assert np.array_equal(pairs.numpy()[: len(expected)], expected), step
+    # Outside a capture the same array is ordered after its producer's stream by an event.
+    scene.refit_async(_ProducedOn(positions, int(producer.cuda_stream)))
+    scene.async_status(wp.get_stream("cuda:0"))
+    assert np.array_equal(scene.query("vt", "box", R, leaf_exact=True, canonical=True).numpy(), expected)
+
+
 @pytest.mark.gpu
 def test_warp_cuda_arrays_on_an_explicit_stream_and_short_capacity(wp, mesh):
     _needs_cuda(wp)
