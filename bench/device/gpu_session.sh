@@ -17,6 +17,21 @@
 #   third call, at once: command="bash bench/device/gpu_session.sh bench"
 #   then Warp / Newton on the same GPU, per ../shared/tools/warp-for-device.sh (its last call
 #   ends with: bash bench/device/gpu_session.sh warp)
+# The device budget is 15 minutes a session, one call at most 10: the calls above and the
+# Python ones below do not fit in one session together. The Python gpu tests alone (about 6 to
+# 8 minutes of the 15; neither setup nor .carry/kit needed):
+#   here:    bash bench/device/pack_python.sh   # .carry/py (cp312 CUDA wheel, newton; 14 MB),
+#                                               # .carry/a, b, c (Warp, Newton; 38 + 38 + 23 MB)
+#            mkdir -p /tmp/w && cp .carry/a/* .carry/b/* /tmp/w/ &&   # what calls 1 and 2 do
+#              bash bench/device/gpu_session.sh --smoke python         # the gpu tests skip here
+#   device, three calls back to back (/tmp/w must survive between them: ~30 s idle at most):
+#     1 (the machine's start, 1 to 2 min): run(carry=[".carry/a"], timeout_s=120,
+#                                             command="mkdir -p /tmp/w && cp .carry/a/* /tmp/w/")
+#     2 (under a minute):  run(carry=[".carry/b"], timeout_s=120, command="cp .carry/b/* /tmp/w/")
+#     3 (about 3 to 5 min: Warp's kernels compile on first use; pytest stops at 420 s):
+#          run(carry=[".carry/c", ".carry/py"], timeout_s=540, command="bash bench/device/gpu_session.sh python")
+#   then give_back. $OUT brings session.log and logs.tar.gz (python.log: pytest -v, every test).
+#   Each call carries at most 64 MiB with the working tree (about 9 MB): 38, 38 and 36 + 9.
 #
 # Stages, in the order of their value:
 #   setup      unpack the packages into /tmp/minkq-deps, ../shared from the kit; the machine,
@@ -37,6 +52,12 @@
 #              minkq_count --backend cuda --large;
 #              $OUT/results.tar.gz holds bench/results-style tables
 #   warp       bench/warp_baseline.py --device cuda:0 on the exported frames ($OUT/warp_gpu.md)
+#   python     the Python package's gpu tests (pytest -m gpu on bindings/python/tests: Warp
+#              ScopedCapture, the Newton detector's CUDA capture, torch CUDA graphs, CUDA
+#              tensors through DLPack) on python3 with .carry/py's wheels (pack_python.sh) and
+#              Warp unpacked from .carry/c over /tmp/w's parts, all in /tmp/site; fails when
+#              the wheels or the parts are missing, or when the carried minkq sees no GPU;
+#              under --smoke, pack_python.sh's Python 3.12 (the tests skip with their reasons)
 #   profile    Nsight Compute on the 1M-triangle twisted sheet's query and refit kernels
 #              ($OUT/ncu.txt)
 # --smoke (first argument): on a machine without a GPU, the same script from an empty build
@@ -196,6 +217,65 @@ stage_warp() {
     "$out/warp_gpu.md" --device cuda:0
 }
 
+# The Python package's gpu tests (bindings/python/tests, marker gpu: Warp ScopedCapture of the
+# stream-ordered calls, the Newton detector's CUDA capture, torch CUDA graphs, CUDA tensors
+# through DLPack) on the carried cp312 wheel (CUDA libminkq) with Warp and Newton, all in /tmp/site.
+stage_python() {
+  local py=${MINKQ_PYTHON:-python3} site=/tmp/site parts=${MINKQ_WARP_PARTS:-$root/.carry}
+  local pykit=${MINKQ_PY_KIT:-$root/.carry/py}
+  # Here the cp312 wheel needs a Python 3.12: pack_python.sh's (numpy and pytest, no torch).
+  if [ $smoke = 1 ] && [ -z "${MINKQ_PYTHON:-}" ] && [ -x "$root/build-sm90-py/venv/bin/python" ]; then
+    py=$root/build-sm90-py/venv/bin/python
+  fi
+  if ! ls "$pykit"/wheels/minkq-*.whl > /dev/null 2>&1; then
+    echo "no minkq wheel in $pykit/wheels: run bench/device/pack_python.sh here and carry .carry/py"
+    return 1
+  fi
+  # Warp and Newton: .carry/c unpacked over the two parts that the calls before this one left in
+  # /tmp/w (../shared/tools/warp-for-device.sh), unless an earlier call did it.
+  if [ ! -f "$site/warp/bin/warp.so" ]; then
+    if [ -f /tmp/w/part00 ] && [ -f /tmp/w/part01 ] && [ -f "$parts/c/unpack.sh" ]; then
+      # unpack.sh imports Warp with python3: the one the tests run under.
+      PATH="$(dirname "$(command -v "$py")"):$PATH" bash "$parts/c/unpack.sh" ||
+        { echo "python: unpacking Warp failed"; return 1; }
+    else
+      echo "no Warp in $site and nothing to unpack it from (/tmp/w: $(ls /tmp/w 2> /dev/null | tr '\n' ' ')," \
+        "$parts/c/unpack.sh: $([ -f "$parts/c/unpack.sh" ] && echo there || echo missing)): make the calls" \
+        "carrying .carry/a and .carry/b just before this one, which carries .carry/c and .carry/py"
+      return 1
+    fi
+  fi
+  # minkq, and Newton at the version the tests pin over the one .carry/c held.
+  "$py" -m pip install -q --disable-pip-version-check --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+    --target "$site" "$pykit"/wheels/*.whl > "$logs/python-install.log" 2>&1 || { tail -20 "$logs/python-install.log"; return 1; }
+  [ -f "$pykit/VERSIONS" ] && sed 's/^/kit: /' "$pykit/VERSIONS"
+  local env=(env PYTHONPATH="$site${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1)
+  local expect=any
+  have_gpu && expect=gpu  # there every gpu test should run: a minkq that sees no GPU fails here
+  "${env[@]}" "$py" - "$site" "$expect" <<'EOF' || return 1
+import importlib, sys
+import minkq
+assert minkq.__file__.startswith(sys.argv[1]), f"minkq from {minkq.__file__}, not the carried wheel"
+print(f"python {sys.version.split()[0]}; minkq {minkq.__file__}, CUDA devices {minkq.cuda_device_count()}")
+if sys.argv[2] == "gpu" and minkq.cuda_device_count() == 0:
+    sys.exit("python: the carried minkq sees no CUDA device (a CPU-only libminkq, or its CUDA runtime and the driver disagree)")
+for name in ("numpy", "warp", "newton", "torch", "cupy"):
+    try:
+        module = importlib.import_module(name)
+        print(f"  {name} {getattr(module, '__version__', None) or getattr(getattr(module, 'config', None), 'version', '?')}")
+    except Exception as e:  # the tests that need it skip and say so
+        print(f"  {name}: not importable ({type(e).__name__}: {e})")
+EOF
+  # faulthandler_timeout: a test hung on the GPU dumps every thread's stack into the log.
+  "${env[@]}" timeout "${MINKQ_PYTEST_TIMEOUT:-420}" "$py" -m pytest -m gpu -v -rfEs -p no:cacheprovider \
+    -o faulthandler_timeout=240 bindings/python/tests > "$logs/python.log" 2>&1
+  local status=$?
+  [ $status = 124 ] && echo "python: pytest ran past ${MINKQ_PYTEST_TIMEOUT:-420} s (log: python.log)"
+  grep -E " (PASSED|FAILED|ERROR|SKIPPED)|^(FAILED|ERROR|SKIPPED) |^=+ .*(passed|failed|skipped|error|deselected)" \
+    "$logs/python.log" | tail -40
+  return $status
+}
+
 stage_profile() {
   # Nsight Compute on the issue's target scene, the 1M-triangle twisted sheet at r = 0.25x mean
   # edge (minkq demo --size 708: every mode, checked against the oracle): the query and refit
@@ -218,7 +298,7 @@ for stage in "$@"; do
   case "$stage" in
     setup) stage_setup ;; build) stage_build ;; memcheck) stage_memcheck ;; gpu) stage_gpu ;;
     racecheck) stage_racecheck ;; test) stage_test ;; fuzz) stage_fuzz ;; bench) stage_bench ;; warp) stage_warp ;;
-    profile) stage_profile ;;
+    python) stage_python ;; profile) stage_profile ;;
     *) echo "unknown stage $stage"; false ;;
   esac
   status=$?
