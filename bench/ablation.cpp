@@ -153,7 +153,7 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
                                int repeats, bool& ok) {
   const int32_t nv = int32_t(sc.mesh.vertex_count()), nt = int32_t(sc.mesh.triangle_count());
   const int32_t ne = int32_t(sc.mesh.edge_count());
-  std::vector<int32_t> order;
+  HostVector<int32_t> order;
   SortScratch scratch;
   sort_by_morton(PointBoxes{v}, nv, order, scratch);
   std::string out;
@@ -195,7 +195,7 @@ std::string compare_fine_nodes_one(const std::string& scene, const BvhView& bvh,
 struct FrameTrees {
   int32_t nv, ne;
   CpuTree triangles, edges;
-  std::vector<int32_t> order;
+  HostVector<int32_t> order;
   FrameTrees(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e)
       : nv(int32_t(sc.mesh.vertex_count())), ne(int32_t(sc.mesh.edge_count())) {
     triangles.build(TriangleBoxes{v, t}, int32_t(sc.mesh.triangle_count()));
@@ -209,7 +209,7 @@ std::string compare_fine_nodes(const SceneFrames& sc, const FrameTrees& trees, c
                                const Edge* e, float r, int repeats, bool& ok) {
   const int32_t nv = trees.nv, ne = trees.ne;
   const CpuTree &triangles = trees.triangles, &edges = trees.edges;
-  const std::vector<int32_t>& order = trees.order;
+  const HostVector<int32_t>& order = trees.order;
   std::string out;
   for (const float factor : {1.0f, 8.0f}) {
     const float rr = r * factor;
@@ -317,7 +317,7 @@ struct FirstAndLast {
   const Edge* e;
   float r;
   int32_t nv, nt, ne;
-  std::vector<int32_t> order;
+  HostVector<int32_t> order;
   FirstAndLast(const SceneFrames& sc, const char* study)
       : v0(reinterpret_cast<const Vec3*>(sc.frames.front().data())),
         v(reinterpret_cast<const Vec3*>(sc.frames.back().data())),

@@ -46,9 +46,11 @@ long minor_faults() {
   return usage.ru_minflt;
 }
 
-template <class T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+// Two arrays of the same records (std::vector or the library's HostVector), byte for byte.
+template <class A, class B>
+bool same_bytes(const A& a, const B& b) {
+  static_assert(sizeof(a[0]) == sizeof(b[0]), "arrays of the same records");
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
 }
 
 // One tree of one scene; false when the two builds differ (the row then holds no times).
@@ -65,11 +67,11 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
     CpuTree now;
     now.build(boxes, n);
     std::vector<BoxGroup> groups(now.leaf_groups(), now.leaf_groups() + old.leaf_groups.size());
-    if (!same_bytes(old.nodes, now.nodes()) || old.sorted_prims != now.sorted_prims() ||
+    if (!same_bytes(old.nodes, now.nodes()) || !same_bytes(old.sorted_prims, now.sorted_prims()) ||
         !same_bytes(old.leaf_groups, groups) || old.cost_at_build != now.cost_at_build()) {
       std::fprintf(stderr, "FAIL %s %s: the builds differ (nodes %d, leaf order %d, leaf boxes %d, area cost %d)\n",
                    scene.c_str(), tree_name, int(!same_bytes(old.nodes, now.nodes())),
-                   int(old.sorted_prims != now.sorted_prims()), int(!same_bytes(old.leaf_groups, groups)),
+                   int(!same_bytes(old.sorted_prims, now.sorted_prims())), int(!same_bytes(old.leaf_groups, groups)),
                    int(old.cost_at_build != now.cost_at_build()));
       for (size_t i = 0; i < std::min(old.nodes.size(), now.nodes().size()); ++i)
         if (std::memcmp(&old.nodes[i], &now.nodes()[i], sizeof(BvhNode)) != 0) {
@@ -133,13 +135,13 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
   row.library = summarize(t_new);
   row.kept = summarize(t_kept);
   // The library's phases, each alone (its inputs made untimed).
-  std::vector<Box> element;
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> order;
+  HostVector<Box> element;
+  HostVector<uint64_t> keys;
+  HostVector<int32_t> order;
   Box centres{};
   row.boxes = measure(warmup, repeats, [&] { centres = element_boxes(boxes, n, element); });
   row.sort = measure(warmup, repeats, [&] { sort_by_morton(element, centres, keys, order); });
-  std::vector<BvhNode> nodes;
+  HostVector<BvhNode> nodes;
   std::vector<BoxGroup> groups(size_t(box_group_count(n)));
   row.hierarchy = measure(warmup, repeats, [&] {
     build_nodes(keys.data(), n, kLeafSize, GivenBoxes{element.data()}, order.data(), nodes, groups.data());
@@ -151,13 +153,13 @@ bool study(const std::string& scene, const char* tree_name, Boxes boxes, int32_t
     volatile double c = tree.area_cost();
     (void)c;
   });
-  auto same_as_library = [&](const std::vector<BvhNode>& built) {
+  auto same_as_library = [&](const auto& built) {
     return same_bytes(built, tree.nodes()) &&
            std::memcmp(groups.data(), tree.leaf_groups(), groups.size() * sizeof(BoxGroup)) == 0;
   };
   // The hierarchy as the library built it before (and the CUDA build still does): every Karras
   // node, the scan, the records, then the refit.
-  std::vector<BvhNode> karras;
+  HostVector<BvhNode> karras;
   test::build_nodes_karras(keys.data(), n, element.data(), order.data(), kLeafSize, karras, groups.data());
   row.karras_same = same_as_library(karras);
   row.karras = measure(warmup, repeats, [&] {

@@ -38,7 +38,7 @@ inline int32_t index_kept_nodes(const std::vector<KarrasNode>& karras, int32_t l
 // build (cpu/tree.h's build_nodes, top-down through the kept nodes only) must give the same
 // records byte for byte: test_bvh checks it, minkq_build_study times the two side by side.
 inline void build_nodes_karras(const uint64_t* keys, int32_t n, const Box* element, const int32_t* order,
-                               int32_t leaf_size, std::vector<BvhNode>& nodes, BoxGroup* leaf_groups) {
+                               int32_t leaf_size, HostVector<BvhNode>& nodes, BoxGroup* leaf_groups) {
   std::vector<KarrasNode> karras(size_t(n - 1));
   parallel_for_each(n - 1, [&](int64_t i) { karras[size_t(i)] = karras_node(int32_t(i), keys, n); });
   std::vector<int32_t> new_index;
@@ -47,7 +47,7 @@ inline void build_nodes_karras(const uint64_t* keys, int32_t n, const Box* eleme
     if (keeps_node(int32_t(i), karras[size_t(i)], leaf_size))
       collapse_node(int32_t(i), karras.data(), new_index.data(), leaf_size, nodes.data());
   });
-  std::vector<int32_t> arrivals(nodes.size(), 0);
+  HostVector<int32_t> arrivals(nodes.size(), 0);
   refit_slots(GivenBoxes{element}, nodes, order, leaf_groups, arrivals);
 }
 

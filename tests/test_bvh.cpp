@@ -176,10 +176,10 @@ TEST(Bvh, top_down_build_gives_the_records_of_the_cuda_build_steps) {
   test::Random rng(test::fresh_seed());
   auto check = [](const std::vector<Box>& boxes, int32_t leaf_size, const char* what) {
     const int32_t n = int32_t(boxes.size());
-    std::vector<int32_t> order;
+    HostVector<int32_t> order;
     SortScratch sort;
     sort_by_morton(GivenBoxes{boxes.data()}, n, order, sort);
-    std::vector<BvhNode> top_down, karras;
+    HostVector<BvhNode> top_down, karras;
     std::vector<BoxGroup> top_down_groups(size_t(box_group_count(n))), karras_groups(top_down_groups.size());
     build_nodes(sort.keys.data(), n, leaf_size, GivenBoxes{boxes.data()}, order.data(), top_down,
                 top_down_groups.data());
@@ -255,8 +255,8 @@ TEST(Bvh, radix_sort_of_pairs_is_a_stable_sort_by_key) {
   for (const int64_t n : {0, 1, 2, 3, 100, 5000, 70001}) {
     for (const int bits : {1, 8, 13, 63, 64}) {
       for (const int distinct : {1, 7, 1 << 20}) {
-        std::vector<uint64_t> keys(static_cast<size_t>(n));
-        std::vector<int32_t> values(static_cast<size_t>(n));
+        HostVector<uint64_t> keys(static_cast<size_t>(n));
+        HostVector<int32_t> values(static_cast<size_t>(n));
         const uint64_t mask = bits == 64 ? ~0ull : (1ull << bits) - 1;
         const uint64_t high = (uint64_t(rng.integer(0, INT32_MAX)) << 33) & mask;  // a shared high part
         for (int64_t i = 0; i < n; ++i) {

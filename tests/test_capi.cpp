@@ -255,6 +255,61 @@ TEST_F(Fixture, failed_refit_keeps_the_previous_positions) {
   EXPECT_EQ(scene.query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE, 0.1f), before);
 }
 
+// The backends scan large inputs in parallel blocks: the vertex named is still the first bad
+// one, whichever block finds one first, for creation, blocking and stream-ordered refits, in
+// float and double and through a stride.
+TEST(CapiLarge, non_finite_coordinates_of_many_vertices_name_the_first) {
+  test::Device device;
+  const reference::Mesh mesh = reference::twisted_sheet(300, 1.0);
+  const int64_t n = int64_t(mesh.vertex_count());
+  ASSERT_GT(n, 80000);
+  for (const bool float64 : {false, true}) {
+    for (const size_t stride_floats : {size_t(3), size_t(5)}) {
+      SCOPED_TRACE(std::string(float64 ? "float64" : "float32") + ", stride " + std::to_string(stride_floats));
+      std::vector<double> xyz(size_t(n) * stride_floats, 0.0);
+      for (int64_t v = 0; v < n; ++v)
+        for (int k = 0; k < 3; ++k) xyz[size_t(v) * stride_floats + size_t(k)] = mesh.xyz[size_t(3 * v + k)];
+      std::vector<float> xyz_f(xyz.begin(), xyz.end());
+      auto buffer = [&]() {
+        minkq_buffer b{};
+        b.data = float64 ? static_cast<void*>(xyz.data()) : static_cast<void*>(xyz_f.data());
+        b.byte_stride = stride_floats * (float64 ? sizeof(double) : sizeof(float));
+        b.count = size_t(n);
+        b.memory = MINKQ_MEMORY_HOST;
+        return b;
+      };
+      auto spoil = [&](int64_t v, int k, double value) {
+        xyz[size_t(v) * stride_floats + size_t(k)] = value;
+        xyz_f[size_t(v) * stride_floats + size_t(k)] = float(value);
+      };
+      minkq_scene_desc d{};
+      d.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | (float64 ? uint32_t(MINKQ_SCENE_FLOAT64) : 0u);
+      d.vertices = buffer();
+      d.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
+      minkq_scene* raw = nullptr;
+      ASSERT_EQ(minkq_scene_create(device.get(), &d, &raw), MINKQ_SUCCESS) << message();
+      const cxx::Scene scene(raw);
+      ASSERT_EQ(minkq_scene_reserve(raw, MINKQ_RESERVE_REFIT, 0), MINKQ_SUCCESS) << message();
+      spoil(n - 1, 2, std::numeric_limits<double>::quiet_NaN());
+      spoil(70001, 0, std::numeric_limits<double>::infinity());
+      spoil(40000, 1, std::numeric_limits<double>::quiet_NaN());
+      spoil(40001, 1, -std::numeric_limits<double>::infinity());
+      EXPECT_EQ(minkq_scene_refit(raw, buffer()), MINKQ_ERROR_NON_FINITE);
+      EXPECT_NE(message().find("vertex 40000 "), std::string::npos) << message();
+      EXPECT_EQ(minkq_scene_rebuild(raw, buffer()), MINKQ_ERROR_NON_FINITE);
+      EXPECT_NE(message().find("vertex 40000 "), std::string::npos) << message();
+      ASSERT_EQ(minkq_scene_refit_async(raw, buffer(), nullptr), MINKQ_SUCCESS) << message();
+      EXPECT_EQ(minkq_scene_async_status(raw, nullptr), MINKQ_ERROR_NON_FINITE);
+      EXPECT_NE(message().find("vertex 40000 "), std::string::npos) << message();
+      d.vertices = buffer();
+      minkq_scene* bad = nullptr;
+      EXPECT_EQ(minkq_scene_create(device.get(), &d, &bad), MINKQ_ERROR_NON_FINITE);
+      EXPECT_EQ(bad, nullptr);
+      EXPECT_NE(message().find("vertex 40000 "), std::string::npos) << message();
+    }
+  }
+}
+
 TEST_F(Fixture, failed_rebuild_keeps_the_previous_positions_and_growth_checks_its_arguments) {
   test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const test::Pairs before = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);

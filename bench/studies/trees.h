@@ -24,10 +24,10 @@ inline MortonFrame morton_frame_per_axis(const Box& centre_bounds) {
 // CpuTree::build with the per-axis frame in place of cubic cells.
 template <class Boxes>
 void build_per_axis(CpuTree& tree, Boxes boxes, int32_t n) {
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> order;
+  HostVector<uint64_t> keys;
+  HostVector<int32_t> order;
   if (n > 1) {
-    std::vector<Box> element;
+    HostVector<Box> element;
     const MortonFrame frame = morton_frame_per_axis(element_boxes(boxes, n, element));
     sort_by_key(n, [&](int32_t i) { return morton_code(frame, box_centre(element[size_t(i)])); }, keys, order);
   }

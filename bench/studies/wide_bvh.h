@@ -41,7 +41,7 @@ class WideTree {
     source_.clear();
     n_ = binary.size();
     if (n_ < 2) return;  // the studies use scenes with at least two primitives
-    const std::vector<BvhNode>& b = binary.nodes();
+    const auto& b = binary.nodes();
     struct Slot {
       int32_t slot;  // binary (node << 1) | side
       int32_t child;
@@ -101,7 +101,7 @@ class WideTree {
   // stored decoded: the tests and counts are those of such a layout, the time is not (no
   // decoding here, and the records keep their float size).
   void fill(const CpuTree& binary, bool quantized = false) {
-    const std::vector<BvhNode>& b = binary.nodes();
+    const auto& b = binary.nodes();
     quantized_ = quantized;
     for (size_t i = 0; i < nodes_.size(); ++i) {
       Box boxes[W];

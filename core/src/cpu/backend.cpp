@@ -18,7 +18,7 @@ namespace {
 
 // gather_float64_host in parallel: the records rounded into `out`, rho reduced (max is exact,
 // so the result does not depend on the split).
-float gather_float64(const Strided& values, std::vector<Vec3>& out) {
+float gather_float64(const Strided& values, HostVector<Vec3>& out) {
   out.resize(size_t(values.count));
   return tbb::parallel_reduce(
       tbb::blocked_range<int64_t>(0, values.count, 1024), 0.0f,
@@ -30,12 +30,29 @@ float gather_float64(const Strided& values, std::vector<Vec3>& out) {
       [](float a, float b) { return std::max(a, b); });
 }
 
+// first_non_finite_host in parallel: each block of records scanned in order up to its first bad
+// one, the lowest of those kept (a block past a bad one already found is skipped).
+int64_t first_non_finite(const Strided& values, int floats) {
+  const auto lowest = [](int64_t a, int64_t b) { return a < 0 ? b : b < 0 ? a : std::min(a, b); };
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int64_t>(0, values.count, 4096), int64_t(-1),
+      [&](const tbb::blocked_range<int64_t>& range, int64_t found) {
+        if (found >= 0 && found < range.begin()) return found;
+        Strided part = values;
+        part.data = static_cast<const char*>(values.data) + size_t(range.begin()) * values.stride;
+        part.count = int64_t(range.size());
+        const int64_t bad = first_non_finite_host(part, floats);
+        return bad < 0 ? found : lowest(found, range.begin() + bad);
+      },
+      lowest);
+}
+
 // store.h's executor on the host: every call completes before it returns.
 class CpuExecutor {
  public:
   struct Device {};
   template <class T>
-  using Array = std::vector<T>;
+  using Array = HostVector<T>;
   using Tree = CpuTree;
 
   explicit CpuExecutor(Device) {}
@@ -48,25 +65,30 @@ class CpuExecutor {
   void hold_for_teardown() noexcept {}
   void finish() {}
 
+  // Into dst's own memory (no allocation once it has the size), in parallel.
   template <class T>
-  void gather(const Strided& values, std::vector<T>& dst) {
-    dst = gather_host<T>(values);
+  void gather(const Strided& values, HostVector<T>& dst) {
+    dst.resize(size_t(values.count));
+    const char* base = static_cast<const char*>(values.data);
+    parallel_for_each(values.count, [&](int64_t i) {
+      std::memcpy(&dst[size_t(i)], base + size_t(i) * values.stride, sizeof(T));
+    });
   }
-  void gather_float64(const Strided& values, std::vector<Vec3>& dst, std::vector<float>& rho, bool accumulate) {
+  void gather_float64(const Strided& values, HostVector<Vec3>& dst, HostVector<float>& rho, bool accumulate) {
     const float moved = minkq::gather_float64(values, dst);
     rho.resize(1, 0.0f);
     rho[0] = accumulate ? std::max(rho[0], moved) : moved;
   }
   template <class T>
-  void upload(std::vector<T>& dst, std::vector<T>&& host) {
-    dst = std::move(host);
+  void upload(HostVector<T>& dst, std::vector<T>&& host) {
+    dst.assign(host.begin(), host.end());
   }
   template <class T>
-  void download(T* host_out, const std::vector<T>& src, size_t count) {
+  void download(T* host_out, const HostVector<T>& src, size_t count) {
     if (count) std::memcpy(host_out, src.data(), count * sizeof(T));
   }
   template <class Boxes>
-  void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids) {
+  void sort_by_morton(Boxes boxes, int32_t n, HostVector<int32_t>& ids) {
     SortScratch local;
     minkq::sort_by_morton(boxes, n, ids, sort_reserved_ ? sort_ : local);
   }
@@ -86,7 +108,7 @@ class CpuExecutor {
   // Asynchronous calls need nothing reserved (host vectors grow as they need, and the check
   // before the copy needs no staging); a rebuild reservation keeps the builds' and the vertex
   // sort's scratch, so that rebuilds of the scene allocate nothing.
-  void reserve_staging(std::vector<Vec3>&, int32_t) {}
+  void reserve_staging(HostVector<Vec3>&, int32_t) {}
   void reserve_pending() {}
   void reserve_canonical(size_t) {}
   template <class Boxes>
@@ -98,17 +120,17 @@ class CpuExecutor {
     sort_.reserve(n);
     sort_reserved_ = true;
   }
-  void commit_finite(const Strided& values, std::vector<Vec3>&, std::vector<Vec3>& dst, float* rho,
+  void commit_finite(const Strided& values, HostVector<Vec3>&, HostVector<Vec3>& dst, float* rho,
                      PendingError::Call call) {
-    if (const int64_t bad = first_non_finite_host(values, 3); bad >= 0) {
+    if (const int64_t bad = minkq::first_non_finite(values, 3); bad >= 0) {
       if (pending_.call == PendingError::kNone) pending_ = {call, bad};
       return;
     }
     if (values.scalar == Scalar::kFloat64) *rho = minkq::gather_float64(values, dst); else gather(values, dst);
   }
-  void commit_finite_swept(const Strided& x0, const Strided& x1, std::vector<Vec3>&, std::vector<Vec3>&,
-                           std::vector<Vec3>& dst0, std::vector<Vec3>& dst1, float* rho, PendingError::Call call) {
-    const int64_t bad0 = first_non_finite_host(x0, 3), bad1 = first_non_finite_host(x1, 3);
+  void commit_finite_swept(const Strided& x0, const Strided& x1, HostVector<Vec3>&, HostVector<Vec3>&,
+                           HostVector<Vec3>& dst0, HostVector<Vec3>& dst1, float* rho, PendingError::Call call) {
+    const int64_t bad0 = minkq::first_non_finite(x0, 3), bad1 = minkq::first_non_finite(x1, 3);
     if (bad0 >= 0 || bad1 >= 0) {
       if (pending_.call == PendingError::kNone) pending_ = {call, bad0 >= 0 && (bad1 < 0 || bad0 < bad1) ? bad0 : bad1};
       dst1 = dst0;  // at rest where it was
@@ -135,7 +157,9 @@ class CpuBackend final : public Backend {
     return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads)";
   }
   bool is_cuda() const override { return false; }
-  int64_t first_non_finite(const Strided& values, int floats) override { return first_non_finite_host(values, floats); }
+  int64_t first_non_finite(const Strided& values, int floats) override {
+    return minkq::first_non_finite(values, floats);
+  }
   void copy_to_host(void* dst, const void* src, size_t bytes, Memory) override {
     if (bytes) std::memcpy(dst, src, bytes);
   }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <utility>
+#include <vector>
 
 namespace minkq {
 namespace {
@@ -60,11 +61,11 @@ bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_
 // One parallel pass on the top digit splits the pairs into buckets that fit a core's cache,
 // then each bucket runs its LSD passes over the lower bits alone (sort_range): one pass over
 // memory instead of one per digit. Stable throughout, so the order is a stable sort's.
-void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values, int bits, RadixScratch& scratch) {
+void radix_sort_pairs(HostVector<uint64_t>& keys, HostVector<int32_t>& values, int bits, RadixScratch& scratch) {
   const int64_t n = int64_t(keys.size());
   if (n < 2) return;
-  std::vector<uint64_t>& other_keys = scratch.keys;
-  std::vector<int32_t>& other_values = scratch.values;
+  HostVector<uint64_t>& other_keys = scratch.keys;
+  HostVector<int32_t>& other_values = scratch.values;
   other_keys.resize(size_t(n));
   other_values.resize(size_t(n));
   const int top = std::max(0, bits - kDigitBits);  // the top digit: bits [top, bits)
@@ -79,7 +80,7 @@ void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values,
   const int64_t threads = std::max(1, tbb::this_task_arena::max_concurrency());
   const int64_t blocks = std::clamp<int64_t>(n / kMinBlock, 1, 4 * threads);
   const int64_t block = (n + blocks - 1) / blocks;
-  std::vector<uint32_t>& offsets = scratch.offsets;
+  HostVector<uint32_t>& offsets = scratch.offsets;
   offsets.resize(size_t(blocks * kBuckets));
   tbb::parallel_for(int64_t(0), blocks, [&](int64_t b) {
     uint32_t* count = offsets.data() + b * kBuckets;

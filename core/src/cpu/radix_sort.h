@@ -8,15 +8,16 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <vector>
+
+#include "cpu/runtime.h"
 
 namespace minkq {
 
 // The sort's second buffers and per-block digit counts, kept by a caller that sorts again.
 struct RadixScratch {
-  std::vector<uint64_t> keys;
-  std::vector<int32_t> values;
-  std::vector<uint32_t> offsets;
+  HostVector<uint64_t> keys;
+  HostVector<int32_t> values;
+  HostVector<uint32_t> offsets;
   size_t bytes() const {
     return keys.capacity() * sizeof(uint64_t) + values.capacity() * sizeof(int32_t) +
            offsets.capacity() * sizeof(uint32_t);
@@ -26,8 +27,8 @@ struct RadixScratch {
 // Sorts keys ascending by their low `bits` bits (1 to 64; higher bits must be zero), moving
 // values along; equal keys keep their order. Digits that every key shares are skipped. The
 // vectors may come back swapped with the scratch's (same sizes).
-void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values, int bits, RadixScratch& scratch);
-inline void radix_sort_pairs(std::vector<uint64_t>& keys, std::vector<int32_t>& values, int bits) {
+void radix_sort_pairs(HostVector<uint64_t>& keys, HostVector<int32_t>& values, int bits, RadixScratch& scratch);
+inline void radix_sort_pairs(HostVector<uint64_t>& keys, HostVector<int32_t>& values, int bits) {
   RadixScratch scratch;
   radix_sort_pairs(keys, values, bits, scratch);
 }

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <utility>
-#include <vector>
 
 #include "cpu/radix_sort.h"
 #include "cpu/runtime.h"
@@ -21,7 +20,7 @@ namespace minkq {
 // Every element's box once: out[i] = boxes(i), returning the bounds of their centres (min and
 // max are exact: any order gives them). The build reads the boxes from `out` from then on.
 template <class Boxes>
-Box element_boxes(Boxes boxes, int32_t n, std::vector<Box>& out) {
+Box element_boxes(Boxes boxes, int32_t n, HostVector<Box>& out) {
   out.resize(size_t(n));
   return tbb::parallel_reduce(
       tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),
@@ -39,7 +38,7 @@ Box element_boxes(Boxes boxes, int32_t n, std::vector<Box>& out) {
 // Ids 0..n-1 sorted by key_of(id), ties broken by id (a stable radix sort, as CUB's of the
 // CUDA backend), with the sorted keys.
 template <class KeyOf>
-void sort_by_key(int32_t n, const KeyOf& key_of, std::vector<uint64_t>& keys, std::vector<int32_t>& ids) {
+void sort_by_key(int32_t n, const KeyOf& key_of, HostVector<uint64_t>& keys, HostVector<int32_t>& ids) {
   keys.resize(size_t(n));
   ids.resize(size_t(n));
   parallel_for_each(n, [&](int64_t i) {
@@ -51,8 +50,8 @@ void sort_by_key(int32_t n, const KeyOf& key_of, std::vector<uint64_t>& keys, st
 
 // Ids 0..n-1 sorted by the Morton code of the centres of boxes[0..n-1] (ties by id), with the
 // keys; centres: the bounds of those centres (element_boxes gives both).
-inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, std::vector<uint64_t>& keys,
-                           std::vector<int32_t>& ids, RadixScratch& scratch) {
+inline void sort_by_morton(const HostVector<Box>& boxes, const Box& centres, HostVector<uint64_t>& keys,
+                           HostVector<int32_t>& ids, RadixScratch& scratch) {
   const int32_t n = int32_t(boxes.size());
   const MortonFrame frame = morton_frame(centres);
   keys.resize(size_t(n));
@@ -63,8 +62,8 @@ inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, st
   });
   radix_sort_pairs(keys, ids, 63, scratch);  // Morton codes use the low 63 bits
 }
-inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, std::vector<uint64_t>& keys,
-                           std::vector<int32_t>& ids) {
+inline void sort_by_morton(const HostVector<Box>& boxes, const Box& centres, HostVector<uint64_t>& keys,
+                           HostVector<int32_t>& ids) {
   RadixScratch scratch;
   sort_by_morton(boxes, centres, keys, ids, scratch);
 }
@@ -72,8 +71,8 @@ inline void sort_by_morton(const std::vector<Box>& boxes, const Box& centres, st
 // What a Morton sort of n elements needs besides its output, about 44 B per element: each
 // element's box (evaluated once), the keys, the radix sort's second buffers.
 struct SortScratch {
-  std::vector<Box> element;
-  std::vector<uint64_t> keys;
+  HostVector<Box> element;
+  HostVector<uint64_t> keys;
   RadixScratch radix;
   void reserve(int32_t n) {
     const size_t count = size_t(std::max(n, 0));
@@ -87,7 +86,7 @@ struct SortScratch {
 // Ids 0..n-1 in the Morton order of boxes(0..n-1)'s centres (ties by id), each box evaluated
 // once into s.element and the sorted keys left in s.keys.
 template <class Boxes>
-void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids, SortScratch& s) {
+void sort_by_morton(Boxes boxes, int32_t n, HostVector<int32_t>& ids, SortScratch& s) {
   const Box centres = element_boxes(boxes, n, s.element);
   sort_by_morton(s.element, centres, s.keys, ids, s.radix);
 }
@@ -98,7 +97,7 @@ void sort_by_morton(Boxes boxes, int32_t n, std::vector<int32_t>& ids, SortScrat
 // so that rebuilds of the same size allocate nothing; otherwise each build makes and frees its own.
 struct BuildScratch {
   SortScratch sort;
-  std::vector<int32_t> order;
+  HostVector<int32_t> order;
   void reserve(int32_t n) {
     sort.reserve(n);
     order.reserve(size_t(std::max(n, 0)));
@@ -183,7 +182,7 @@ struct TopDownBuild {
 // (box_group_count(n) of them): TopDownBuild's two passes, its per-node records in `info`.
 template <class Boxes>
 void build_nodes(const uint64_t* keys, int32_t n, int32_t leaf_size, Boxes boxes, const int32_t* sorted_prims,
-                 std::vector<BvhNode>& nodes, BoxGroup* leaf_groups, std::vector<uint64_t>& info) {
+                 HostVector<BvhNode>& nodes, BoxGroup* leaf_groups, HostVector<uint64_t>& info) {
   info.resize(size_t(n - 1));
   TopDownBuild<Boxes> build{keys, n, leaf_size, boxes, sorted_prims, info.data(), nullptr, leaf_groups};
   nodes.resize(size_t(build.count(0, 0, n - 1)));
@@ -192,16 +191,16 @@ void build_nodes(const uint64_t* keys, int32_t n, int32_t leaf_size, Boxes boxes
 }
 template <class Boxes>
 void build_nodes(const uint64_t* keys, int32_t n, int32_t leaf_size, Boxes boxes, const int32_t* sorted_prims,
-                 std::vector<BvhNode>& nodes, BoxGroup* leaf_groups) {
-  std::vector<uint64_t> info;
+                 HostVector<BvhNode>& nodes, BoxGroup* leaf_groups) {
+  HostVector<uint64_t> info;
   build_nodes(keys, n, leaf_size, boxes, sorted_prims, nodes, leaf_groups, info);
 }
 
 // tree.h's bottom-up refit from every child slot of `nodes` in parallel (the arrival counters,
 // one per node, zeroed first): the leaf groups and every node's child boxes from boxes().
-template <class Boxes>
-void refit_slots(Boxes boxes, std::vector<BvhNode>& nodes, const int32_t* sorted_prims, BoxGroup* leaf_groups,
-                 std::vector<int32_t>& arrivals) {
+// Nodes, Arrivals: vectors of BvhNode and int32_t (the studies' trees keep std::vectors).
+template <class Boxes, class Nodes, class Arrivals>
+void refit_slots(Boxes boxes, Nodes& nodes, const int32_t* sorted_prims, BoxGroup* leaf_groups, Arrivals& arrivals) {
   std::fill(arrivals.begin(), arrivals.end(), 0);
   parallel_for_each(int64_t(nodes.size()) * 2, [&](int64_t slot) {
     refit_from_slot(int32_t(slot), boxes, sorted_prims, leaf_groups, nodes.data(), arrivals.data());
@@ -210,9 +209,9 @@ void refit_slots(Boxes boxes, std::vector<BvhNode>& nodes, const int32_t* sorted
 
 class CpuTree {
  public:
-  const std::vector<BvhNode>& nodes() const { return nodes_; }
+  const HostVector<BvhNode>& nodes() const { return nodes_; }
   // Primitive at each sorted leaf position.
-  const std::vector<int32_t>& sorted_prims() const { return sorted_prims_; }
+  const HostVector<int32_t>& sorted_prims() const { return sorted_prims_; }
 
   // Builds the tree over boxes(0..n-1): each box evaluated once, the primitives sorted by
   // the Morton codes of the box centres, then the kept nodes with their boxes (build_nodes).
@@ -228,7 +227,7 @@ class CpuTree {
   // position p and keys[p] its 63-bit key, ascending (ties in position order); for n <= 1
   // both may be empty. build() is this with Morton codes.
   template <class Boxes>
-  void build_sorted(Boxes boxes, const std::vector<uint64_t>& keys, std::vector<int32_t> sorted_prims, int32_t n,
+  void build_sorted(Boxes boxes, const HostVector<uint64_t>& keys, HostVector<int32_t> sorted_prims, int32_t n,
                     const BuildConfig& config = {}) {
     BuildScratch local;
     BuildScratch& s = reserved_ ? scratch_ : local;
@@ -270,7 +269,7 @@ class CpuTree {
  private:
   // build_sorted() over the primitives' boxes in s.sort.element (element i: primitive i's), with
   // sorted_prims taken as the leaf order (its vector swapped with the tree's last one).
-  void build_over(const std::vector<uint64_t>& keys, std::vector<int32_t>& sorted_prims, BuildScratch& s,
+  void build_over(const HostVector<uint64_t>& keys, HostVector<int32_t>& sorted_prims, BuildScratch& s,
                   const BuildConfig& config) {
     const int32_t n = int32_t(s.sort.element.size());
     n_ = n;
@@ -291,10 +290,10 @@ class CpuTree {
 
   int32_t n_ = 0;
   double cost_at_build_ = 0.0;
-  std::vector<BvhNode> nodes_;
-  std::vector<int32_t> arrivals_;
-  std::vector<int32_t> sorted_prims_;
-  std::vector<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
+  HostVector<BvhNode> nodes_;
+  HostVector<int32_t> arrivals_;
+  HostVector<int32_t> sorted_prims_;
+  HostVector<BoxGroup> leaf_groups_;  // box of the primitive at sorted position p: lane p % 4 of group p / 4
   bool reserved_ = false;
   BuildScratch scratch_;  // kept once reserved
 };
