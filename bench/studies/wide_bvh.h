@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "cpu/tree.h"
+#include "minkq/queries.h"  // run_query_wide: QueryTarget, LeafFilter
 #include "minkq/traversal.h"
 #include "studies/box_tests.h"
 
