@@ -3,7 +3,7 @@
 // the work counters (the same on every backend) and CPU time (median of repeats, all
 // threads). Variants:
 //   VT   queries in vertex id order         vs  in vertex Morton order (kept)
-//   leaf ranges of 1 (the binary tree), 2, 4, 8 or 16 (kept) primitives: VT sphere, EE box
+//   leaf ranges of 1 (the binary tree), 2, 4, 8, 16, 32 (kept) or 64 primitives: VT sphere, EE box
 //        and EE capsule_exact on each
 //   EE   every edge queries the whole tree  vs  each pair met once: a query reaches only the
 //        and keeps f > e (each pair met        leaves after its own (kept; queries in leaf

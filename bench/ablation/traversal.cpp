@@ -31,7 +31,7 @@ std::string compare_ee(const SceneFrames& sc, const Vec3* v, const Edge* e, floa
          row(sc.name, "EE", mode, "once, queries in edge id order", d, ne, a);
 }
 
-// Trees with leaf ranges of up to 1 (the binary tree: before), 2, 4, 8 and 16 primitives
+// Trees with leaf ranges of up to 1 (the binary tree: before), 2, 4, 8, 16, 32 and 64 primitives
 // (the library's kLeafSize marked kept): VT sphere, EE box and EE capsule_exact on each; the
 // pairs must not change.
 std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Triangle* t, const Edge* e, float r,
@@ -43,7 +43,7 @@ std::string compare_leaf_sizes(const SceneFrames& sc, const Vec3* v, const Trian
   sort_by_morton(PointBoxes{v}, nv, order, scratch);
   std::string out;
   Outcome base[3];
-  for (int32_t leaf : {1, 2, 4, 8, 16}) {
+  for (int32_t leaf : {1, 2, 4, 8, 16, 32, 64}) {
     CpuTree triangles, edges;
     triangles.build(TriangleBoxes{v, t}, nt, BuildConfig{leaf});
     edges.build(EdgeBoxes{v, e}, ne, BuildConfig{leaf});

@@ -106,7 +106,7 @@ struct BuildScratch {
 };
 
 // The tree over n >= 2 sorted keys, top-down from the root through the kept nodes only (those
-// over more than leaf_size leaves; about one Karras node in ten at the default size): each
+// over more than leaf_size leaves; about one Karras node in twenty at the default size): each
 // range comes from its parent, so a node costs one split search (split_position) instead of
 // karras_node()'s three, and the nodes below the kept ones are never computed. The records
 // equal those of the CUDA build (every Karras node, a scan of the kept ones, collapse_node, the
