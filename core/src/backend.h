@@ -188,12 +188,17 @@ std::unique_ptr<Backend> make_cuda_backend(int ordinal);
 int cuda_device_count();  // 0 where built without CUDA or no device/driver
 bool built_with_cuda();
 
-// `values` (host memory) packed into a vector of records of type T (float records: Vec3, Box).
+// Record i of host `values` into `out` (float records: Vec3, Box).
+template <class T>
+void gather_record(const Strided& values, int64_t i, T& out) {
+  std::memcpy(&out, static_cast<const char*>(values.data) + size_t(i) * values.stride, sizeof(T));
+}
+
+// `values` (host memory) packed into a vector of records of type T.
 template <class T>
 std::vector<T> gather_host(const Strided& values) {
   std::vector<T> out(static_cast<size_t>(values.count));
-  const char* base = static_cast<const char*>(values.data);
-  for (int64_t i = 0; i < values.count; ++i) std::memcpy(&out[size_t(i)], base + size_t(i) * values.stride, sizeof(T));
+  for (int64_t i = 0; i < values.count; ++i) gather_record(values, i, out[size_t(i)]);
   return out;
 }
 

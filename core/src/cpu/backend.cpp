@@ -69,10 +69,7 @@ class CpuExecutor {
   template <class T>
   void gather(const Strided& values, HostVector<T>& dst) {
     dst.resize(size_t(values.count));
-    const char* base = static_cast<const char*>(values.data);
-    parallel_for_each(values.count, [&](int64_t i) {
-      std::memcpy(&dst[size_t(i)], base + size_t(i) * values.stride, sizeof(T));
-    });
+    parallel_for_each(values.count, [&](int64_t i) { gather_record(values, i, dst[size_t(i)]); });
   }
   void gather_float64(const Strided& values, HostVector<Vec3>& dst, HostVector<float>& rho, bool accumulate) {
     const float moved = minkq::gather_float64(values, dst);
