@@ -154,9 +154,10 @@ struct Report {
 
 // Bytes of trees and scene data of a CPU VT+EE scene from the library's layouts: vertices
 // (12 B), triangles (12 B) and edges (8 B) in the store (the only copy: the C API keeps none),
-// and the vertices' query order (4 B); per tree what CpuTree::bytes() counts (node records of
-// 64 B plus a 4 B refit counter, and per primitive a sorted-order id and a leaf box, 4 + 24 B)
-// on the library's own trees, built here.
+// the edges again in the edge tree's leaf order (EdgeGroup: 32 B per four) and the vertices'
+// query order (4 B); per tree what CpuTree::bytes() counts (node records of 64 B plus a 4 B
+// refit counter, and per primitive a sorted-order id and a leaf box, 4 + 24 B) on the
+// library's own trees, built here.
 double layout_bytes(const SceneFrames& sc) {
   const auto* v = reinterpret_cast<const minkq::Vec3*>(sc.mesh.xyz.data());
   const auto* t = reinterpret_cast<const minkq::Triangle*>(sc.mesh.tris.data());
@@ -166,7 +167,8 @@ double layout_bytes(const SceneFrames& sc) {
   minkq::CpuTree triangles, edges;
   triangles.build(minkq::TriangleBoxes{v, t}, int32_t(nt));
   edges.build(minkq::EdgeBoxes{v, e}, int32_t(ne));
-  return 16.0 * double(nv) + 12.0 * double(nt) + 8.0 * double(ne) + double(triangles.bytes() + edges.bytes());
+  const double leaf_edges = double(sizeof(minkq::EdgeGroup)) * double(minkq::box_group_count(ne));
+  return 16.0 * double(nv) + 12.0 * double(nt) + 8.0 * double(ne) + leaf_edges + double(triangles.bytes() + edges.bytes());
 }
 
 // The narrow phase a simulator runs on every candidate, at its cheapest: the double-precision
@@ -682,9 +684,10 @@ std::string memory_table(const Report& rep, const Options& opt, const std::strin
   o << header("Memory per triangle (VT + EE scene)", machine, opt, rep.scenes.empty() ? 0 : rep.scenes.front().load_start);
   o << "Layout bytes from the library's structures (CPU backend; the CUDA backend keeps the same arrays in device "
        "memory): vertices 12 B plus a 4 B query-order entry, triangles 12 B, edges 8 B (the store's copy is the only "
-       "one); per tree its node records (64 B and a 4 B refit counter each; leaf ranges of up to 16 primitives leave "
-       "about n / 10 nodes for n primitives) and per primitive a sorted-order id and its box in leaf order (4 + 24 "
-       "B). Output buffers excluded. "
+       "one) and 8 B more in the edge tree's leaf order (the EE and EV incidence filters read them four at a time); "
+       "per tree its node records (64 B and a 4 B refit counter each, one per internal node above leaf ranges of up "
+       "to 32 primitives) and per primitive a sorted-order id and its box in leaf order (4 + 24 B). Output buffers "
+       "excluded. "
        "RSS delta: resident memory before and after minkq_scene_create (malloc_trim first; includes allocator slack, "
        "excludes pages freed after the build).\n\n";
   o << "| suite | scene | vertices | triangles | edges | layout B/triangle | RSS delta B/triangle | target |\n|---|---|---|---|---|---|---|---|\n";

@@ -304,12 +304,14 @@ TEST(Bvh, leaf_scan_four_at_a_time_matches_the_test_box_by_box) {
       for (int32_t last = first; last < n; ++last)
         for (int32_t after = first - 2; after <= last; ++after) {
           std::vector<int32_t> got, want;
-          auto on_leaf = [&](int32_t prim, const Box& box) {
-            got.push_back(prim);
-            EXPECT_TRUE(same_box(box, boxes[size_t(prim - 100)]));
+          auto on_hits = [&](int64_t base, unsigned hits, const BoxGroup& group) {
+            EXPECT_EQ(base % 4, 0);
+            EXPECT_EQ(&group, &groups[size_t(base / 4)]);
+            for (int k = 0; k < 4; ++k)
+              if (hits >> k & 1u) got.push_back(prims[size_t(base + k)]);
           };
           WorkCounts work;
-          scan_leaves(groups.data(), prims.data(), shape, first, last, after, on_leaf, work);
+          scan_leaves(groups.data(), shape, first, last, after, on_hits, work);
           for (int32_t p = std::max(first, after + 1); p <= last; ++p)
             if (shape.overlaps(boxes[size_t(p)])) want.push_back(100 + p);
           ASSERT_EQ(got, want) << "range " << first << ".." << last << " after " << after;

@@ -17,9 +17,16 @@ struct WithLeafTest {
   WithLeafTest(Queries source, LeafTest test) : candidates(source), leaf_test(test) { candidates.filters &= ~kLeafExact; }
   QueryTarget target(int32_t i) const { return candidates.target(i); }
   QueryGeometry geometry(int32_t q) const { return candidates.geometry(q); }
+  unsigned dropped_lanes(int32_t q, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+    return candidates.dropped_lanes(q, base, hits, sorted_prims);
+  }
   template <class Shape>
-  bool accept(int32_t q, int32_t prim, const Box&) const {
-    return candidates.template accept<Shape>(q, prim) && leaf_test(q, prim);
+  bool tests_rest() const {
+    return true;
+  }
+  template <class Shape>
+  bool accept_rest(int32_t q, int32_t prim) const {
+    return candidates.template accept_rest<Shape>(q, prim) && leaf_test(q, prim);
   }
   Pair pair(int32_t q, int32_t prim) const { return candidates.pair(q, prim); }
 };

@@ -82,14 +82,14 @@ void run_group(const BvhView& bvh, const Queries& queries, int32_t begin, int32_
     }
     const QueryTarget target = queries.target(i);
     const Shape shape = Shape::from(queries.geometry(target.q));
-    LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, target.q, emit, work};
+    LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, bvh.sorted_prims, target.q, emit, work};
     for (int k = 0; k < count; ++k) {
       const RangeEntry& e = ranges[k];
       if (!e.own) {
         work.test_node();
         if (!shape.may_overlap(e.box)) continue;
       }
-      visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, e.first, e.last, target.after, e.box, on_leaf, work);
+      visit_leaf_range(bvh.leaf_groups, shape, e.first, e.last, target.after, e.box, on_leaf, work);
     }
   }
 }

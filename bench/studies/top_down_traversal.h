@@ -2,18 +2,18 @@
 // self-query from the leaf at sorted position `after` descends from the root like any query,
 // testing both children of each node on the path to its own leaf (tests that always pass,
 // since those nodes hold the query's own box) and skipping left children that end at or
-// before `after`. Same pairs, met in the same order, as traversal.h's traverse().
+// before `after`. Same pairs, met in the same order, as traversal.h's traverse_groups().
 #pragma once
 
 #include "minkq/traversal.h"
 
 namespace minkq::bench {
 
-template <class Shape, class OnLeaf, class Work>
-void top_down_traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
+template <class Shape, class OnHits, class Work>
+void top_down_traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnHits& on_leaf, Work& work) {
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
-    visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, first, last, after, range_box, on_leaf, work);
+    visit_leaf_range(bvh.leaf_groups, shape, first, last, after, range_box, on_leaf, work);
   };
   int32_t stack[kTraversalStack];
   int sp = 0;
@@ -51,7 +51,7 @@ template <class Shape, class Queries, class Emit, class Work>
 void run_query_top_down(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target.q));
-  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, target.q, emit, work};
+  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, bvh.sorted_prims, target.q, emit, work};
   top_down_traverse(bvh, shape, target.after, on_leaf, work);
 }
 

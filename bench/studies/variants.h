@@ -11,12 +11,18 @@ namespace minkq::bench {
 
 // The EE source before issue 8: query i is edge i over the whole tree; pairs with f <= e are
 // dropped at the leaf, so each unordered pair is reached twice and kept once.
+// (The whole filter pair by pair: accept_rest, nothing dropped four at a time.)
 struct EdgeEdgeTwice {
   EdgeEdgeQueries base;
   QueryTarget target(int32_t i) const { return {i, -1}; }
   QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
+  unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
-  bool accept(int32_t e, int32_t f, const Box&) const {
+  bool tests_rest() const {
+    return true;
+  }
+  template <class Shape>
+  bool accept_rest(int32_t e, int32_t f) const {
     if (f <= e) return false;
     const Edge a = base.edges[e], b = base.edges[f];
     if ((base.filters & kDropIncident) && share_vertex(a, b)) return false;
@@ -34,8 +40,13 @@ struct EdgeEdgeOnceByIdOrder {
   const int32_t* position;  // sorted leaf position of each edge
   QueryTarget target(int32_t i) const { return {i, position[i]}; }
   QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
+  unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
-  bool accept(int32_t e, int32_t f, const Box& f_box) const { return base.accept<Shape>(e, f, f_box); }
+  bool tests_rest() const {
+    return true;
+  }
+  template <class Shape>
+  bool accept_rest(int32_t e, int32_t f) const { return base.accept<Shape>(e, f); }
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
 };
 

@@ -160,7 +160,7 @@ inline unsigned box_test_lanes(const WideNode<W>& node, const Shape& shape) {
   return bits;
 }
 
-// traverse() of traversal.h over wide nodes; kLanes: the child boxes tested 4 at a time, else the
+// traverse_groups() of traversal.h over wide nodes; kLanes: the child boxes tested 4 at a time, else the
 // shape's may_overlap child by child. Leaf ranges are visited as the library does (traversal.h).
 // Work counts: nodes_visited = wide records read, node_tests = non-empty child boxes past
 // `after` (tested) plus leaf boxes scanned.
@@ -170,8 +170,8 @@ void traverse_wide(const WideTree<W>& tree, const Shape& shape, int32_t after, O
   const WideNode<W>* nodes = tree.nodes().data();
   auto visit_range = [&](int32_t first, int32_t last, const Box& range_box) {
     if (tree.quantized())  // a child box holds its primitive's only grown: test the exact one
-      return scan_leaves(tree.leaf_groups(), tree.sorted_prims(), shape, first, last, after, on_leaf, work);
-    visit_leaf_range(tree.leaf_groups(), tree.sorted_prims(), shape, first, last, after, range_box, on_leaf, work);
+      return scan_leaves(tree.leaf_groups(), shape, first, last, after, on_leaf, work);
+    visit_leaf_range(tree.leaf_groups(), shape, first, last, after, range_box, on_leaf, work);
   };
   int32_t stack[kTraversalStack * W];  // each level pushes at most W - 1 siblings
   int sp = 0;
@@ -215,7 +215,7 @@ template <int W, bool kLanes, class Shape, class Queries, class Emit, class Work
 void run_query_wide(const WideTree<W>& tree, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target.q));
-  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, target.q, emit, work};
+  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, tree.sorted_prims(), target.q, emit, work};
   traverse_wide<W, kLanes>(tree, shape, target.after, on_leaf, work);
 }
 

@@ -21,6 +21,9 @@
 //   download(T* host, Array<T>, n) copies n records to the host.
 //   sort_by_morton(boxes, n, Array<int32_t>& ids)
 //                                  ids 0..n-1 in the Morton order of the boxes' centres.
+//   fill_edge_groups(edges, sorted_edges, n, Array<EdgeGroup>& out)
+//                                  the n edges in the edge tree's leaf order (queries.h's
+//                                  EdgeGroup, fill_edge_group), sized for them.
 //   run_passes<Work>(works, passes...)
 //                                  runs the QueryPasses of one call (one parallel loop, or one
 //                                  kernel launch) and returns each pass's exact pair count,
@@ -291,7 +294,7 @@ class MeshStoreOn final : public MeshStore {
       case QueryKind::kEdgeEdge: return with_ee_pass(request, out, fn);
       case QueryKind::kVertexEdge: {
         const VertexEdgeQueries queries{vertices_.data(), edges_.data(), vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1()};
+                                        request.filters, rho(), vertices1(), leaf_edges_.data()};
         return with_vertex_pass(request, edge_tree_.view(), queries, out, fn);
       }
       case QueryKind::kVertexVertex: {
@@ -324,7 +327,7 @@ class MeshStoreOn final : public MeshStore {
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const BvhView edge_tree = edge_tree_.view();
     const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree.sorted_prims, request.r, request.filters,
-                                  rho(), vertices1()};
+                                  rho(), vertices1(), leaf_edges_.data()};
     with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
   }
 
@@ -352,7 +355,10 @@ class MeshStoreOn final : public MeshStore {
   void build_trees() {
     if (has_triangle_tree_) triangle_tree_.build(triangle_boxes(), num_triangles_);
     if (keeps_vertex_order_) x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
-    if (has_edge_tree_) edge_tree_.build(edge_boxes(), num_edges_);
+    if (has_edge_tree_) {
+      edge_tree_.build(edge_boxes(), num_edges_);
+      x_.fill_edge_groups(edges_.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
+    }
     if (has_vertex_tree_) vertex_tree_.build(vertex_boxes(), num_vertices_);
   }
   TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data(), vertices1()}; }
@@ -363,6 +369,7 @@ class MeshStoreOn final : public MeshStore {
   Array<Vec3> vertices_;
   Array<Triangle> triangles_;  // only with a triangle tree
   Array<Edge> edges_;
+  Array<EdgeGroup> leaf_edges_;  // with an edge tree: its edges in leaf order (EE and EV filters)
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT and EV query order
   Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
   Array<Vec3> staging1_;  // asynchronous swept steps: the end positions, checked likewise

@@ -90,6 +90,15 @@ MINKQ_HD int lowest_bit(unsigned mask) {
 #endif
 }
 
+// Number of set bits of a lane mask.
+MINKQ_HD int popcount(unsigned mask) {
+#if defined(__CUDA_ARCH__)
+  return __popc(mask);
+#else
+  return __builtin_popcount(mask);
+#endif
+}
+
 // Union and overlap are exact in float (min, max and comparisons do not round), so node
 // bounds built from exact primitive boxes need no outward rounding.
 MINKQ_HD Box box_union(Box a, Box b) { return {vmin(a.lo, b.lo), vmax(a.hi, b.hi)}; }

@@ -3,6 +3,8 @@
 // and to the one traversal; backends call it per query and supply only emit(first, second).
 #pragma once
 
+#include <type_traits>
+
 #include "minkq/float64.h"
 #include "minkq/traversal.h"
 #include "minkq/shapes.h"
@@ -22,6 +24,39 @@ MINKQ_HD bool has_vertex(const Triangle& t, int32_t v) { return t.v[0] == v || t
 MINKQ_HD bool has_vertex(const Edge& e, int32_t v) { return e.v[0] == v || e.v[1] == v; }
 MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
   return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
+}
+
+// The edges at four consecutive leaf positions of the edge tree, by lane as a BoxGroup holds
+// their boxes: the incidence filters of EE and EV read them in leaf order, four at a time on
+// the host, instead of each edge's record by id. Lanes past the last edge hold -1 (no vertex).
+struct EdgeGroup {
+  int32_t v[2][4];
+};
+static_assert(sizeof(EdgeGroup) == 32, "a group holds four edges and nothing else");
+// Group g of the edge tree whose leaf order is sorted_edges (n edges).
+MINKQ_HD void fill_edge_group(int64_t g, const Edge* edges, const int32_t* sorted_edges, int32_t n, EdgeGroup& out) {
+  for (int k = 0; k < 4; ++k) {
+    const int64_t p = 4 * g + k;
+    const Edge e = p < n ? edges[sorted_edges[p]] : Edge{{-1, -1}};
+    out.v[0][k] = e.v[0];
+    out.v[1][k] = e.v[1];
+  }
+}
+// The lanes of `lanes` whose edge has vertex a or vertex b (a vertex's own edges: a == b):
+// share_vertex and has_vertex, lane by lane.
+MINKQ_HD unsigned incident_lanes(const EdgeGroup& g, int32_t a, int32_t b, unsigned lanes) {
+#if defined(__CUDACC__)
+  unsigned bits = 0;
+  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
+    const int k = lowest_bit(rest);
+    const int32_t u = g.v[0][k], w = g.v[1][k];
+    bits |= unsigned(u == a || u == b || w == a || w == b) << k;
+  }
+  return bits;
+#else
+  const simd4::M4 u = simd4::load(g.v[0]), w = simd4::load(g.v[1]);
+  return lanes & simd4::mask_bits((u == a) | (u == b) | (w == a) | (w == b));
+#endif
 }
 
 // Filter bits of a query (capi/query.cpp sets them from the C flags one by one).
@@ -101,21 +136,40 @@ struct VertexPrimQueries {
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
+  const EdgeGroup* leaf_edges = nullptr;  // EV: the edge tree's edges in leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t v) const {
     return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
   }
-  // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box.
-  template <class Shape>
-  MINKQ_HD bool accept(int32_t v, int32_t t, const Box& /*t_box*/) const {
-    return accept<Shape>(v, t);
-  }
+  // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box: not
+  // incident (where dropped), then accept_rest.
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
-    const Prim prim = prims[t];
-    if ((filters & kDropIncident) && has_vertex(prim, v)) return false;
-    if (filters & kLeafExact) return point_within(vertices, vertices[v], prim, radius());
+    if ((filters & kDropIncident) && has_vertex(prims[t], v)) return false;
+    return accept_rest<Shape>(v, t);
+  }
+  // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops.
+  MINKQ_HD unsigned dropped_lanes(int32_t v, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+    if (!(filters & kDropIncident)) return 0;
+    if constexpr (std::is_same<Prim, Edge>::value)
+      if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], v, v, hits);
+    unsigned bits = 0;
+    for (unsigned rest = hits; rest != 0; rest &= rest - 1u) {
+      const int k = lowest_bit(rest);
+      bits |= unsigned(has_vertex(prims[sorted_prims[base + k]], v)) << k;
+    }
+    return bits;
+  }
+  // What the filter tests after incidence, and whether it tests anything (else every lane the
+  // incidence filter leaves is a candidate).
+  template <class Shape>
+  MINKQ_HD bool tests_rest() const {
+    return (filters & kLeafExact) != 0;
+  }
+  template <class Shape>
+  MINKQ_HD bool accept_rest(int32_t v, int32_t t) const {
+    if (filters & kLeafExact) return point_within(vertices, vertices[v], prims[t], radius());
     return true;
   }
   MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
@@ -136,6 +190,7 @@ struct EdgeEdgeQueries {
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
+  const EdgeGroup* leaf_edges = nullptr;  // the edges in the tree's leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
   // Static: the edge as a segment. Swept: the edge's swept box, as the box from its low to its
@@ -148,20 +203,38 @@ struct EdgeEdgeQueries {
     return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], radius()};
   }
   MINKQ_HD EdgeBoxes boxes() const { return {vertices, edges, vertices1}; }
-  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box.
-  template <class Shape>
-  MINKQ_HD bool accept(int32_t e, int32_t f, const Box& /*f_box*/) const {
-    return accept<Shape>(e, f);
-  }
+  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box: not
+  // sharing a vertex (where dropped), then accept_rest.
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
-    const Edge a = edges[e], b = edges[f];
-    if ((filters & kDropIncident) && share_vertex(a, b)) return false;
-    // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
-    // finer test against e's box (nothing for the box mode).
+    if ((filters & kDropIncident) && share_vertex(edges[e], edges[f])) return false;
+    return accept_rest<Shape>(e, f);
+  }
+  // The lanes of `hits` (group `base` of the edge tree's leaf order) that the incidence filter
+  // drops: four at a time from leaf_edges, else edge by edge.
+  MINKQ_HD unsigned dropped_lanes(int32_t e, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+    if (!(filters & kDropIncident)) return 0;
+    const Edge a = edges[e];
+    if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], a.v[0], a.v[1], hits);
+    unsigned bits = 0;
+    for (unsigned rest = hits; rest != 0; rest &= rest - 1u) {
+      const int k = lowest_bit(rest);
+      bits |= unsigned(share_vertex(a, edges[sorted_prims[base + k]])) << k;
+    }
+    return bits;
+  }
+  // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
+  // finer test against e's box (nothing for the box mode), then the leaf-exact test.
+  template <class Shape>
+  MINKQ_HD bool tests_rest() const {
+    return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
+  }
+  template <class Shape>
+  MINKQ_HD bool accept_rest(int32_t e, int32_t f) const {
     if (!Shape::from(geometry(f)).finer(boxes()(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
+    const Edge a = edges[e], b = edges[f];
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
   }
@@ -186,11 +259,16 @@ struct VertexVertexQueries {
     return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
   }
   template <class Shape>
-  MINKQ_HD bool accept(int32_t v, int32_t w, const Box& /*w_box*/) const {
-    return accept<Shape>(v, w);
+  MINKQ_HD bool accept(int32_t v, int32_t w) const {
+    return accept_rest<Shape>(v, w);
+  }
+  MINKQ_HD unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
+  template <class Shape>
+  MINKQ_HD bool tests_rest() const {
+    return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
   template <class Shape>
-  MINKQ_HD bool accept(int32_t v, int32_t w) const {
+  MINKQ_HD bool accept_rest(int32_t v, int32_t w) const {
     if (!Shape::from(geometry(w)).finer(PointBoxes{vertices, vertices1}(v))) return false;
     if (!(filters & kLeafExact)) return true;
     const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
@@ -208,24 +286,59 @@ struct UserQueries {
   MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
   template <class Shape>
-  MINKQ_HD bool accept(int32_t, int32_t, const Box& = Box{}) const { return true; }
+  MINKQ_HD bool accept(int32_t, int32_t) const { return true; }
+  MINKQ_HD unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
+  template <class Shape>
+  MINKQ_HD bool tests_rest() const {
+    return false;
+  }
+  template <class Shape>
+  MINKQ_HD bool accept_rest(int32_t, int32_t) const { return true; }
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
 
-// The leaf filter of query element q: each primitive the traversal reaches is counted, kept
-// or dropped by the source's accept, and emitted as the source's pair.
+// Whether an emitter only counts pairs (a static kCountsOnly member and add(n)): the leaf
+// filter then adds a group's candidates at once instead of emitting them one by one.
+template <class Emit>
+MINKQ_HD constexpr auto counts_only(int) -> decltype(bool(Emit::kCountsOnly)) {
+  return Emit::kCountsOnly;
+}
+template <class Emit>
+MINKQ_HD constexpr bool counts_only(long) {
+  return false;
+}
+
+// The leaf filter of query element q, a leaf group's hits at a time (positions base + k for the
+// bits k of hits, each a primitive whose box the shape overlaps): each is counted, the incidence
+// filter drops lanes (dropped_lanes: four at once where the source can), the source's other
+// tests (accept_rest) keep or drop the rest one by one where it has any, and each kept one is
+// emitted as the source's pair. accept(q, prim) is the same verdict for one pair.
 template <class Shape, class Queries, class Emit, class Work>
 struct LeafFilter {
   const Queries& queries;
+  const int32_t* sorted_prims;
   int32_t q;
   Emit& emit;
   Work& work;
-  MINKQ_HD void operator()(int32_t prim, const Box& prim_box) const {
-    work.test_primitive();
-    if (!queries.template accept<Shape>(q, prim, prim_box)) return;
-    work.emit_candidate();
-    const Pair pair = queries.pair(q, prim);
-    emit(pair.first, pair.second);
+  MINKQ_HD void operator()(int64_t base, unsigned hits, const BoxGroup& /*group*/) const {
+    work.test_primitives(unsigned(popcount(hits)));
+    hits &= ~queries.dropped_lanes(q, base, hits, sorted_prims);
+    const bool rest = queries.template tests_rest<Shape>();
+    if constexpr (counts_only<Emit>(0)) {
+      if (!rest) {
+        work.emit_candidates(unsigned(popcount(hits)));
+        emit.add(unsigned(popcount(hits)));
+        return;
+      }
+    }
+    for (; hits != 0; hits &= hits - 1u) {
+      const int k = lowest_bit(hits);
+      const int32_t prim = sorted_prims[base + k];
+      if (rest && !queries.template accept_rest<Shape>(q, prim)) continue;
+      work.emit_candidate();
+      const Pair pair = queries.pair(q, prim);
+      emit(pair.first, pair.second);
+    }
   }
 };
 
@@ -234,8 +347,8 @@ template <class Shape, class Queries, class Emit, class Work>
 MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target.q));
-  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, target.q, emit, work};
-  traverse(bvh, shape, target.after, on_leaf, work);
+  LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target.q, emit, work};
+  traverse_groups(bvh, shape, target.after, on_hits, work);
 }
 
 }  // namespace minkq

@@ -66,8 +66,17 @@ inline F4 load(const float* p) {
   return v;
 }
 inline F4 splat(float x) { return F4{x, x, x, x}; }
+inline M4 load(const int32_t* p) {
+  M4 v;
+  memcpy(&v, p, 16);
+  return v;
+}
 inline unsigned mask_bits(M4 m) {
+#if defined(__SSE__)
+  return unsigned(__builtin_ia32_movmskps((F4)m));  // one instruction: each lane's sign bit
+#else
   return unsigned(m[0] & 1) | unsigned(m[1] & 1) << 1 | unsigned(m[2] & 1) << 2 | unsigned(m[3] & 1) << 3;
+#endif
 }
 inline F4 min_num(F4 a, F4 b) { return ((a < b) | (b != b)) ? a : b; }
 inline F4 max_num(F4 a, F4 b) { return ((a > b) | (b != b)) ? a : b; }
@@ -115,6 +124,21 @@ struct BoxShape {
 #endif
   }
 };
+
+// Whether Shape is the box mode, whose finer test is no test: a filter that would apply it the
+// other way round (EE, VV) has nothing to do.
+template <class Shape>
+struct IsBoxShape {
+  static constexpr bool value = false;
+};
+template <>
+struct IsBoxShape<BoxShape> {
+  static constexpr bool value = true;
+};
+template <class Shape>
+MINKQ_HD constexpr bool is_box_shape() {
+  return IsBoxShape<Shape>::value;
+}
 
 // What a finer mode's shape (Shape) derives from its two tests: box_test(), its BoxShape, and
 // finer(b) with, on the host, finer_group(g, lanes), the same on the lanes asked for. On the

@@ -1,6 +1,7 @@
 // The traversal, written once for every query shape and both backends: a query walks the
 // tree (tree.h) top-down with a small stack, tests child boxes with the shape's box test and
-// scans leaf ranges four boxes at a time with the shape's leaf test (shapes.h states the
+// scans leaf ranges four boxes at a time with the shape's leaf test, handing each group's hits
+// to the leaf filter at once (shapes.h states the
 // contract a shape fulfils); a self-query walks only the half after its own leaf. Work is
 // counted when asked for and compiled out when not.
 #pragma once
@@ -20,8 +21,10 @@ struct WorkCounts {
   uint64_t candidates = 0;       // pairs emitted
   MINKQ_HD void visit_node() { ++nodes_visited; }
   MINKQ_HD void test_node() { ++node_tests; }
-  MINKQ_HD void test_primitive() { ++primitive_tests; }
+  MINKQ_HD void test_nodes(unsigned n) { node_tests += n; }
+  MINKQ_HD void test_primitives(unsigned n) { primitive_tests += n; }
   MINKQ_HD void emit_candidate() { ++candidates; }
+  MINKQ_HD void emit_candidates(unsigned n) { candidates += n; }
   MINKQ_HD void add(const WorkCounts& o) {
     nodes_visited += o.nodes_visited;
     node_tests += o.node_tests;
@@ -32,39 +35,38 @@ struct WorkCounts {
 struct NoWork {
   MINKQ_HD void visit_node() {}
   MINKQ_HD void test_node() {}
-  MINKQ_HD void test_primitive() {}
+  MINKQ_HD void test_nodes(unsigned) {}
+  MINKQ_HD void test_primitives(unsigned) {}
   MINKQ_HD void emit_candidate() {}
+  MINKQ_HD void emit_candidates(unsigned) {}
 };
 
-// Leaf positions max(first, after + 1)..last, a group of four at a time: on_leaf(prim, box) for
-// each whose box passes overlaps (four at once: overlaps_group).
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape, int32_t first,
-                          int32_t last, int32_t after, OnLeaf& on_leaf, Work& work) {
+// Leaf positions max(first, after + 1)..last, a group of four at a time: on_hits(base, hits,
+// group) for each group whose boxes pass overlaps in some lane (four at once: overlaps_group),
+// hits holding bit k for position base + k.
+template <class Shape, class OnHits, class Work>
+MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const Shape& shape, int32_t first, int32_t last, int32_t after,
+                          OnHits& on_hits, Work& work) {
   for (int64_t p = first > after ? first : after + 1; p <= last; p = (p | 3) + 1) {
     const int64_t base = p & ~int64_t(3);
     const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
     const BoxGroup& group = leaf_groups[base >> 2];
-    unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
-    for (int k = from; k <= to; ++k) work.test_node();
-    for (; hits != 0; hits &= hits - 1u) {
-      const int k = lowest_bit(hits);
-      on_leaf(sorted_prims[base + k], group_box(group, k));
-    }
+    const unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
+    work.test_nodes(unsigned(to - from + 1));
+    if (hits != 0) on_hits(base, hits, group);
   }
 }
 
 // A leaf range whose box passed may_overlap. One leaf: its box is the range's and passed the
 // box test; only the finer one is left.
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const int32_t* sorted_prims, const Shape& shape,
-                               int32_t first, int32_t last, int32_t after, const Box& range_box, OnLeaf& on_leaf,
-                               Work& work) {
+template <class Shape, class OnHits, class Work>
+MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const Shape& shape, int32_t first, int32_t last,
+                               int32_t after, const Box& range_box, OnHits& on_hits, Work& work) {
   if (first == last) {
-    if (shape.finer(range_box)) on_leaf(sorted_prims[first], range_box);
+    if (shape.finer(range_box)) on_hits(int64_t(first) & ~int64_t(3), 1u << (first & 3), leaf_groups[first >> 2]);
     return;
   }
-  scan_leaves(leaf_groups, sorted_prims, shape, first, last, after, on_leaf, work);
+  scan_leaves(leaf_groups, shape, first, last, after, on_hits, work);
 }
 
 // The one walk of the tree, for every query shape and both backends: on_range(first, last,
@@ -122,16 +124,29 @@ MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRang
   }
 }
 
-// The traversal: on_leaf(prim, box) is called for every primitive at a sorted position after
-// `after` whose box the shape overlaps (the contract at the top of shapes.h makes that exact:
-// may_overlap accepts every ancestor box of such a box), a self-query thus meeting each pair
-// once.
-template <class Shape, class OnLeaf, class Work>
-MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
+// The traversal: on_hits(base, hits, group) is called for the leaf groups holding primitives at
+// sorted positions after `after` whose box the shape overlaps (the contract at the top of
+// shapes.h makes that exact: may_overlap accepts every ancestor box of such a box), bit k of
+// hits for position base + k; a self-query thus meets each pair once. The leaf filter
+// (queries.h) takes a group's hits at once.
+template <class Shape, class OnHits, class Work>
+MINKQ_HD void traverse_groups(const BvhView& bvh, const Shape& shape, int32_t after, OnHits& on_hits, Work& work) {
   auto on_range = [&](int32_t first, int32_t last, const Box& range_box, bool) {
-    visit_leaf_range(bvh.leaf_groups, bvh.sorted_prims, shape, first, last, after, range_box, on_leaf, work);
+    visit_leaf_range(bvh.leaf_groups, shape, first, last, after, range_box, on_hits, work);
   };
   walk(bvh, shape, after, on_range, work);
+}
+
+// The same, primitive by primitive: on_leaf(prim, box) for each, in the order met.
+template <class Shape, class OnLeaf, class Work>
+MINKQ_HD void traverse(const BvhView& bvh, const Shape& shape, int32_t after, OnLeaf& on_leaf, Work& work) {
+  auto on_hits = [&](int64_t base, unsigned hits, const BoxGroup& group) {
+    for (; hits != 0; hits &= hits - 1u) {
+      const int k = lowest_bit(hits);
+      on_leaf(bvh.sorted_prims[base + k], group_box(group, k));
+    }
+  };
+  traverse_groups(bvh, shape, after, on_hits, work);
 }
 
 }  // namespace minkq

@@ -89,6 +89,10 @@ class CpuExecutor {
     SortScratch local;
     minkq::sort_by_morton(boxes, n, ids, sort_reserved_ ? sort_ : local);
   }
+  void fill_edge_groups(const Edge* edges, const int32_t* sorted_edges, int32_t n, HostVector<EdgeGroup>& out) {
+    out.resize(size_t(box_group_count(n)));
+    parallel_for_each(box_group_count(n), [&](int64_t g) { fill_edge_group(g, edges, sorted_edges, n, out[size_t(g)]); });
+  }
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                    const Pass&... passes) {

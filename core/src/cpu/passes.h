@@ -26,11 +26,19 @@ struct BlockOut {
   uint64_t counted = 0;
 };
 
+// A count-only query's emitter: the leaf filter adds a group's candidates at once (queries.h).
+struct CountPairs {
+  static constexpr bool kCountsOnly = true;
+  uint64_t& counted;
+  void operator()(int32_t, int32_t) { ++counted; }
+  void add(unsigned n) { counted += n; }
+};
+
 template <class Work, class Pass>
 void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
   const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
   if (pass.out.capacity == 0) {
-    auto count = [&part](int32_t, int32_t) { ++part.counted; };
+    CountPairs count{part.counted};
     for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, count, work);
     return;
   }

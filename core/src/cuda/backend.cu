@@ -19,6 +19,13 @@ namespace {
 
 using namespace cuda;
 
+// Group g of the edge tree's edges in leaf order (queries.h).
+static __global__ void fill_edge_groups_kernel(const Edge* edges, const int32_t* sorted_edges, int32_t n,
+                                               EdgeGroup* out) {
+  const int64_t g = global_index();
+  if (g < box_group_count(n)) fill_edge_group(g, edges, sorted_edges, n, out[g]);
+}
+
 // The scope of one call: its device, then its stream (runtime.cuh's call stream).
 class CallScope {
  public:
@@ -70,6 +77,12 @@ class CudaExecutor {
   void sort_by_morton(Boxes boxes, int32_t n, DeviceBuffer<int32_t>& ids) {
     SortScratch local;
     cuda::sort_by_morton(boxes, n, sort_reserved_ ? sort_ : local, ids);
+  }
+  // Sized at the scene's first build (an asynchronous rebuild only fills it).
+  void fill_edge_groups(const Edge* edges, const int32_t* sorted_edges, int32_t n, DeviceBuffer<EdgeGroup>& out) {
+    out.ensure(size_t(box_group_count(n)));
+    launch("fill_edge_groups_kernel launch", fill_edge_groups_kernel, box_group_count(n), kThreads, edges, sorted_edges, n,
+           out.data());
   }
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
