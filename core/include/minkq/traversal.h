@@ -1,9 +1,9 @@
 // The traversal, written once for every query shape and both backends: a query walks the
 // tree (tree.h) top-down with a small stack, tests child boxes with the shape's box test and
-// scans leaf ranges four boxes at a time with the shape's leaf test, handing each group's hits
-// to the leaf filter at once (shapes.h states the
-// contract a shape fulfils); a self-query walks only the half after its own leaf. Work is
-// counted when asked for and compiled out when not.
+// scans leaf ranges four boxes at a time with the shape's leaf test (shapes.h states the
+// contract a shape fulfils), handing each group's hits to the leaf filter at once; a
+// self-query walks only the half after its own leaf. Work is counted when asked for and
+// compiled out when not.
 #pragma once
 
 #include "minkq/tree.h"
