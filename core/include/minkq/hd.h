@@ -98,6 +98,17 @@ MINKQ_HD int popcount(unsigned mask) {
   return __builtin_popcount(mask);
 #endif
 }
+// The lanes of `lanes` for which pred(k) holds, tested lane by lane (the scalar form of a
+// lane-mask test: CUDA code, and the host where a test has no four-lane form).
+template <class Pred>
+MINKQ_HD unsigned lanes_where(unsigned lanes, Pred pred) {
+  unsigned bits = 0;
+  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
+    const int k = lowest_bit(rest);
+    bits |= unsigned(bool(pred(k))) << k;
+  }
+  return bits;
+}
 
 // Union and overlap are exact in float (min, max and comparisons do not round), so node
 // bounds built from exact primitive boxes need no outward rounding.

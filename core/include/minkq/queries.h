@@ -46,13 +46,10 @@ MINKQ_HD void fill_edge_group(int64_t g, const Edge* edges, const int32_t* sorte
 // share_vertex and has_vertex, lane by lane.
 MINKQ_HD unsigned incident_lanes(const EdgeGroup& g, int32_t a, int32_t b, unsigned lanes) {
 #if defined(__CUDACC__)
-  unsigned bits = 0;
-  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
-    const int k = lowest_bit(rest);
+  return lanes_where(lanes, [&](int k) {
     const int32_t u = g.v[0][k], w = g.v[1][k];
-    bits |= unsigned(u == a || u == b || w == a || w == b) << k;
-  }
-  return bits;
+    return u == a || u == b || w == a || w == b;
+  });
 #else
   const simd4::M4 u = simd4::load(g.v[0]), w = simd4::load(g.v[1]);
   return lanes & simd4::mask_bits((u == a) | (u == b) | (w == a) | (w == b));
@@ -154,12 +151,7 @@ struct VertexPrimQueries {
     if (!(filters & kDropIncident)) return 0;
     if constexpr (std::is_same<Prim, Edge>::value)
       if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], v, v, hits);
-    unsigned bits = 0;
-    for (unsigned rest = hits; rest != 0; rest &= rest - 1u) {
-      const int k = lowest_bit(rest);
-      bits |= unsigned(has_vertex(prims[sorted_prims[base + k]], v)) << k;
-    }
-    return bits;
+    return lanes_where(hits, [&](int k) { return has_vertex(prims[sorted_prims[base + k]], v); });
   }
   // What the filter tests after incidence, and whether it tests anything (else every lane the
   // incidence filter leaves is a candidate).
@@ -216,12 +208,7 @@ struct EdgeEdgeQueries {
     if (!(filters & kDropIncident)) return 0;
     const Edge a = edges[e];
     if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], a.v[0], a.v[1], hits);
-    unsigned bits = 0;
-    for (unsigned rest = hits; rest != 0; rest &= rest - 1u) {
-      const int k = lowest_bit(rest);
-      bits |= unsigned(share_vertex(a, edges[sorted_prims[base + k]])) << k;
-    }
-    return bits;
+    return lanes_where(hits, [&](int k) { return share_vertex(a, edges[sorted_prims[base + k]]); });
   }
   // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
   // finer test against e's box (nothing for the box mode), then the leaf-exact test.

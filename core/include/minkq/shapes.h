@@ -44,12 +44,7 @@ struct QueryGeometry {
 // reads only the boxes it tests).
 template <class Shape>
 MINKQ_HD unsigned overlaps_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
-  unsigned bits = 0;
-  for (unsigned rest = lanes; rest != 0; rest &= rest - 1u) {
-    const int k = lowest_bit(rest);
-    bits |= unsigned(shape.overlaps(group_box(g, k))) << k;
-  }
-  return bits;
+  return lanes_where(lanes, [&](int k) { return shape.overlaps(group_box(g, k)); });
 }
 
 #if !defined(__CUDACC__)
@@ -259,12 +254,9 @@ struct CapsuleExactShape : BoxThenFiner<CapsuleExactShape> {
   // The ray test on four lanes, then the segment-box distance lane by lane (it branches).
   unsigned finer_group(const BoxGroup& g, unsigned lanes) const {
     if (point) return sphere_finer_group(ray.p0, threshold2, g, lanes);
-    unsigned bits = ray.finer_group(g, lanes);
-    for (unsigned rest = bits; rest != 0; rest &= rest - 1u) {
-      const int k = lowest_bit(rest);
-      if (!(segment_box_distance2(ray.p0, p1, group_box(g, k)) <= threshold2)) bits &= ~(1u << k);
-    }
-    return bits;
+    return lanes_where(ray.finer_group(g, lanes), [&](int k) {
+      return segment_box_distance2(ray.p0, p1, group_box(g, k)) <= threshold2;
+    });
   }
 #endif
 };
