@@ -249,19 +249,22 @@ TEST(Bvh, a_tree_that_keeps_its_scratch_rebuilds_as_a_fresh_one) {
 
 // The build's radix sort equals a stable sort by key, for any size (one block or many), key
 // width, and share of ties (equal keys keep their order: the CUDA sort's index tie-break), and
-// when whole digits are shared by every key (those passes are skipped).
+// when whole digits are shared by every key (those passes are skipped). distinct -1: keys in a
+// few clusters of shared top bits with distinct low bits, so that the runs of shared top bits
+// the one-thread sort finishes are long (past the insertion sort's) as well as short.
 TEST(Bvh, radix_sort_of_pairs_is_a_stable_sort_by_key) {
   test::Random rng(test::fresh_seed());
-  for (const int64_t n : {0, 1, 2, 3, 100, 5000, 70001}) {
+  for (const int64_t n : {0, 1, 2, 3, 100, 5000, 16383, 70001}) {
     for (const int bits : {1, 8, 13, 63, 64}) {
-      for (const int distinct : {1, 7, 1 << 20}) {
+      for (const int distinct : {1, 7, 1 << 20, -1}) {
         HostVector<uint64_t> keys(static_cast<size_t>(n));
         HostVector<int32_t> values(static_cast<size_t>(n));
         const uint64_t mask = bits == 64 ? ~0ull : (1ull << bits) - 1;
         const uint64_t high = (uint64_t(rng.integer(0, INT32_MAX)) << 33) & mask;  // a shared high part
         for (int64_t i = 0; i < n; ++i) {
-          const uint64_t low = uint64_t(rng.integer(0, distinct - 1)) * 0x9e3779b97f4a7c15ull;
-          keys[size_t(i)] = (distinct == 7 ? high | (low >> 61) : low) & mask;
+          const uint64_t low = uint64_t(rng.integer(0, distinct == -1 ? INT32_MAX : distinct - 1)) * 0x9e3779b97f4a7c15ull;
+          const uint64_t cluster = uint64_t(rng.integer(0, 63)) << (bits > 16 ? bits - 16 : 0);
+          keys[size_t(i)] = (distinct == 7 ? high | (low >> 61) : distinct == -1 ? cluster | (low >> 40) : low) & mask;
           values[size_t(i)] = int32_t(i);
         }
         std::vector<std::pair<uint64_t, int32_t>> expected(static_cast<size_t>(n));

@@ -1,5 +1,6 @@
 // The CPU build's key sort: a parallel radix sort of (key, value) pairs (one pass on the top
-// digit, then LSD passes within each bucket), the host counterpart of the CUDA build's
+// digit, then each bucket by its next digits and its runs of shared top bits by the rest; fewer
+// pairs on one thread the same way), the host counterpart of the CUDA build's
 // cub::DeviceRadixSort::SortPairs. Stable, so values that start
 // as 0..n-1 break ties by index exactly as CUB's sort does, and the result does not depend on
 // the thread count. Hand-written because no Debian or PyPI library offers a parallel host radix
