@@ -26,7 +26,8 @@ uint32_t digit_at(uint64_t key, int shift) { return uint32_t(key >> shift) & (kB
 bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_t n, int lo, int hi) {
   constexpr int kMaxDigits = (64 + kDigitBits - 1) / kDigitBits;
   const int digits = (hi - lo + kDigitBits - 1) / kDigitBits;
-  uint32_t count[kMaxDigits][kBuckets] = {};
+  uint32_t count[kMaxDigits][kBuckets];
+  std::fill(&count[0][0], &count[0][0] + digits * kBuckets, 0u);  // only the digits sorted
   const uint64_t below_hi = hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1;
   // Digit d of bits [lo, hi).
   auto digit = [&](uint64_t key, int d) { return digit_at(key & below_hi, lo + d * kDigitBits); };
@@ -57,7 +58,7 @@ bool sort_range(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_
 }
 
 // Runs of keys sharing their top bits no longer than this are finished by insertion sort,
-// longer ones by LSD passes (sort_range).
+// longer ones by sort_range_msd over their low bits.
 constexpr int64_t kInsertionRun = 32;
 // The one-thread sort's top digits tell apart at least this many cells per key.
 constexpr int64_t kCellsPerKey = 16;
@@ -76,10 +77,12 @@ void insertion_sort(uint64_t* k, int32_t* v, int64_t n) {
 // Bits [0, hi) of one range sorted on one thread, like sort_range, but most significant digits
 // first: LSD passes over the top digits alone, as many as make at least kCellsPerKey cells per
 // key, then each run of keys that share those top bits by its low bits: insertion sort for a
-// short run, sort_range for a long one. Morton codes of points on a surface or a curve leave
-// short runs then, so a few scatters and one nearly free pass replace a scatter per digit (the
-// build study's real meshes: one top digit fewer leaves long runs, one more costs a scatter).
-// Returns whether the range ended in b.
+// short run, the same way again for a long one (its top digits then sized by its own length,
+// so clustered keys cost a few passes per level, not one per digit). Morton codes of points on
+// a surface or a curve leave short runs, so a few scatters and one nearly free pass replace a
+// scatter per digit (the build study's real meshes: one top digit fewer leaves long runs, one
+// more costs a scatter). Each level sorts at least one more digit, so it nests at most eight
+// deep. Returns whether the range ended in b.
 bool sort_range_msd(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, int64_t n, int hi) {
   int top_bits = kDigitBits;
   while (top_bits < hi && (int64_t(1) << top_bits) < kCellsPerKey * n) top_bits += kDigitBits;
@@ -98,7 +101,7 @@ bool sort_range_msd(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, in
     const int64_t count = last - first;
     if (count <= kInsertionRun) {
       insertion_sort(k + first, v + first, count);
-    } else if (sort_range(k + first, v + first, other_k + first, other_v + first, count, 0, lo)) {
+    } else if (sort_range_msd(k + first, v + first, other_k + first, other_v + first, count, lo)) {
       std::copy(other_k + first, other_k + last, k + first);
       std::copy(other_v + first, other_v + last, v + first);
     }
