@@ -25,8 +25,8 @@ struct WithLeafTest {
     return true;
   }
   template <class Shape>
-  bool accept_rest(int32_t q, int32_t prim) const {
-    return candidates.template accept_rest<Shape>(q, prim) && leaf_test(q, prim);
+  bool accept_rest(int32_t q, int32_t prim, int64_t p) const {
+    return candidates.template accept_rest<Shape>(q, prim, p) && leaf_test(q, prim);
   }
   Pair pair(int32_t q, int32_t prim) const { return candidates.pair(q, prim); }
 };

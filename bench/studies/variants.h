@@ -22,7 +22,7 @@ struct EdgeEdgeTwice {
     return true;
   }
   template <class Shape>
-  bool accept_rest(int32_t e, int32_t f) const {
+  bool accept_rest(int32_t e, int32_t f, int64_t) const {
     if (f <= e) return false;
     const Edge a = base.edges[e], b = base.edges[f];
     if ((base.filters & kDropIncident) && share_vertex(a, b)) return false;
@@ -46,7 +46,7 @@ struct EdgeEdgeOnceByIdOrder {
     return true;
   }
   template <class Shape>
-  bool accept_rest(int32_t e, int32_t f) const { return base.accept<Shape>(e, f); }
+  bool accept_rest(int32_t e, int32_t f, int64_t) const { return base.accept<Shape>(e, f); }
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
 };
 

@@ -21,9 +21,11 @@
 //   download(T* host, Array<T>, n) copies n records to the host.
 //   sort_by_morton(boxes, n, Array<int32_t>& ids)
 //                                  ids 0..n-1 in the Morton order of the boxes' centres.
-//   fill_edge_groups(edges, sorted_edges, n, Array<EdgeGroup>& out)
-//                                  the n edges in the edge tree's leaf order (queries.h's
-//                                  EdgeGroup, fill_edge_group), sized for them.
+//   fill_groups(prims, sorted_prims, n, Array<LeafGroup<Prim>>& out)
+//                                  the n elements (by id) in a tree's leaf order (queries.h's
+//                                  LeafGroup, fill_leaf_group), sized for them.
+//   scatter_groups(groups, sorted_prims, n, Array<Prim>& out)
+//                                  the inverse: the elements by id, sized for them.
 //   run_passes<Work>(works, passes...)
 //                                  runs the QueryPasses of one call (one parallel loop, or one
 //                                  kernel launch) and returns each pass's exact pair count,
@@ -36,7 +38,7 @@
 //   scope_on(stream)               the scope of an asynchronous call: on CUDA the caller's
 //                                  stream, with allocation and host copies refused.
 //   wait(stream)                   waits for the stream's work (CUDA).
-//   reserve_staging(Array<Vec3>&, n), reserve_pending(), reserve_canonical(pairs),
+//   reserve_staging(Array<T>&, n), reserve_pending(), reserve_canonical(pairs),
 //   reserve_build(Tree&, boxes, n), reserve_sort(boxes, n)
 //                                  the scratch the asynchronous calls use, kept from then on.
 //   commit_finite(values, staging, dst, rho, call)
@@ -140,9 +142,10 @@ class MeshStoreOn final : public MeshStore {
         float64_(vertices.scalar == Scalar::kFloat64) {
     x_.hold();
     gather_vertices(vertices);
-    if (has_triangle_tree_) x_.upload(triangles_, std::move(triangles));
+    Array<Triangle> by_id;  // the triangles by id, only until the triangle tree holds them
+    if (has_triangle_tree_) x_.upload(by_id, std::move(triangles));
     x_.upload(edges_, std::move(edges));
-    build_trees();
+    build_trees(by_id);
     x_.finish();
     x_.release();
   }
@@ -165,7 +168,7 @@ class MeshStoreOn final : public MeshStore {
     [[maybe_unused]] const auto scope = x_.scope();
     swept_ = false;
     gather_vertices(vertices);
-    build_trees();
+    rebuild_trees();
     x_.finish();
   }
 
@@ -179,7 +182,7 @@ class MeshStoreOn final : public MeshStore {
   void rebuild_swept(const Strided& x0, const Strided& x1) override {
     [[maybe_unused]] const auto scope = x_.scope();
     gather_swept(x0, x1);
-    build_trees();
+    rebuild_trees();
     x_.finish();
   }
   bool swept() const override { return swept_; }
@@ -224,7 +227,10 @@ class MeshStoreOn final : public MeshStore {
       reserved_.swept = true;
     }
     if (wanted.rebuild && !reserved_.rebuild) {
-      if (has_triangle_tree_) x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
+      if (has_triangle_tree_) {
+        x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
+        x_.reserve_staging(triangle_scratch_, num_triangles_);
+      }
       if (keeps_vertex_order_) x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
       if (has_edge_tree_) x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
       if (has_vertex_tree_) x_.reserve_build(vertex_tree_, vertex_boxes(), num_vertices_);
@@ -249,7 +255,7 @@ class MeshStoreOn final : public MeshStore {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
     swept_ = false;
     x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRebuild);
-    build_trees();
+    rebuild_trees();
   }
 
   void refit_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
@@ -263,7 +269,7 @@ class MeshStoreOn final : public MeshStore {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
     swept_ = true;
     x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRebuildSwept);
-    build_trees();
+    rebuild_trees();
   }
 
   void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) override {
@@ -309,8 +315,8 @@ class MeshStoreOn final : public MeshStore {
   // Calls fn with the QueryPass of a VT request, or of an EE request.
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
-    const VertexTriangleQueries queries{vertices_.data(), triangles_.data(), vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1()};
+    const VertexTriangleQueries queries{vertices_.data(), nullptr, vertex_order_.data(), request.r,
+                                        request.filters, rho(), vertices1(), leaf_triangles_.data()};
     with_vertex_pass(request, triangle_tree_.view(), queries, out, fn);
   }
   // Vertex queries (VT, EV, VV): points, or swept each vertex's path, a segment: the segment
@@ -351,23 +357,38 @@ class MeshStoreOn final : public MeshStore {
   // Where the queries read rho (executor memory): nullptr for float input, whose radius stays r.
   float* rho() { return float64_ ? rho_.data() : nullptr; }
 
-  // The trees the flags ask for, and the VT / EV query order, from the current vertices.
-  void build_trees() {
-    if (has_triangle_tree_) triangle_tree_.build(triangle_boxes(), num_triangles_);
+  // The trees the flags ask for, and the VT / EV query order, from the current vertices;
+  // by_id: the triangles by id (with a triangle tree), which it then holds in leaf order.
+  void build_trees(const Array<Triangle>& by_id) {
+    if (has_triangle_tree_) {
+      triangle_tree_.build(TriangleBoxes{vertices_.data(), by_id.data(), vertices1()}, num_triangles_);
+      x_.fill_groups(by_id.data(), triangle_tree_.view().sorted_prims, num_triangles_, leaf_triangles_);
+    }
     if (keeps_vertex_order_) x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
     if (has_edge_tree_) {
       edge_tree_.build(edge_boxes(), num_edges_);
-      x_.fill_edge_groups(edges_.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
+      x_.fill_groups(edges_.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
     }
     if (has_vertex_tree_) vertex_tree_.build(vertex_boxes(), num_vertices_);
   }
-  TriangleBoxes triangle_boxes() const { return {vertices_.data(), triangles_.data(), vertices1()}; }
+  // The same for a rebuild: the triangles back in id order first, into triangle_scratch_ once
+  // a rebuild is reserved (an asynchronous one allocates nothing), else into this call's own.
+  void rebuild_trees() {
+    Array<Triangle> local;
+    Array<Triangle>& by_id = reserved_.rebuild ? triangle_scratch_ : local;
+    if (has_triangle_tree_)
+      x_.scatter_groups(leaf_triangles_, triangle_tree_.view().sorted_prims, num_triangles_, by_id);
+    build_trees(by_id);
+  }
+  // The triangles' boxes by leaf position, for refits (a build reads them by id: build_trees).
+  LeafBoxes<Triangle> triangle_boxes() const { return {vertices_.data(), leaf_triangles_.data(), vertices1()}; }
   EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data(), vertices1()}; }
   PointBoxes vertex_boxes() const { return {vertices_.data(), vertices1()}; }
 
   X x_;  // first: holds its device while the members below are created and destroyed
   Array<Vec3> vertices_;
-  Array<Triangle> triangles_;  // only with a triangle tree
+  Array<TriangleGroup> leaf_triangles_;  // with a triangle tree: the triangles, in its leaf order only
+  Array<Triangle> triangle_scratch_;     // a reserved rebuild's: the triangles by id (rebuild_trees)
   Array<Edge> edges_;
   Array<EdgeGroup> leaf_edges_;  // with an edge tree: its edges in leaf order (EE and EV filters)
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT and EV query order

@@ -26,33 +26,70 @@ MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
   return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
 }
 
-// The edges at four consecutive leaf positions of the edge tree, by lane as a BoxGroup holds
-// their boxes: the incidence filters of EE and EV read them in leaf order, four at a time on
-// the host, instead of each edge's record by id. Lanes past the last edge hold -1 (no vertex).
-struct EdgeGroup {
-  int32_t v[2][4];
+// A tree's elements (triangles or edges) at four consecutive leaf positions, by lane as a
+// BoxGroup holds their boxes: the store keeps a tree's elements in this form only, so that its
+// leaf filters read them in leaf order, four at a time on the host, and a refit reads them
+// sequentially (LeafBoxes). Lanes past the last element hold -1 (no vertex).
+template <class Prim>
+struct LeafGroup {
+  static constexpr int kVertices = int(sizeof(Prim) / sizeof(int32_t));
+  int32_t v[kVertices][4];
+  // The element in lane k.
+  MINKQ_HD Prim at(int k) const {
+    Prim e;
+    for (int j = 0; j < kVertices; ++j) e.v[j] = v[j][k];
+    return e;
+  }
+  MINKQ_HD void set(int k, const Prim& e) {
+    for (int j = 0; j < kVertices; ++j) v[j][k] = e.v[j];
+  }
 };
-static_assert(sizeof(EdgeGroup) == 32, "a group holds four edges and nothing else");
-// Group g of the edge tree whose leaf order is sorted_edges (n edges).
-MINKQ_HD void fill_edge_group(int64_t g, const Edge* edges, const int32_t* sorted_edges, int32_t n, EdgeGroup& out) {
+// The element at leaf position p of a tree whose elements `groups` holds.
+template <class Prim>
+MINKQ_HD Prim leaf_element(const LeafGroup<Prim>* groups, int64_t p) {
+  return groups[p >> 2].at(int(p & 3));
+}
+using TriangleGroup = LeafGroup<Triangle>;
+using EdgeGroup = LeafGroup<Edge>;
+static_assert(sizeof(TriangleGroup) == 48 && sizeof(EdgeGroup) == 32, "a group holds four elements and nothing else");
+
+// Group g of the tree whose leaf order is sorted_prims (n elements), from the elements by id.
+template <class Prim>
+MINKQ_HD void fill_leaf_group(int64_t g, const Prim* prims, const int32_t* sorted_prims, int32_t n,
+                              LeafGroup<Prim>& out) {
   for (int k = 0; k < 4; ++k) {
     const int64_t p = 4 * g + k;
-    const Edge e = p < n ? edges[sorted_edges[p]] : Edge{{-1, -1}};
-    out.v[0][k] = e.v[0];
-    out.v[1][k] = e.v[1];
+    Prim none;
+    for (int j = 0; j < LeafGroup<Prim>::kVertices; ++j) none.v[j] = -1;
+    out.set(k, p < n ? prims[sorted_prims[p]] : none);
   }
 }
-// The lanes of `lanes` whose edge has vertex a or vertex b (a vertex's own edges: a == b):
-// share_vertex and has_vertex, lane by lane.
-MINKQ_HD unsigned incident_lanes(const EdgeGroup& g, int32_t a, int32_t b, unsigned lanes) {
+// The inverse: group g's elements back to their ids (a rebuild reads the elements by id).
+template <class Prim>
+MINKQ_HD void scatter_leaf_group(int64_t g, const LeafGroup<Prim>& group, const int32_t* sorted_prims, int32_t n,
+                                 Prim* prims) {
+  for (int k = 0; k < 4; ++k)
+    if (4 * g + k < n) prims[sorted_prims[4 * g + k]] = group.at(k);
+}
+
+// The lanes of `lanes` whose element has vertex a or vertex b (a vertex's own triangles or
+// edges: a == b; the edges sharing a vertex with edge (a, b)): has_vertex and share_vertex,
+// lane by lane.
+template <class Prim>
+MINKQ_HD unsigned incident_lanes(const LeafGroup<Prim>& g, int32_t a, int32_t b, unsigned lanes) {
 #if defined(__CUDACC__)
   return lanes_where(lanes, [&](int k) {
-    const int32_t u = g.v[0][k], w = g.v[1][k];
-    return u == a || u == b || w == a || w == b;
+    bool any = false;
+    for (int j = 0; j < LeafGroup<Prim>::kVertices; ++j) any |= g.v[j][k] == a || g.v[j][k] == b;
+    return any;
   });
 #else
-  const simd4::M4 u = simd4::load(g.v[0]), w = simd4::load(g.v[1]);
-  return lanes & simd4::mask_bits((u == a) | (u == b) | (w == a) | (w == b));
+  simd4::M4 any = {0, 0, 0, 0};
+  for (int j = 0; j < LeafGroup<Prim>::kVertices; ++j) {
+    const simd4::M4 u = simd4::load(g.v[j]);
+    any |= (u == a) | (u == b);
+  }
+  return lanes & simd4::mask_bits(any);
 #endif
 }
 
@@ -64,28 +101,36 @@ constexpr uint32_t kLeafExact = 2u;     // primitive distance test at the leaves
 // A swept scene (vertices moving linearly from `vertices` to `vertices1`) boxes each element
 // over both positions: every position between holds it, since each of its points at time t is
 // a convex combination of its vertices' two positions.
-struct TriangleBoxes {
+MINKQ_HD Box element_box(const Vec3* vertices, const Vec3* vertices1, const Triangle& tri) {
+  Box b = box_expand(box_expand(Box::of_point(vertices[tri.v[0]]), vertices[tri.v[1]]), vertices[tri.v[2]]);
+  if (vertices1)
+    for (int k = 0; k < 3; ++k) b = box_expand(b, vertices1[tri.v[k]]);
+  return b;
+}
+MINKQ_HD Box element_box(const Vec3* vertices, const Vec3* vertices1, const Edge& edge) {
+  Box b = box_expand(Box::of_point(vertices[edge.v[0]]), vertices[edge.v[1]]);
+  if (vertices1) b = box_expand(box_expand(b, vertices1[edge.v[0]]), vertices1[edge.v[1]]);
+  return b;
+}
+// The box of element i, by id.
+template <class Prim>
+struct ElementBoxes {
   const Vec3* vertices;
-  const Triangle* triangles;
+  const Prim* prims;
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  MINKQ_HD Box operator()(int32_t t) const {
-    const Triangle tri = triangles[t];
-    Box b = box_expand(box_expand(Box::of_point(vertices[tri.v[0]]), vertices[tri.v[1]]), vertices[tri.v[2]]);
-    if (vertices1)
-      for (int k = 0; k < 3; ++k) b = box_expand(b, vertices1[tri.v[k]]);
-    return b;
-  }
+  MINKQ_HD Box operator()(int32_t i) const { return element_box(vertices, vertices1, prims[i]); }
 };
-struct EdgeBoxes {
+using TriangleBoxes = ElementBoxes<Triangle>;
+using EdgeBoxes = ElementBoxes<Edge>;
+// The box of the element at leaf position p, from the elements in leaf order (a refit's
+// source: kByLeafPosition, tree.h).
+template <class Prim>
+struct LeafBoxes {
+  static constexpr bool kByLeafPosition = true;
   const Vec3* vertices;
-  const Edge* edges;
+  const LeafGroup<Prim>* groups;
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  MINKQ_HD Box operator()(int32_t e) const {
-    const Edge edge = edges[e];
-    Box b = box_expand(Box::of_point(vertices[edge.v[0]]), vertices[edge.v[1]]);
-    if (vertices1) b = box_expand(box_expand(b, vertices1[edge.v[0]]), vertices1[edge.v[1]]);
-    return b;
-  }
+  MINKQ_HD Box operator()(int32_t p) const { return element_box(vertices, vertices1, leaf_element(groups, p)); }
 };
 struct PointBoxes {
   const Vec3* points;
@@ -127,15 +172,17 @@ MINKQ_HD bool point_within(const Vec3* vertices, Vec3 p, const Edge& e, float r)
 template <class Prim>
 struct VertexPrimQueries {
   const Vec3* vertices;
-  const Prim* prims;
+  const Prim* prims;     // by id: the one-pair verdict accept() reads them (nullptr: leaf_prims only)
   const int32_t* order;  // or nullptr: vertex i is query i
   float r;
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  const EdgeGroup* leaf_edges = nullptr;  // EV: the edge tree's edges in leaf order (or nullptr)
+  const LeafGroup<Prim>* leaf_prims = nullptr;  // the tree's elements in leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
+  // Element t, at leaf position p (-1: not known): from leaf_prims where given, else by id.
+  MINKQ_HD Prim element(int32_t t, int64_t p) const { return p >= 0 && leaf_prims ? leaf_element(leaf_prims, p) : prims[t]; }
   MINKQ_HD QueryGeometry geometry(int32_t v) const {
     return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
   }
@@ -144,13 +191,13 @@ struct VertexPrimQueries {
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
     if ((filters & kDropIncident) && has_vertex(prims[t], v)) return false;
-    return accept_rest<Shape>(v, t);
+    return accept_rest<Shape>(v, t, -1);
   }
-  // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops.
+  // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops:
+  // four at a time from leaf_prims, else element by element.
   MINKQ_HD unsigned dropped_lanes(int32_t v, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
     if (!(filters & kDropIncident)) return 0;
-    if constexpr (std::is_same<Prim, Edge>::value)
-      if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], v, v, hits);
+    if (leaf_prims) return incident_lanes(leaf_prims[base >> 2], v, v, hits);
     return lanes_where(hits, [&](int k) { return has_vertex(prims[sorted_prims[base + k]], v); });
   }
   // What the filter tests after incidence, and whether it tests anything (else every lane the
@@ -159,9 +206,10 @@ struct VertexPrimQueries {
   MINKQ_HD bool tests_rest() const {
     return (filters & kLeafExact) != 0;
   }
+  // Primitive t is at leaf position p (-1: not known).
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t v, int32_t t) const {
-    if (filters & kLeafExact) return point_within(vertices, vertices[v], prims[t], radius());
+  MINKQ_HD bool accept_rest(int32_t v, int32_t t, int64_t p) const {
+    if (filters & kLeafExact) return point_within(vertices, vertices[v], element(t, p), radius());
     return true;
   }
   MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
@@ -200,7 +248,7 @@ struct EdgeEdgeQueries {
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
     if ((filters & kDropIncident) && share_vertex(edges[e], edges[f])) return false;
-    return accept_rest<Shape>(e, f);
+    return accept_rest<Shape>(e, f, -1);
   }
   // The lanes of `hits` (group `base` of the edge tree's leaf order) that the incidence filter
   // drops: four at a time from leaf_edges, else edge by edge.
@@ -216,12 +264,13 @@ struct EdgeEdgeQueries {
   MINKQ_HD bool tests_rest() const {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
+  // Edge f is at leaf position p (-1: not known).
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t e, int32_t f) const {
+  MINKQ_HD bool accept_rest(int32_t e, int32_t f, int64_t p) const {
     if (!Shape::from(geometry(f)).finer(boxes()(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
-    const Edge a = edges[e], b = edges[f];
+    const Edge a = edges[e], b = p >= 0 && leaf_edges ? leaf_element(leaf_edges, p) : edges[f];
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
   }
@@ -247,7 +296,7 @@ struct VertexVertexQueries {
   }
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t w) const {
-    return accept_rest<Shape>(v, w);
+    return accept_rest<Shape>(v, w, -1);
   }
   MINKQ_HD unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
@@ -255,7 +304,7 @@ struct VertexVertexQueries {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t v, int32_t w) const {
+  MINKQ_HD bool accept_rest(int32_t v, int32_t w, int64_t) const {
     if (!Shape::from(geometry(w)).finer(PointBoxes{vertices, vertices1}(v))) return false;
     if (!(filters & kLeafExact)) return true;
     const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
@@ -280,7 +329,7 @@ struct UserQueries {
     return false;
   }
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t, int32_t) const { return true; }
+  MINKQ_HD bool accept_rest(int32_t, int32_t, int64_t) const { return true; }
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
 
@@ -298,8 +347,9 @@ MINKQ_HD constexpr bool counts_only(long) {
 // The leaf filter of query element q, a leaf group's hits at a time (positions base + k for the
 // bits k of hits, each a primitive whose box the shape overlaps): each is counted, the incidence
 // filter drops lanes (dropped_lanes: four at once where the source can), the source's other
-// tests (accept_rest) keep or drop the rest one by one where it has any, and each kept one is
-// emitted as the source's pair. accept(q, prim) is the same verdict for one pair.
+// tests (accept_rest, told the leaf position) keep or drop the rest one by one where it has
+// any, and each kept one is emitted as the source's pair. accept(q, prim) is the same verdict
+// for one pair, by id.
 template <class Shape, class Queries, class Emit, class Work>
 struct LeafFilter {
   const Queries& queries;
@@ -321,7 +371,7 @@ struct LeafFilter {
     for (; hits != 0; hits &= hits - 1u) {
       const int k = lowest_bit(hits);
       const int32_t prim = sorted_prims[base + k];
-      if (rest && !queries.template accept_rest<Shape>(q, prim)) continue;
+      if (rest && !queries.template accept_rest<Shape>(q, prim, base + k)) continue;
       work.emit_candidate();
       const Pair pair = queries.pair(q, prim);
       emit(pair.first, pair.second);

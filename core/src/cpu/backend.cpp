@@ -89,9 +89,16 @@ class CpuExecutor {
     SortScratch local;
     minkq::sort_by_morton(boxes, n, ids, sort_reserved_ ? sort_ : local);
   }
-  void fill_edge_groups(const Edge* edges, const int32_t* sorted_edges, int32_t n, HostVector<EdgeGroup>& out) {
+  template <class Prim>
+  void fill_groups(const Prim* prims, const int32_t* sorted_prims, int32_t n, HostVector<LeafGroup<Prim>>& out) {
     out.resize(size_t(box_group_count(n)));
-    parallel_for_each(box_group_count(n), [&](int64_t g) { fill_edge_group(g, edges, sorted_edges, n, out[size_t(g)]); });
+    parallel_for_each(box_group_count(n), [&](int64_t g) { fill_leaf_group(g, prims, sorted_prims, n, out[size_t(g)]); });
+  }
+  template <class Prim>
+  void scatter_groups(const HostVector<LeafGroup<Prim>>& groups, const int32_t* sorted_prims, int32_t n,
+                      HostVector<Prim>& out) {
+    out.resize(size_t(n));
+    parallel_for_each(box_group_count(n), [&](int64_t g) { scatter_leaf_group(g, groups[size_t(g)], sorted_prims, n, out.data()); });
   }
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
@@ -109,7 +116,8 @@ class CpuExecutor {
   // Asynchronous calls need nothing reserved (host vectors grow as they need, and the check
   // before the copy needs no staging); a rebuild reservation keeps the builds' and the vertex
   // sort's scratch, so that rebuilds of the scene allocate nothing.
-  void reserve_staging(HostVector<Vec3>&, int32_t) {}
+  template <class T>
+  void reserve_staging(HostVector<T>&, int32_t) {}
   void reserve_pending() {}
   void reserve_canonical(size_t) {}
   template <class Boxes>

@@ -19,11 +19,18 @@ namespace {
 
 using namespace cuda;
 
-// Group g of the edge tree's edges in leaf order (queries.h).
-static __global__ void fill_edge_groups_kernel(const Edge* edges, const int32_t* sorted_edges, int32_t n,
-                                               EdgeGroup* out) {
+// Group g of a tree's elements in leaf order, from the elements by id (queries.h), and back.
+template <class Prim>
+static __global__ void fill_groups_kernel(const Prim* prims, const int32_t* sorted_prims, int32_t n,
+                                          LeafGroup<Prim>* out) {
   const int64_t g = global_index();
-  if (g < box_group_count(n)) fill_edge_group(g, edges, sorted_edges, n, out[g]);
+  if (g < box_group_count(n)) fill_leaf_group(g, prims, sorted_prims, n, out[g]);
+}
+template <class Prim>
+static __global__ void scatter_groups_kernel(const LeafGroup<Prim>* groups, const int32_t* sorted_prims, int32_t n,
+                                             Prim* out) {
+  const int64_t g = global_index();
+  if (g < box_group_count(n)) scatter_leaf_group(g, groups[g], sorted_prims, n, out);
 }
 
 // The scope of one call: its device, then its stream (runtime.cuh's call stream).
@@ -79,10 +86,19 @@ class CudaExecutor {
     cuda::sort_by_morton(boxes, n, sort_reserved_ ? sort_ : local, ids);
   }
   // Sized at the scene's first build (an asynchronous rebuild only fills it).
-  void fill_edge_groups(const Edge* edges, const int32_t* sorted_edges, int32_t n, DeviceBuffer<EdgeGroup>& out) {
+  template <class Prim>
+  void fill_groups(const Prim* prims, const int32_t* sorted_prims, int32_t n, DeviceBuffer<LeafGroup<Prim>>& out) {
     out.ensure(size_t(box_group_count(n)));
-    launch("fill_edge_groups_kernel launch", fill_edge_groups_kernel, box_group_count(n), kThreads, edges, sorted_edges, n,
+    launch("fill_groups_kernel launch", fill_groups_kernel<Prim>, box_group_count(n), kThreads, prims, sorted_prims, n,
            out.data());
+  }
+  // out: reserved (reserve_staging) for an asynchronous rebuild.
+  template <class Prim>
+  void scatter_groups(const DeviceBuffer<LeafGroup<Prim>>& groups, const int32_t* sorted_prims, int32_t n,
+                      DeviceBuffer<Prim>& out) {
+    out.ensure(size_t(n));
+    launch("scatter_groups_kernel launch", scatter_groups_kernel<Prim>, box_group_count(n), kThreads, groups.data(),
+           sorted_prims, n, out.data());
   }
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
@@ -96,7 +112,8 @@ class CudaExecutor {
   }
 
   // Asynchronous calls.
-  void reserve_staging(DeviceBuffer<Vec3>& staging, int32_t n) { staging.ensure(size_t(n)); }
+  template <class T>
+  void reserve_staging(DeviceBuffer<T>& staging, int32_t n) { staging.ensure(size_t(n)); }
   void reserve_pending() {
     pending_.ensure(3);
     zero(pending_, 3);
