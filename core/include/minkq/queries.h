@@ -264,13 +264,12 @@ struct EdgeEdgeQueries {
   MINKQ_HD bool tests_rest() const {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
-  // Edge f is at leaf position p (-1: not known).
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t e, int32_t f, int64_t p) const {
+  MINKQ_HD bool accept_rest(int32_t e, int32_t f, int64_t) const {
     if (!Shape::from(geometry(f)).finer(boxes()(e))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
-    const Edge a = edges[e], b = p >= 0 && leaf_edges ? leaf_element(leaf_edges, p) : edges[f];
+    const Edge a = edges[e], b = edges[f];
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
   }
