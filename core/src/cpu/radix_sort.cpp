@@ -93,11 +93,13 @@ bool sort_range_msd(uint64_t* a_k, int32_t* a_v, uint64_t* b_k, int32_t* b_v, in
   int32_t* v = in_b ? b_v : a_v;
   uint64_t* other_k = in_b ? a_k : b_k;
   int32_t* other_v = in_b ? a_v : b_v;
-  const uint64_t below_hi = hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << hi) - 1;
+  // Every key of the range has the same bits at and above hi (zero at the top call, the
+  // bucket's digit or the enclosing run's top bits in nested ones), so a run is the keys equal
+  // above lo; the insertion sort relies on the same.
   for (int64_t first = 0; first < n;) {
-    const uint64_t cell = (k[first] & below_hi) >> lo;
+    const uint64_t cell = k[first] >> lo;
     int64_t last = first + 1;
-    while (last < n && ((k[last] & below_hi) >> lo) == cell) ++last;
+    while (last < n && (k[last] >> lo) == cell) ++last;
     const int64_t count = last - first;
     if (count <= kInsertionRun) {
       insertion_sort(k + first, v + first, count);
