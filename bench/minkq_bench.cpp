@@ -153,11 +153,11 @@ struct Report {
 };
 
 // Bytes of trees and scene data of a CPU VT+EE scene from the library's layouts: vertices
-// (12 B) and edges (8 B) in the store (the only copy: the C API keeps none), the triangles in
-// the triangle tree's leaf order only (TriangleGroup: 48 B per four), the edges again in the
-// edge tree's leaf order (EdgeGroup: 32 B per four) and the vertices' query order (4 B); per
-// tree what CpuTree::bytes() counts (node records of 64 B plus a 4 B refit counter, and per
-// primitive a sorted-order id and a leaf box, 4 + 24 B) on the library's own trees, built here.
+// (12 B) in the store (the only copy: the C API keeps none), the triangles and the edges in
+// their trees' leaf order only (TriangleGroup: 48 B per four, EdgeGroup: 32 B per four) and the
+// vertices' query order (4 B); per tree what CpuTree::bytes() counts (node records of 64 B plus
+// a 4 B refit counter, and per primitive a sorted-order id and a leaf box, 4 + 24 B) on the
+// library's own trees, built here.
 double layout_bytes(const SceneFrames& sc) {
   const auto* v = reinterpret_cast<const minkq::Vec3*>(sc.mesh.xyz.data());
   const auto* t = reinterpret_cast<const minkq::Triangle*>(sc.mesh.tris.data());
@@ -169,7 +169,7 @@ double layout_bytes(const SceneFrames& sc) {
   edges.build(minkq::EdgeBoxes{v, e}, int32_t(ne));
   const double leaf_triangles = double(sizeof(minkq::TriangleGroup)) * double(minkq::box_group_count(nt));
   const double leaf_edges = double(sizeof(minkq::EdgeGroup)) * double(minkq::box_group_count(ne));
-  return 16.0 * double(nv) + 8.0 * double(ne) + leaf_triangles + leaf_edges + double(triangles.bytes() + edges.bytes());
+  return 16.0 * double(nv) + leaf_triangles + leaf_edges + double(triangles.bytes() + edges.bytes());
 }
 
 // The narrow phase a simulator runs on every candidate, at its cheapest: the double-precision

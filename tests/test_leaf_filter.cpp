@@ -1,6 +1,7 @@
 // The leaf filter (queries.h) a group of hits at a time: the incidence test on four edges or
 // triangles in leaf order (LeafGroup) against share_vertex / has_vertex one by one, and the EE,
-// EV and VT queries with the elements in leaf order, without them (element by element, by id)
+// EV and VT queries with the elements in leaf order (also only so, none by id), without them
+// (element by element, by id)
 // and pair by pair (accept) giving the same pairs, in the same order, with the same work counts,
 // into a pair emitter and a count-only one; and a refit from the elements in leaf order
 // (LeafBoxes) giving the tree a refit by id gives.
@@ -156,6 +157,9 @@ void check_sources(const std::vector<Vec3>& vertices, const std::vector<Edge>& e
   ee.leaf_edges = groups.data();
   expect_same(by_edge, run_all<Shape>(bvh, ee, n, false), "EE, edges in leaf order");
   expect_same(by_edge, run_all<Shape>(bvh, ee, n, true), "EE, counted");
+  EdgeEdgeQueries leaf_only = ee;  // as the store holds them: no edge by id to read
+  leaf_only.edges = nullptr;
+  expect_same(by_edge, run_all<Shape>(bvh, leaf_only, n, false), "EE, edges in leaf order only");
   std::vector<Pair> want;
   const EdgeBoxes boxes{vertices.data(), edges.data()};
   for (int32_t p = 0; p < n; ++p) {
@@ -173,6 +177,9 @@ void check_sources(const std::vector<Vec3>& vertices, const std::vector<Edge>& e
     ev.leaf_prims = groups.data();
     expect_same(ev_by_edge, run_all<Shape>(bvh, ev, nv, false), "EV, edges in leaf order");
     expect_same(ev_by_edge, run_all<Shape>(bvh, ev, nv, true), "EV, counted");
+    VertexEdgeQueries leaf_only = ev;
+    leaf_only.prims = nullptr;
+    expect_same(ev_by_edge, run_all<Shape>(bvh, leaf_only, nv, false), "EV, edges in leaf order only");
     size_t k = 0;
     for (int32_t i = 0; i < nv; ++i) {
       const int32_t v = order[size_t(i)];

@@ -16,17 +16,17 @@ struct WithLeafTest {
   LeafTest leaf_test;
   WithLeafTest(Queries source, LeafTest test) : candidates(source), leaf_test(test) { candidates.filters &= ~kLeafExact; }
   QueryTarget target(int32_t i) const { return candidates.target(i); }
-  QueryGeometry geometry(int32_t q) const { return candidates.geometry(q); }
-  unsigned dropped_lanes(int32_t q, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
-    return candidates.dropped_lanes(q, base, hits, sorted_prims);
+  QueryGeometry geometry(QueryTarget t) const { return candidates.geometry(t); }
+  unsigned dropped_lanes(QueryTarget t, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+    return candidates.dropped_lanes(t, base, hits, sorted_prims);
   }
   template <class Shape>
   bool tests_rest() const {
     return true;
   }
   template <class Shape>
-  bool accept_rest(int32_t q, int32_t prim, int64_t p) const {
-    return candidates.template accept_rest<Shape>(q, prim, p) && leaf_test(q, prim);
+  bool accept_rest(QueryTarget t, int32_t prim, int64_t p) const {
+    return candidates.template accept_rest<Shape>(t, prim, p) && leaf_test(t.q, prim);
   }
   Pair pair(int32_t q, int32_t prim) const { return candidates.pair(q, prim); }
 };

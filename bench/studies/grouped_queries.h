@@ -61,7 +61,7 @@ template <class Shape, class Queries, class Emit, class Work>
 void run_group(const BvhView& bvh, const Queries& queries, int32_t begin, int32_t end, Emit& emit, Work& work) {
   BoxShape group{{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0.0f};
   for (int32_t i = begin; i <= end; ++i) {
-    const BoxShape b = box_test_of(Shape::from(queries.geometry(queries.target(i).q)));
+    const BoxShape b = box_test_of(Shape::from(queries.geometry(queries.target(i))));
     group.lo = vmin(group.lo, b.lo), group.hi = vmax(group.hi, b.hi), group.r = max_num(group.r, b.r);
   }
   RangeEntry ranges[kGroupRanges];
@@ -81,8 +81,8 @@ void run_group(const BvhView& bvh, const Queries& queries, int32_t begin, int32_
       continue;
     }
     const QueryTarget target = queries.target(i);
-    const Shape shape = Shape::from(queries.geometry(target.q));
-    LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, bvh.sorted_prims, target.q, emit, work};
+    const Shape shape = Shape::from(queries.geometry(target));
+    LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, bvh.sorted_prims, target, emit, work};
     for (int k = 0; k < count; ++k) {
       const RangeEntry& e = ranges[k];
       if (!e.own) {

@@ -50,8 +50,8 @@ void top_down_traverse(const BvhView& bvh, const Shape& shape, int32_t after, On
 template <class Shape, class Queries, class Emit, class Work>
 void run_query_top_down(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
-  const Shape shape = Shape::from(queries.geometry(target.q));
-  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, bvh.sorted_prims, target.q, emit, work};
+  const Shape shape = Shape::from(queries.geometry(target));
+  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, bvh.sorted_prims, target, emit, work};
   top_down_traverse(bvh, shape, target.after, on_leaf, work);
 }
 

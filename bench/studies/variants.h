@@ -15,14 +15,15 @@ namespace minkq::bench {
 struct EdgeEdgeTwice {
   EdgeEdgeQueries base;
   QueryTarget target(int32_t i) const { return {i, -1}; }
-  QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
+  QueryGeometry geometry(QueryTarget t) const { return base.geometry(t.q); }
+  unsigned dropped_lanes(QueryTarget, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
   bool tests_rest() const {
     return true;
   }
   template <class Shape>
-  bool accept_rest(int32_t e, int32_t f, int64_t) const {
+  bool accept_rest(QueryTarget t, int32_t f, int64_t) const {
+    const int32_t e = t.q;
     if (f <= e) return false;
     const Edge a = base.edges[e], b = base.edges[f];
     if ((base.filters & kDropIncident) && share_vertex(a, b)) return false;
@@ -39,14 +40,14 @@ struct EdgeEdgeOnceByIdOrder {
   EdgeEdgeQueries base;
   const int32_t* position;  // sorted leaf position of each edge
   QueryTarget target(int32_t i) const { return {i, position[i]}; }
-  QueryGeometry geometry(int32_t e) const { return base.geometry(e); }
-  unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
+  QueryGeometry geometry(QueryTarget t) const { return base.geometry(t.q); }
+  unsigned dropped_lanes(QueryTarget, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
   bool tests_rest() const {
     return true;
   }
   template <class Shape>
-  bool accept_rest(int32_t e, int32_t f, int64_t) const { return base.accept<Shape>(e, f); }
+  bool accept_rest(QueryTarget t, int32_t f, int64_t) const { return base.accept<Shape>(t.q, f); }
   Pair pair(int32_t e, int32_t f) const { return base.pair(e, f); }
 };
 

@@ -214,8 +214,8 @@ void traverse_wide(const WideTree<W>& tree, const Shape& shape, int32_t after, O
 template <int W, bool kLanes, class Shape, class Queries, class Emit, class Work>
 void run_query_wide(const WideTree<W>& tree, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
-  const Shape shape = Shape::from(queries.geometry(target.q));
-  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, tree.sorted_prims(), target.q, emit, work};
+  const Shape shape = Shape::from(queries.geometry(target));
+  LeafFilter<Shape, Queries, Emit, Work> on_leaf{queries, tree.sorted_prims(), target, emit, work};
   traverse_wide<W, kLanes>(tree, shape, target.after, on_leaf, work);
 }
 

@@ -142,10 +142,12 @@ class MeshStoreOn final : public MeshStore {
         float64_(vertices.scalar == Scalar::kFloat64) {
     x_.hold();
     gather_vertices(vertices);
-    Array<Triangle> by_id;  // the triangles by id, only until the triangle tree holds them
-    if (has_triangle_tree_) x_.upload(by_id, std::move(triangles));
-    x_.upload(edges_, std::move(edges));
-    build_trees(by_id);
+    // The elements by id, only until their trees hold them (edges without an edge tree: kept).
+    Array<Triangle> triangles_by_id;
+    Array<Edge> edges_by_id;
+    if (has_triangle_tree_) x_.upload(triangles_by_id, std::move(triangles));
+    x_.upload(has_edge_tree_ ? edges_by_id : edges_, std::move(edges));
+    build_trees(triangles_by_id, edges_by_id);
     x_.finish();
     x_.release();
   }
@@ -153,7 +155,10 @@ class MeshStoreOn final : public MeshStore {
 
   void copy_edges(Edge* host_out) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    x_.download(host_out, edges_, size_t(num_edges_));
+    if (!has_edge_tree_) return x_.download(host_out, edges_, size_t(num_edges_));
+    Array<Edge> by_id;
+    x_.scatter_groups(leaf_edges_, edge_tree_.view().sorted_prims, num_edges_, by_id);
+    x_.download(host_out, by_id, size_t(num_edges_));
   }
 
   void refit(const Strided& vertices) override {
@@ -232,7 +237,10 @@ class MeshStoreOn final : public MeshStore {
         x_.reserve_staging(triangle_scratch_, num_triangles_);
       }
       if (keeps_vertex_order_) x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
-      if (has_edge_tree_) x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
+      if (has_edge_tree_) {
+        x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
+        x_.reserve_staging(edge_scratch_, num_edges_);
+      }
       if (has_vertex_tree_) x_.reserve_build(vertex_tree_, vertex_boxes(), num_vertices_);
       reserved_.rebuild = true;
     }
@@ -299,7 +307,7 @@ class MeshStoreOn final : public MeshStore {
       case QueryKind::kVertexTriangle: return with_vt_pass(request, out, fn);
       case QueryKind::kEdgeEdge: return with_ee_pass(request, out, fn);
       case QueryKind::kVertexEdge: {
-        const VertexEdgeQueries queries{vertices_.data(), edges_.data(), vertex_order_.data(), request.r,
+        const VertexEdgeQueries queries{vertices_.data(), nullptr, vertex_order_.data(), request.r,
                                         request.filters, rho(), vertices1(), leaf_edges_.data()};
         return with_vertex_pass(request, edge_tree_.view(), queries, out, fn);
       }
@@ -332,7 +340,7 @@ class MeshStoreOn final : public MeshStore {
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const BvhView edge_tree = edge_tree_.view();
-    const EdgeEdgeQueries queries{vertices_.data(), edges_.data(), edge_tree.sorted_prims, request.r, request.filters,
+    const EdgeEdgeQueries queries{vertices_.data(), nullptr, edge_tree.sorted_prims, request.r, request.filters,
                                   rho(), vertices1(), leaf_edges_.data()};
     with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
   }
@@ -358,39 +366,44 @@ class MeshStoreOn final : public MeshStore {
   float* rho() { return float64_ ? rho_.data() : nullptr; }
 
   // The trees the flags ask for, and the VT / EV query order, from the current vertices;
-  // by_id: the triangles by id (with a triangle tree), which it then holds in leaf order.
-  void build_trees(const Array<Triangle>& by_id) {
+  // triangles and edges: the elements by id (with their trees), which they then hold in leaf
+  // order.
+  void build_trees(const Array<Triangle>& triangles, const Array<Edge>& edges) {
     if (has_triangle_tree_) {
-      triangle_tree_.build(TriangleBoxes{vertices_.data(), by_id.data(), vertices1()}, num_triangles_);
-      x_.fill_groups(by_id.data(), triangle_tree_.view().sorted_prims, num_triangles_, leaf_triangles_);
+      triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles.data(), vertices1()}, num_triangles_);
+      x_.fill_groups(triangles.data(), triangle_tree_.view().sorted_prims, num_triangles_, leaf_triangles_);
     }
     if (keeps_vertex_order_) x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
     if (has_edge_tree_) {
-      edge_tree_.build(edge_boxes(), num_edges_);
-      x_.fill_groups(edges_.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
+      edge_tree_.build(EdgeBoxes{vertices_.data(), edges.data(), vertices1()}, num_edges_);
+      x_.fill_groups(edges.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
     }
     if (has_vertex_tree_) vertex_tree_.build(vertex_boxes(), num_vertices_);
   }
-  // The same for a rebuild: the triangles back in id order first, into triangle_scratch_ once
+  // The same for a rebuild: the elements back in id order first, into the scratch members once
   // a rebuild is reserved (an asynchronous one allocates nothing), else into this call's own.
   void rebuild_trees() {
-    Array<Triangle> local;
-    Array<Triangle>& by_id = reserved_.rebuild ? triangle_scratch_ : local;
+    Array<Triangle> local_triangles;
+    Array<Edge> local_edges;
+    Array<Triangle>& triangles = reserved_.rebuild ? triangle_scratch_ : local_triangles;
+    Array<Edge>& edges = reserved_.rebuild ? edge_scratch_ : local_edges;
     if (has_triangle_tree_)
-      x_.scatter_groups(leaf_triangles_, triangle_tree_.view().sorted_prims, num_triangles_, by_id);
-    build_trees(by_id);
+      x_.scatter_groups(leaf_triangles_, triangle_tree_.view().sorted_prims, num_triangles_, triangles);
+    if (has_edge_tree_) x_.scatter_groups(leaf_edges_, edge_tree_.view().sorted_prims, num_edges_, edges);
+    build_trees(triangles, edges);
   }
-  // The triangles' boxes by leaf position, for refits (a build reads them by id: build_trees).
+  // The elements' boxes by leaf position, for refits (a build reads them by id: build_trees).
   LeafBoxes<Triangle> triangle_boxes() const { return {vertices_.data(), leaf_triangles_.data(), vertices1()}; }
-  EdgeBoxes edge_boxes() const { return {vertices_.data(), edges_.data(), vertices1()}; }
+  LeafBoxes<Edge> edge_boxes() const { return {vertices_.data(), leaf_edges_.data(), vertices1()}; }
   PointBoxes vertex_boxes() const { return {vertices_.data(), vertices1()}; }
 
   X x_;  // first: holds its device while the members below are created and destroyed
   Array<Vec3> vertices_;
   Array<TriangleGroup> leaf_triangles_;  // with a triangle tree: the triangles, in its leaf order only
-  Array<Triangle> triangle_scratch_;     // a reserved rebuild's: the triangles by id (rebuild_trees)
-  Array<Edge> edges_;
-  Array<EdgeGroup> leaf_edges_;  // with an edge tree: its edges in leaf order (EE and EV filters)
+  Array<EdgeGroup> leaf_edges_;          // with an edge tree: the edges, in its leaf order only
+  Array<Edge> edges_;                    // without an edge tree: the edges by id (copy_edges)
+  Array<Triangle> triangle_scratch_;     // a reserved rebuild's: the elements by id (rebuild_trees)
+  Array<Edge> edge_scratch_;
   Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT and EV query order
   Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
   Array<Vec3> staging1_;  // asynchronous swept steps: the end positions, checked likewise

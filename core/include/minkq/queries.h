@@ -186,17 +186,19 @@ struct VertexPrimQueries {
   MINKQ_HD QueryGeometry geometry(int32_t v) const {
     return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
   }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry(t.q); }
   // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box: not
   // incident (where dropped), then accept_rest.
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t t) const {
     if ((filters & kDropIncident) && has_vertex(prims[t], v)) return false;
-    return accept_rest<Shape>(v, t, -1);
+    return accept_rest<Shape>({v, -1}, t, -1);
   }
   // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops:
   // four at a time from leaf_prims, else element by element.
-  MINKQ_HD unsigned dropped_lanes(int32_t v, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+  MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
     if (!(filters & kDropIncident)) return 0;
+    const int32_t v = target.q;
     if (leaf_prims) return incident_lanes(leaf_prims[base >> 2], v, v, hits);
     return lanes_where(hits, [&](int k) { return has_vertex(prims[sorted_prims[base + k]], v); });
   }
@@ -208,7 +210,8 @@ struct VertexPrimQueries {
   }
   // Primitive t is at leaf position p (-1: not known).
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t v, int32_t t, int64_t p) const {
+  MINKQ_HD bool accept_rest(QueryTarget target, int32_t t, int64_t p) const {
+    const int32_t v = target.q;
     if (filters & kLeafExact) return point_within(vertices, vertices[v], element(t, p), radius());
     return true;
   }
@@ -224,7 +227,7 @@ using VertexEdgeQueries = VertexPrimQueries<Edge>;
 // {e, f} is a candidate when Shape(e) overlaps box(f) and Shape(f) overlaps box(e).
 struct EdgeEdgeQueries {
   const Vec3* vertices;
-  const Edge* edges;
+  const Edge* edges;  // by id: the one-pair verdict accept() reads them (nullptr: leaf_edges only)
   const int32_t* sorted_edges;  // the edge tree's leaf order
   float r;
   uint32_t filters;
@@ -233,28 +236,31 @@ struct EdgeEdgeQueries {
   const EdgeGroup* leaf_edges = nullptr;  // the edges in the tree's leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
+  // Edge e, at leaf position p (-1: not known): from leaf_edges where given, else by id.
+  MINKQ_HD Edge edge(int32_t e, int64_t p) const { return p >= 0 && leaf_edges ? leaf_element(leaf_edges, p) : edges[e]; }
   // Static: the edge as a segment. Swept: the edge's swept box, as the box from its low to its
   // high corner (box mode only: the front end refuses the segment modes).
-  MINKQ_HD QueryGeometry geometry(int32_t e) const {
+  MINKQ_HD QueryGeometry geometry_of(const Edge& e) const {
     if (vertices1) {
-      const Box b = boxes()(e);
+      const Box b = element_box(vertices, vertices1, e);
       return {b.lo, b.hi, radius()};
     }
-    return {vertices[edges[e].v[0]], vertices[edges[e].v[1]], radius()};
+    return {vertices[e.v[0]], vertices[e.v[1]], radius()};
   }
-  MINKQ_HD EdgeBoxes boxes() const { return {vertices, edges, vertices1}; }
+  MINKQ_HD QueryGeometry geometry(int32_t e) const { return geometry_of(edges[e]); }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry_of(edge(t.q, t.after)); }
   // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box: not
   // sharing a vertex (where dropped), then accept_rest.
   template <class Shape>
   MINKQ_HD bool accept(int32_t e, int32_t f) const {
     if ((filters & kDropIncident) && share_vertex(edges[e], edges[f])) return false;
-    return accept_rest<Shape>(e, f, -1);
+    return accept_rest<Shape>({e, -1}, f, -1);
   }
   // The lanes of `hits` (group `base` of the edge tree's leaf order) that the incidence filter
   // drops: four at a time from leaf_edges, else edge by edge.
-  MINKQ_HD unsigned dropped_lanes(int32_t e, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+  MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
     if (!(filters & kDropIncident)) return 0;
-    const Edge a = edges[e];
+    const Edge a = edge(target.q, target.after);
     if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], a.v[0], a.v[1], hits);
     return lanes_where(hits, [&](int k) { return share_vertex(a, edges[sorted_prims[base + k]]); });
   }
@@ -264,12 +270,14 @@ struct EdgeEdgeQueries {
   MINKQ_HD bool tests_rest() const {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
+  // Edge f is at leaf position p (-1: not known).
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t e, int32_t f, int64_t) const {
-    if (!Shape::from(geometry(f)).finer(boxes()(e))) return false;
+  MINKQ_HD bool accept_rest(QueryTarget target, int32_t f, int64_t p) const {
+    const int32_t e = target.q;
+    const Edge a = edge(e, target.after), b = edge(f, p);
+    if (!Shape::from(geometry_of(b)).finer(element_box(vertices, vertices1, a))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
-    const Edge a = edges[e], b = edges[f];
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
   }
@@ -293,17 +301,19 @@ struct VertexVertexQueries {
   MINKQ_HD QueryGeometry geometry(int32_t v) const {
     return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
   }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry(t.q); }
   template <class Shape>
   MINKQ_HD bool accept(int32_t v, int32_t w) const {
-    return accept_rest<Shape>(v, w, -1);
+    return accept_rest<Shape>({v, -1}, w, -1);
   }
-  MINKQ_HD unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
+  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
   MINKQ_HD bool tests_rest() const {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t v, int32_t w, int64_t) const {
+  MINKQ_HD bool accept_rest(QueryTarget target, int32_t w, int64_t) const {
+    const int32_t v = target.q;
     if (!Shape::from(geometry(w)).finer(PointBoxes{vertices, vertices1}(v))) return false;
     if (!(filters & kLeafExact)) return true;
     const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
@@ -320,15 +330,16 @@ struct UserQueries {
   float r;
   MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
   MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry(t.q); }
   template <class Shape>
   MINKQ_HD bool accept(int32_t, int32_t) const { return true; }
-  MINKQ_HD unsigned dropped_lanes(int32_t, int64_t, unsigned, const int32_t*) const { return 0; }
+  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned, const int32_t*) const { return 0; }
   template <class Shape>
   MINKQ_HD bool tests_rest() const {
     return false;
   }
   template <class Shape>
-  MINKQ_HD bool accept_rest(int32_t, int32_t, int64_t) const { return true; }
+  MINKQ_HD bool accept_rest(QueryTarget, int32_t, int64_t) const { return true; }
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
 
@@ -343,22 +354,23 @@ MINKQ_HD constexpr bool counts_only(long) {
   return false;
 }
 
-// The leaf filter of query element q, a leaf group's hits at a time (positions base + k for the
-// bits k of hits, each a primitive whose box the shape overlaps): each is counted, the incidence
-// filter drops lanes (dropped_lanes: four at once where the source can), the source's other
-// tests (accept_rest, told the leaf position) keep or drop the rest one by one where it has
-// any, and each kept one is emitted as the source's pair. accept(q, prim) is the same verdict
-// for one pair, by id.
+// The leaf filter of a query target (element q; a self-query's at leaf position `after`), a leaf
+// group's hits at a time (positions base + k for the bits k of hits, each a primitive whose box
+// the shape overlaps): each is counted, the incidence filter drops lanes (dropped_lanes: four at
+// once where the source can), the source's other tests (accept_rest, told the leaf position)
+// keep or drop the rest one by one where it has any, and each kept one is emitted as the
+// source's pair. accept(q, prim) is the same verdict for one pair, by id. The sources read a
+// query's element and the primitives by leaf position where they keep them in leaf order.
 template <class Shape, class Queries, class Emit, class Work>
 struct LeafFilter {
   const Queries& queries;
   const int32_t* sorted_prims;
-  int32_t q;
+  QueryTarget target;
   Emit& emit;
   Work& work;
   MINKQ_HD void operator()(int64_t base, unsigned hits, const BoxGroup& /*group*/) const {
     work.test_primitives(unsigned(popcount(hits)));
-    hits &= ~queries.dropped_lanes(q, base, hits, sorted_prims);
+    hits &= ~queries.dropped_lanes(target, base, hits, sorted_prims);
     const bool rest = queries.template tests_rest<Shape>();
     if constexpr (counts_only<Emit>(0)) {
       if (!rest) {
@@ -370,9 +382,9 @@ struct LeafFilter {
     for (; hits != 0; hits &= hits - 1u) {
       const int k = lowest_bit(hits);
       const int32_t prim = sorted_prims[base + k];
-      if (rest && !queries.template accept_rest<Shape>(q, prim, base + k)) continue;
+      if (rest && !queries.template accept_rest<Shape>(target, prim, base + k)) continue;
       work.emit_candidate();
-      const Pair pair = queries.pair(q, prim);
+      const Pair pair = queries.pair(target.q, prim);
       emit(pair.first, pair.second);
     }
   }
@@ -382,8 +394,8 @@ struct LeafFilter {
 template <class Shape, class Queries, class Emit, class Work>
 MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   const QueryTarget target = queries.target(i);
-  const Shape shape = Shape::from(queries.geometry(target.q));
-  LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target.q, emit, work};
+  const Shape shape = Shape::from(queries.geometry(target));
+  LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target, emit, work};
   traverse_groups(bvh, shape, target.after, on_hits, work);
 }
 
