@@ -367,8 +367,9 @@ typedef enum minkq_reserve_flags {
  * synchronise). Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
  * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (where
  * the device cannot hold the scratch; on the CPU only MINKQ_RESERVE_REBUILD keeps any: the
- * builds' scratch, about 64 bytes per element of each tree, so that rebuilds allocate nothing),
- * DEVICE. */
+ * builds' scratch, about 64 bytes per element of each tree, and the triangles and edges by id
+ * (12 and 8 bytes each: the trees keep them in their leaf order), so that rebuilds allocate
+ * nothing), DEVICE. */
 minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity);
 
 /* minkq_scene_refit, enqueued on `stream` (see above: the vertices in device memory on CUDA;
