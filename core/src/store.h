@@ -38,9 +38,11 @@
 //   scope_on(stream)               the scope of an asynchronous call: on CUDA the caller's
 //                                  stream, with allocation and host copies refused.
 //   wait(stream)                   waits for the stream's work (CUDA).
-//   reserve_staging(Array<T>&, n), reserve_pending(), reserve_canonical(pairs),
+//   reserve_staging(Array<Vec3>&, n), reserve_pending(), reserve_canonical(pairs),
 //   reserve_build(Tree&, boxes, n), reserve_sort(boxes, n)
 //                                  the scratch the asynchronous calls use, kept from then on.
+//   reserve_scratch(Array<T>&, n)  room for n elements kept in the array, so that filling it
+//                                  with up to n allocates nothing (a rebuild's elements by id).
 //   commit_finite(values, staging, dst, rho, call)
 //                                  dst = values (executor memory) unless a coordinate is not
 //                                  finite; then dst is kept and the pending error recorded.
@@ -234,12 +236,12 @@ class MeshStoreOn final : public MeshStore {
     if (wanted.rebuild && !reserved_.rebuild) {
       if (has_triangle_tree_) {
         x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
-        x_.reserve_staging(triangle_scratch_, num_triangles_);
+        x_.reserve_scratch(triangle_scratch_, num_triangles_);
       }
       if (keeps_vertex_order_) x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
       if (has_edge_tree_) {
         x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
-        x_.reserve_staging(edge_scratch_, num_edges_);
+        x_.reserve_scratch(edge_scratch_, num_edges_);
       }
       if (has_vertex_tree_) x_.reserve_build(vertex_tree_, vertex_boxes(), num_vertices_);
       reserved_.rebuild = true;

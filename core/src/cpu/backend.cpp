@@ -115,11 +115,15 @@ class CpuExecutor {
 
   // Asynchronous calls need nothing reserved (host vectors grow as they need, and the check
   // before the copy needs no staging); a rebuild reservation keeps the builds' and the vertex
-  // sort's scratch, so that rebuilds of the scene allocate nothing.
-  template <class T>
-  void reserve_staging(HostVector<T>&, int32_t) {}
+  // sort's scratch and the room for the elements by id, so that rebuilds of the scene
+  // allocate nothing.
+  void reserve_staging(HostVector<Vec3>&, int32_t) {}
   void reserve_pending() {}
   void reserve_canonical(size_t) {}
+  template <class T>
+  void reserve_scratch(HostVector<T>& scratch, int32_t n) {
+    scratch.reserve(size_t(std::max(n, 0)));
+  }
   template <class Boxes>
   void reserve_build(CpuTree& tree, Boxes, int32_t n) {
     tree.reserve_build(n);

@@ -92,7 +92,7 @@ class CudaExecutor {
     launch("fill_groups_kernel launch", fill_groups_kernel<Prim>, box_group_count(n), kThreads, prims, sorted_prims, n,
            out.data());
   }
-  // out: reserved (reserve_staging) for an asynchronous rebuild.
+  // out: reserved (reserve_scratch) for an asynchronous rebuild.
   template <class Prim>
   void scatter_groups(const DeviceBuffer<LeafGroup<Prim>>& groups, const int32_t* sorted_prims, int32_t n,
                       DeviceBuffer<Prim>& out) {
@@ -112,13 +112,16 @@ class CudaExecutor {
   }
 
   // Asynchronous calls.
-  template <class T>
-  void reserve_staging(DeviceBuffer<T>& staging, int32_t n) { staging.ensure(size_t(n)); }
+  void reserve_staging(DeviceBuffer<Vec3>& staging, int32_t n) { staging.ensure(size_t(n)); }
   void reserve_pending() {
     pending_.ensure(3);
     zero(pending_, 3);
   }
   void reserve_canonical(size_t capacity) { cuda::reserve_canonical(async_ws_, capacity); }
+  template <class T>
+  void reserve_scratch(DeviceBuffer<T>& scratch, int32_t n) {
+    scratch.ensure(size_t(n));
+  }
   template <class Boxes>
   void reserve_build(CudaTree& tree, Boxes, int32_t n) {
     tree.reserve_build(n);
