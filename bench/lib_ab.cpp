@@ -22,7 +22,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -103,6 +102,32 @@ struct Side {
   Side& operator=(const Side&) = delete;
 };
 
+// The steps timed, in this order: the two updates to the last frame, then the queries.
+struct Step {
+  const char* label;
+  enum { kRefit, kRebuild, kQuery } what;
+  minkq_query_kind kind;  // queries only
+  minkq_mode mode;
+};
+constexpr Step kSteps[] = {{"refit", Step::kRefit, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
+                           {"rebuild", Step::kRebuild, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
+                           {"VT box", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
+                           {"VT sphere", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_SPHERE},
+                           {"EE box", Step::kQuery, MINKQ_QUERY_EE, MINKQ_MODE_BOX}};
+constexpr size_t kStepCount = sizeof(kSteps) / sizeof(kSteps[0]);
+
+// One step on one side: vertices for the updates, radius r and query flags for the queries.
+void run_step(const Step& step, Side& s, const minkq_buffer& vertices, float r, uint32_t flags) {
+  switch (step.what) {
+    case Step::kRefit: return s.api.check(s.api.refit(s.scene, vertices), "minkq_scene_refit");
+    case Step::kRebuild: return s.api.check(s.api.rebuild(s.scene, vertices), "minkq_scene_rebuild");
+    case Step::kQuery: {
+      const minkq_query_desc q{step.kind, step.mode, flags, r};
+      return s.api.check(s.api.query_result(s.scene, &q, s.result), "minkq_scene_query_result");
+    }
+  }
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
@@ -153,63 +178,44 @@ int main(int argc, char** argv) try {
     std::fprintf(stderr, "%s: %zu V, %zu T, r = %.4g\n", name.c_str(), last.size() / 3, sc.mesh.tris.size() / 3, double(r));
     Side sa(a, sc), sb(b, sc);
     const minkq_buffer vb = minkq::cxx::host_buffer(last.data(), last.size() / 3, 12);
-    struct Step {
-      const char* label;
-      std::function<void(Side&)> run;
-    };
-    auto query = [&](minkq_query_kind kind, minkq_mode mode) {
-      return [=](Side& s) {
-        const minkq_query_desc q{kind, mode, 0, r};
-        s.api.check(s.api.query_result(s.scene, &q, s.result), "minkq_scene_query_result");
-      };
-    };
-    const std::vector<Step> steps = {
-        {"refit", [&](Side& s) { s.api.check(s.api.refit(s.scene, vb), "minkq_scene_refit"); }},
-        {"rebuild", [&](Side& s) { s.api.check(s.api.rebuild(s.scene, vb), "minkq_scene_rebuild"); }},
-        {"VT box", query(MINKQ_QUERY_VT, MINKQ_MODE_BOX)},
-        {"VT sphere", query(MINKQ_QUERY_VT, MINKQ_MODE_SPHERE)},
-        {"EE box", query(MINKQ_QUERY_EE, MINKQ_MODE_BOX)},
-    };
-    steps[0].run(sa), steps[0].run(sb);
-    for (size_t k = 2; k < steps.size(); ++k) {  // the same pairs from both
+    run_step(kSteps[0], sa, vb, r, 0), run_step(kSteps[0], sb, vb, r, 0);  // both at the last frame
+    for (const Step& step : kSteps) {  // the same pairs from both
+      if (step.what != Step::kQuery) continue;
       uint64_t digest[2], count[2];
       Side* sides[2] = {&sa, &sb};
       for (int j = 0; j < 2; ++j) {
-        const minkq_query_desc q{k == 4 ? MINKQ_QUERY_EE : MINKQ_QUERY_VT, k == 3 ? MINKQ_MODE_SPHERE : MINKQ_MODE_BOX,
-                                 MINKQ_QUERY_DIGEST, r};
-        sides[j]->api.check(sides[j]->api.query_result(sides[j]->scene, &q, sides[j]->result), "query (digest)");
+        run_step(step, *sides[j], vb, r, MINKQ_QUERY_DIGEST);
         count[j] = sides[j]->api.result_count(sides[j]->result);
         digest[j] = sides[j]->api.result_digest(sides[j]->result);
       }
       if (count[0] != count[1] || digest[0] != digest[1])
-        throw std::runtime_error(name + ", " + steps[k].label + ": the libraries' pairs differ");
+        throw std::runtime_error(name + ", " + step.label + ": the libraries' pairs differ");
     }
-    for (size_t k = 0; k < steps.size(); ++k) {
+    for (size_t k = 0; k < kStepCount; ++k) {
       std::vector<double> ta, tb, ratio;
-      steps[k].run(sa), steps[k].run(sb);  // warm-up
+      run_step(kSteps[k], sa, vb, r, 0), run_step(kSteps[k], sb, vb, r, 0);  // warm-up
       for (int round = 0; round < rounds; ++round) {
         double t[2];
         for (int j = 0; j < 2; ++j) {
           const bool first_a = round % 2 == 0;
           Side& s = (j == 0) == first_a ? sa : sb;
           const double start = now_ms();
-          steps[k].run(s);
+          run_step(kSteps[k], s, vb, r, 0);
           t[&s == &sa ? 0 : 1] = now_ms() - start;
         }
         ta.push_back(t[0]), tb.push_back(t[1]), ratio.push_back(t[0] / t[1]);
       }
       if (all_ratios.size() <= k) all_ratios.resize(k + 1);
       all_ratios[k].push_back(median(ratio));
-      md << "| " << name << " | " << steps[k].label << " | " << fmt(median(ta)) << " | " << fmt(median(tb)) << " | "
+      md << "| " << name << " | " << kSteps[k].label << " | " << fmt(median(ta)) << " | " << fmt(median(tb)) << " | "
          << fmt(median(ratio)) << "x |\n";
     }
   }
   md << "\nGeometric mean of A / B over the scenes, per step:";
-  const char* labels[] = {"refit", "rebuild", "VT box", "VT sphere", "EE box"};
   for (size_t k = 0; k < all_ratios.size(); ++k) {
     double log_sum = 0;
     for (double x : all_ratios[k]) log_sum += std::log(x);
-    md << (k ? ";" : "") << " " << labels[k] << " " << fmt(std::exp(log_sum / double(all_ratios[k].size()))) << "x";
+    md << (k ? ";" : "") << " " << kSteps[k].label << " " << fmt(std::exp(log_sum / double(all_ratios[k].size()))) << "x";
   }
   md << ".\n";
   std::fputs(md.str().c_str(), stdout);

@@ -1,10 +1,9 @@
 // The leaf filter (queries.h) a group of hits at a time: the incidence test on four edges or
 // triangles in leaf order (LeafGroup) against share_vertex / has_vertex one by one, and the EE,
 // EV and VT queries with the elements in leaf order (also only so, none by id), without them
-// (element by element, by id)
-// and pair by pair (accept) giving the same pairs, in the same order, with the same work counts,
-// into a pair emitter and a count-only one; and a refit from the elements in leaf order
-// (LeafBoxes) giving the tree a refit by id gives.
+// (element by element, by id) and pair by pair (accept) giving the same pairs, in the same
+// order, with the same work counts, into a pair emitter and a count-only one; and a refit from
+// the elements in leaf order (LeafBoxes) giving the tree a refit by id gives.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -37,6 +36,14 @@ std::vector<Triangle> random_triangles(test::Random& rng, int32_t n, int32_t ver
   return random_elements<Triangle>(rng, n, vertices);
 }
 
+// The n elements in the leaf order `sorted` (fill_leaf_group over every group).
+template <class Prim>
+std::vector<LeafGroup<Prim>> leaf_groups(const std::vector<Prim>& elements, const int32_t* sorted, int32_t n) {
+  std::vector<LeafGroup<Prim>> groups(static_cast<size_t>(box_group_count(n)));
+  for (int64_t g = 0; g < int64_t(groups.size()); ++g) fill_leaf_group(g, elements.data(), sorted, n, groups[size_t(g)]);
+  return groups;
+}
+
 // The groups of elements in a shuffled leaf order hold them lane by lane (lanes past the last:
 // -1), give them back by id, and incident_lanes(v, w) is has_vertex(v) || has_vertex(w) lane by
 // lane (for edges: share_vertex with the edge v-w).
@@ -49,8 +56,7 @@ void check_incidence(test::Random& rng) {
     std::vector<int32_t> sorted(static_cast<size_t>(n));
     for (int32_t p = 0; p < n; ++p) sorted[size_t(p)] = p;
     std::shuffle(sorted.begin(), sorted.end(), rng.engine);
-    std::vector<LeafGroup<Prim>> groups(static_cast<size_t>(box_group_count(n)));
-    for (int64_t g = 0; g < int64_t(groups.size()); ++g) fill_leaf_group(g, elements.data(), sorted.data(), n, groups[size_t(g)]);
+    const std::vector<LeafGroup<Prim>> groups = leaf_groups(elements, sorted.data(), n);
     Prim unset;
     for (int j = 0; j < kVertices; ++j) unset.v[j] = -7;
     std::vector<Prim> back(static_cast<size_t>(n), unset);
@@ -147,8 +153,7 @@ void check_sources(const std::vector<Vec3>& vertices, const std::vector<Edge>& e
   CpuTree tree;
   tree.build(EdgeBoxes{vertices.data(), edges.data()}, n);
   const BvhView bvh = tree.view();
-  std::vector<EdgeGroup> groups(static_cast<size_t>(box_group_count(n)));
-  for (int64_t g = 0; g < int64_t(groups.size()); ++g) fill_leaf_group(g, edges.data(), bvh.sorted_prims, n, groups[size_t(g)]);
+  const std::vector<EdgeGroup> groups = leaf_groups(edges, bvh.sorted_prims, n);
   std::vector<int32_t> order(static_cast<size_t>(nv));
   for (int32_t v = 0; v < nv; ++v) order[size_t(v)] = nv - 1 - v;
 
@@ -226,8 +231,7 @@ void check_vt_sources(const std::vector<Vec3>& vertices, const std::vector<Trian
   CpuTree tree;
   tree.build(TriangleBoxes{vertices.data(), triangles.data()}, n);
   const BvhView bvh = tree.view();
-  std::vector<TriangleGroup> groups(static_cast<size_t>(box_group_count(n)));
-  for (int64_t g = 0; g < int64_t(groups.size()); ++g) fill_leaf_group(g, triangles.data(), bvh.sorted_prims, n, groups[size_t(g)]);
+  const std::vector<TriangleGroup> groups = leaf_groups(triangles, bvh.sorted_prims, n);
   std::vector<int32_t> order(static_cast<size_t>(nv));
   for (int32_t v = 0; v < nv; ++v) order[size_t(v)] = nv - 1 - v;
 
@@ -283,12 +287,8 @@ TEST(LeafFilter, a_refit_from_elements_in_leaf_order_equals_one_by_id) {
     leaf.build(TriangleBoxes{vertices.data(), triangles.data()}, n);
     edges_by_id.build(EdgeBoxes{vertices.data(), edges.data()}, n);
     edges_leaf.build(EdgeBoxes{vertices.data(), edges.data()}, n);
-    std::vector<TriangleGroup> tg(static_cast<size_t>(box_group_count(n)));
-    std::vector<EdgeGroup> eg(static_cast<size_t>(box_group_count(n)));
-    for (int64_t g = 0; g < int64_t(tg.size()); ++g) {
-      fill_leaf_group(g, triangles.data(), leaf.view().sorted_prims, n, tg[size_t(g)]);
-      fill_leaf_group(g, edges.data(), edges_leaf.view().sorted_prims, n, eg[size_t(g)]);
-    }
+    const std::vector<TriangleGroup> tg = leaf_groups(triangles, leaf.view().sorted_prims, n);
+    const std::vector<EdgeGroup> eg = leaf_groups(edges, edges_leaf.view().sorted_prims, n);
     for (const Vec3* at : {moved.data(), vertices.data()}) {  // the second swept: both positions
       const Vec3* at1 = at == vertices.data() ? moved.data() : nullptr;
       by_id.refit(TriangleBoxes{at, triangles.data(), at1});

@@ -49,6 +49,12 @@ template <class Prim>
 MINKQ_HD Prim leaf_element(const LeafGroup<Prim>* groups, int64_t p) {
   return groups[p >> 2].at(int(p & 3));
 }
+// Element `id`, at leaf position p (-1: not known): from the elements in leaf order where given,
+// else by id (the query sources' two forms).
+template <class Prim>
+MINKQ_HD Prim element_at(const Prim* by_id, const LeafGroup<Prim>* leaf, int32_t id, int64_t p) {
+  return p >= 0 && leaf ? leaf_element(leaf, p) : by_id[id];
+}
 using TriangleGroup = LeafGroup<Triangle>;
 using EdgeGroup = LeafGroup<Edge>;
 static_assert(sizeof(TriangleGroup) == 48 && sizeof(EdgeGroup) == 32, "a group holds four elements and nothing else");
@@ -181,8 +187,7 @@ struct VertexPrimQueries {
   const LeafGroup<Prim>* leaf_prims = nullptr;  // the tree's elements in leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
-  // Element t, at leaf position p (-1: not known): from leaf_prims where given, else by id.
-  MINKQ_HD Prim element(int32_t t, int64_t p) const { return p >= 0 && leaf_prims ? leaf_element(leaf_prims, p) : prims[t]; }
+  MINKQ_HD Prim element(int32_t t, int64_t p) const { return element_at(prims, leaf_prims, t, p); }
   MINKQ_HD QueryGeometry geometry(int32_t v) const {
     return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
   }
@@ -236,8 +241,7 @@ struct EdgeEdgeQueries {
   const EdgeGroup* leaf_edges = nullptr;  // the edges in the tree's leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
-  // Edge e, at leaf position p (-1: not known): from leaf_edges where given, else by id.
-  MINKQ_HD Edge edge(int32_t e, int64_t p) const { return p >= 0 && leaf_edges ? leaf_element(leaf_edges, p) : edges[e]; }
+  MINKQ_HD Edge edge(int32_t e, int64_t p) const { return element_at(edges, leaf_edges, e, p); }
   // Static: the edge as a segment. Swept: the edge's swept box, as the box from its low to its
   // high corner (box mode only: the front end refuses the segment modes).
   MINKQ_HD QueryGeometry geometry_of(const Edge& e) const {
