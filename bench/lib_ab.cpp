@@ -9,12 +9,14 @@
 // created at frame 0 in each library, then each round times, for A and for B:
 //   refit     minkq_scene_refit to the last frame
 //   rebuild   minkq_scene_rebuild to the last frame
-//   VT box, VT sphere, EE box   minkq_scene_query_result at the scene's radius (pairs stored)
+//   VT box, VT sphere, VT leaf_exact, EE box, EE capsule_exact, EE leaf_exact
+//             minkq_scene_query_result at the scene's radius (pairs stored)
 // Checked before timing: both libraries give the same pair count and digest for each query.
 // Reported: each library's median ms, and the median over rounds of A ms / B ms (> 1: B faster).
 //
-//   minkq_lib_ab --a LIB --b LIB [--scenes LIST] [--rounds N] [--data DIR] [--out FILE]
-//   (defaults: the eight procedural scenes, 15 rounds, ../shared/data, stdout only)
+//   minkq_lib_ab --a LIB --b LIB [--scenes LIST] [--steps LIST] [--rounds N] [--data DIR] [--out FILE]
+//   (defaults: the eight procedural scenes, every step, 15 rounds, ../shared/data, stdout only;
+//   --steps takes labels as above, comma-separated: "refit,EE leaf_exact")
 #include <dlfcn.h>
 
 #include <algorithm>
@@ -108,13 +110,16 @@ struct Step {
   enum { kRefit, kRebuild, kQuery } what;
   minkq_query_kind kind;  // queries only
   minkq_mode mode;
+  uint32_t flags = 0;  // the query's own (leaf_exact)
 };
-constexpr Step kSteps[] = {{"refit", Step::kRefit, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
-                           {"rebuild", Step::kRebuild, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
-                           {"VT box", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
-                           {"VT sphere", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_SPHERE},
-                           {"EE box", Step::kQuery, MINKQ_QUERY_EE, MINKQ_MODE_BOX}};
-constexpr size_t kStepCount = sizeof(kSteps) / sizeof(kSteps[0]);
+constexpr Step kAllSteps[] = {{"refit", Step::kRefit, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
+                              {"rebuild", Step::kRebuild, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
+                              {"VT box", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_BOX},
+                              {"VT sphere", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_SPHERE},
+                              {"VT leaf_exact", Step::kQuery, MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT},
+                              {"EE box", Step::kQuery, MINKQ_QUERY_EE, MINKQ_MODE_BOX},
+                              {"EE capsule_exact", Step::kQuery, MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT},
+                              {"EE leaf_exact", Step::kQuery, MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT}};
 
 // One step on one side: vertices for the updates, radius r and query flags for the queries.
 void run_step(const Step& step, Side& s, const minkq_buffer& vertices, float r, uint32_t flags) {
@@ -122,7 +127,7 @@ void run_step(const Step& step, Side& s, const minkq_buffer& vertices, float r, 
     case Step::kRefit: return s.api.check(s.api.refit(s.scene, vertices), "minkq_scene_refit");
     case Step::kRebuild: return s.api.check(s.api.rebuild(s.scene, vertices), "minkq_scene_rebuild");
     case Step::kQuery: {
-      const minkq_query_desc q{step.kind, step.mode, flags, r};
+      const minkq_query_desc q{step.kind, step.mode, flags | step.flags, r};
       return s.api.check(s.api.query_result(s.scene, &q, s.result), "minkq_scene_query_result");
     }
   }
@@ -139,6 +144,7 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) try {
   std::string a_path, b_path, out, data = MINKQ_BENCH_DATA_DIR;
   std::vector<std::string> scenes = procedural_scene_names();
+  std::vector<Step> steps(std::begin(kAllSteps), std::end(kAllSteps));
   int rounds = 15;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -155,8 +161,17 @@ int main(int argc, char** argv) try {
       scenes.clear();
       std::stringstream list(value());
       for (std::string s; std::getline(list, s, ',');) scenes.push_back(s);
+    } else if (arg == "--steps") {
+      steps.clear();
+      std::stringstream list(value());
+      for (std::string label; std::getline(list, label, ',');) {
+        const auto it = std::find_if(std::begin(kAllSteps), std::end(kAllSteps),
+                                     [&](const Step& step) { return label == step.label; });
+        if (it == std::end(kAllSteps)) throw std::runtime_error("--steps: no step named \"" + label + "\"");
+        steps.push_back(*it);
+      }
     } else {
-      std::fprintf(stderr, "usage: minkq_lib_ab --a LIB --b LIB [--scenes LIST] [--rounds N] [--data DIR] [--out FILE]\n");
+      std::fprintf(stderr, "usage: minkq_lib_ab --a LIB --b LIB [--scenes LIST] [--steps LIST] [--rounds N] [--data DIR] [--out FILE]\n");
       return 1;
     }
   }
@@ -178,8 +193,8 @@ int main(int argc, char** argv) try {
     std::fprintf(stderr, "%s: %zu V, %zu T, r = %.4g\n", name.c_str(), last.size() / 3, sc.mesh.tris.size() / 3, double(r));
     Side sa(a, sc), sb(b, sc);
     const minkq_buffer vb = minkq::cxx::host_buffer(last.data(), last.size() / 3, 12);
-    run_step(kSteps[0], sa, vb, r, 0), run_step(kSteps[0], sb, vb, r, 0);  // both at the last frame
-    for (const Step& step : kSteps) {  // the same pairs from both
+    run_step(kAllSteps[0], sa, vb, r, 0), run_step(kAllSteps[0], sb, vb, r, 0);  // both at the last frame
+    for (const Step& step : steps) {  // the same pairs from both
       if (step.what != Step::kQuery) continue;
       uint64_t digest[2], count[2];
       Side* sides[2] = {&sa, &sb};
@@ -191,23 +206,23 @@ int main(int argc, char** argv) try {
       if (count[0] != count[1] || digest[0] != digest[1])
         throw std::runtime_error(name + ", " + step.label + ": the libraries' pairs differ");
     }
-    for (size_t k = 0; k < kStepCount; ++k) {
+    for (size_t k = 0; k < steps.size(); ++k) {
       std::vector<double> ta, tb, ratio;
-      run_step(kSteps[k], sa, vb, r, 0), run_step(kSteps[k], sb, vb, r, 0);  // warm-up
+      run_step(steps[k], sa, vb, r, 0), run_step(steps[k], sb, vb, r, 0);  // warm-up
       for (int round = 0; round < rounds; ++round) {
         double t[2];
         for (int j = 0; j < 2; ++j) {
           const bool first_a = round % 2 == 0;
           Side& s = (j == 0) == first_a ? sa : sb;
           const double start = now_ms();
-          run_step(kSteps[k], s, vb, r, 0);
+          run_step(steps[k], s, vb, r, 0);
           t[&s == &sa ? 0 : 1] = now_ms() - start;
         }
         ta.push_back(t[0]), tb.push_back(t[1]), ratio.push_back(t[0] / t[1]);
       }
       if (all_ratios.size() <= k) all_ratios.resize(k + 1);
       all_ratios[k].push_back(median(ratio));
-      md << "| " << name << " | " << kSteps[k].label << " | " << fmt(median(ta)) << " | " << fmt(median(tb)) << " | "
+      md << "| " << name << " | " << steps[k].label << " | " << fmt(median(ta)) << " | " << fmt(median(tb)) << " | "
          << fmt(median(ratio)) << "x |\n";
     }
   }
@@ -215,7 +230,7 @@ int main(int argc, char** argv) try {
   for (size_t k = 0; k < all_ratios.size(); ++k) {
     double log_sum = 0;
     for (double x : all_ratios[k]) log_sum += std::log(x);
-    md << (k ? ";" : "") << " " << kSteps[k].label << " " << fmt(std::exp(log_sum / double(all_ratios[k].size()))) << "x";
+    md << (k ? ";" : "") << " " << steps[k].label << " " << fmt(std::exp(log_sum / double(all_ratios[k].size()))) << "x";
   }
   md << ".\n";
   std::fputs(md.str().c_str(), stdout);
