@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates every benchmark table and plot of bench/results with one command.
 #
-#   bench/run.sh            full run (about 20 min on 2 cores): scenes, real meshes, radius
+#   bench/run.sh            full run (about 45 min on 2 cores, Warp stage included): scenes, real meshes, radius
 #                           sweep, 1M/2M twisted sheets, stability report, h/r study, plots,
 #                           Warp/Newton CPU baselines, float64 and swept queries, ipctk CCD
 #                           broad phases (when the Scalable CCD sample data is found); writes
