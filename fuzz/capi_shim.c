@@ -1,6 +1,7 @@
 /* C-side helpers for the C API fuzzer. A C caller may store any int in an enum-typed field or
  * argument (C enums are integers); doing the same from C++ would be undefined behaviour in the
- * harness itself. These functions let fuzz_capi.cpp pass such values exactly as C code does. */
+ * harness itself. These functions let the C API fuzzer (fuzz_capi.cpp and its parts, declared in
+ * capi_model.h) pass such values exactly as C code does. */
 #include "minkq.h"
 
 minkq_buffer shim_buffer(const void* data, size_t byte_stride, size_t count, int memory) {
