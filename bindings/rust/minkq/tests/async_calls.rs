@@ -6,31 +6,12 @@
 //! non-finite vertex is reported by `async_status`, which clears it, and leaves the scene's
 //! positions as they were.
 mod common;
-use common::{grid_triangles, Rng};
+use common::grid_triangles;
+use common::sheets::rolled_sheet;
 
 use minkq::{
     Buffer, CountOut, Device, Error, Memory, Mode, PairsOut, Query, QueryFlags, Reserve, Scene, SceneDesc, Stream,
 };
-
-/// An n x n sheet rolled up about 1.4 turns (layers ~0.035 apart), jittered; `phase` shifts
-/// the roll so that successive steps move every vertex.
-fn rolled_sheet(n: i32, seed: u64, phase: f64) -> Vec<[f32; 3]> {
-    let mut rng = Rng(seed);
-    let mut vertices = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
-            let angle = 9.0 * u + phase;
-            let radius = 0.2 + 0.05 * u;
-            vertices.push([
-                (radius * angle.cos() + 0.02 * (rng.uniform() - 0.5)) as f32,
-                (v + 0.02 * (rng.uniform() - 0.5)) as f32,
-                (radius * angle.sin() + 0.02 * (rng.uniform() - 0.5)) as f32,
-            ]);
-        }
-    }
-    vertices
-}
 
 const N: i32 = 12;
 const R: f32 = 0.04;

@@ -10,6 +10,7 @@
 //! equal a triangle-less scene; every blocking and stream-ordered entry point takes the new
 //! kinds; kinds a scene was built without are refused with the library's message.
 mod common;
+use common::oracle::{assert_subset, dot, point_segment_sq, sub, V};
 use common::{grid_triangles, Rng};
 
 use minkq::{
@@ -17,7 +18,6 @@ use minkq::{
     Stream,
 };
 
-type V = [f64; 3];
 type Pairs = Vec<[i32; 2]>;
 
 const LEAF_FLAGS: [QueryFlags; 2] = [QueryFlags::empty(), QueryFlags::LEAF_EXACT];
@@ -25,20 +25,6 @@ const LEAF_FLAGS: [QueryFlags; 2] = [QueryFlags::empty(), QueryFlags::LEAF_EXACT
 /// `SceneDesc::codim`'s flags.
 fn codim_flags() -> SceneFlags {
     SceneFlags::VV | SceneFlags::EV | SceneFlags::DROP_INCIDENT
-}
-
-fn sub(a: V, b: V) -> V {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn point_segment_sq(p: V, a: V, b: V) -> f64 {
-    let d = sub(b, a);
-    let dd = dot(d, d);
-    let t = if dd > 0.0 { (dot(sub(p, a), d) / dd).clamp(0.0, 1.0) } else { 0.0 };
-    let c = sub(p, [a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]]);
-    dot(c, c)
 }
 
 /// Every (v, w), v < w, within r: brute force in double.
@@ -113,17 +99,6 @@ fn pairs(scene: &Scene, query: Query) -> Pairs {
     let mut out = Vec::new();
     scene.query_vec(&query.with_flags(query.flags | QueryFlags::CANONICAL), &mut out).unwrap();
     out
-}
-
-fn assert_subset(small: &[[i32; 2]], large: &[[i32; 2]], what: &str) {
-    let lost: Vec<_> = small.iter().filter(|p| large.binary_search(p).is_err()).collect();
-    assert!(
-        lost.is_empty(),
-        "{what}: {} of {} missing, e.g. {:?}",
-        lost.len(),
-        small.len(),
-        &lost[..lost.len().min(5)]
-    );
 }
 
 /// Zero false negatives in every mode, leaf-exact pairs within [truth(r), truth(r + slack)],

@@ -7,6 +7,7 @@
 //! the other precision are refused (naming the buffer), as are bad counts and NaNs, and the
 //! scene keeps its state; every plain refit or rebuild makes the scene static again.
 mod common;
+use common::oracle::{assert_subset, point_triangle_sq, V};
 use common::{grid_triangles, Rng};
 
 use minkq::{
@@ -59,40 +60,9 @@ fn two_sheets(seed: u64, lift: f32) -> (Positions, Positions, Vec<[i32; 3]>) {
     (x0, x1, triangles)
 }
 
-type V = [f64; 3];
-
 fn lerp(a: [f32; 3], b: [f32; 3], t: f64) -> V {
     [0, 1, 2].map(|k| f64::from(a[k]) + t * (f64::from(b[k]) - f64::from(a[k])))
 }
-fn sub(a: V, b: V) -> V {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V, b: V) -> V {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn point_segment_sq(p: V, a: V, b: V) -> f64 {
-    let d = sub(b, a);
-    let dd = dot(d, d);
-    let t = if dd > 0.0 { (dot(sub(p, a), d) / dd).clamp(0.0, 1.0) } else { 0.0 };
-    let c = sub(p, [a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]]);
-    dot(c, c)
-}
-/// The edges' minimum, and the plane distance where the projection lies inside.
-fn point_triangle_sq(p: V, [a, b, c]: [V; 3]) -> f64 {
-    let mut best = point_segment_sq(p, a, b).min(point_segment_sq(p, b, c)).min(point_segment_sq(p, c, a));
-    let n = cross(sub(b, a), sub(c, a));
-    let nn = dot(n, n);
-    let inside = [(a, b), (b, c), (c, a)].iter().all(|&(s, e)| dot(cross(sub(e, s), sub(p, s)), n) > 0.0);
-    if nn > 0.0 && inside {
-        let h = dot(sub(p, a), n);
-        best = best.min(h * h / nn);
-    }
-    best
-}
-
 /// The box of `vertices` over both positions.
 fn swept_box(x0: &[[f32; 3]], x1: &[[f32; 3]], vertices: &[i32]) -> (V, V) {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
@@ -154,11 +124,6 @@ fn check_box_definition(scene: &Scene, x0: &[[f32; 3]], x1: &[[f32; 3]], triangl
         }
     }
     assert!(inside > 100, "{what}: EE {inside} in");
-}
-
-fn assert_subset(small: &[[i32; 2]], large: &[[i32; 2]], what: &str) {
-    let lost: Vec<_> = small.iter().filter(|p| large.binary_search(p).is_err()).collect();
-    assert!(lost.is_empty(), "{what}: {lost:?}");
 }
 
 #[test]
@@ -233,8 +198,8 @@ fn swept_box_mode_is_its_definition_and_the_finer_vt_modes_nest() {
             for v in 0..x0.len() {
                 let p = lerp(x0[v], x1[v], t);
                 for (ti, tri) in triangles.iter().enumerate() {
-                    let corners = tri.map(|w| lerp(x0[w as usize], x1[w as usize], t));
-                    let within = point_triangle_sq(p, corners).sqrt() <= f64::from(R) * (1.0 - 1e-4);
+                    let [a, b, c] = tri.map(|w| lerp(x0[w as usize], x1[w as usize], t));
+                    let within = point_triangle_sq(p, a, b, c).sqrt() <= f64::from(R) * (1.0 - 1e-4);
                     if within && !tri.contains(&(v as i32)) {
                         contacts.push([v as i32, ti as i32]);
                     }

@@ -1,21 +1,23 @@
 //! The brute-force double-precision oracle: point–segment, point–triangle and segment–segment
 //! distances, a mesh's true VT and EE contacts within r; and the checks of scenes against it
-//! (zero false negatives, the containment chain of every mode) and against each other.
+//! (zero false negatives, the containment chain of every mode) and against each other. Its
+//! vector helpers, distances and `assert_subset` serve the other tests' own oracles too.
 
 use std::collections::BTreeSet;
+use std::fmt::Debug;
 
 use minkq::{Mode, PairBuffer, Query, QueryFlags, QueryKind, Scene};
 
-type V = [f64; 3];
+pub type V = [f64; 3];
 pub type Pairs = BTreeSet<(i32, i32)>;
 
-fn sub(a: V, b: V) -> V {
+pub fn sub(a: V, b: V) -> V {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn dot(a: V, b: V) -> f64 {
+pub fn dot(a: V, b: V) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn cross(a: V, b: V) -> V {
+pub fn cross(a: V, b: V) -> V {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 fn axpy(a: V, d: V, t: f64) -> V {
@@ -112,9 +114,22 @@ pub fn pairs_of(scene: &Scene, query: Query) -> Pairs {
     scene.query(&query, &mut out).unwrap().iter().map(|p| (p[0], p[1])).collect()
 }
 
-pub fn assert_subset(small: &Pairs, large: &Pairs, what: &str) {
-    let missing: Vec<_> = small.difference(large).take(5).collect();
-    assert!(missing.is_empty(), "{what}: {} pairs missing, e.g. {missing:?}", small.difference(large).count());
+/// Every pair of `small` is in `large` (a `Pairs` or a `Vec` of pairs); else fails, naming how
+/// many are missing and up to five.
+pub fn assert_subset<'a, P: Ord + Debug + 'a>(
+    small: impl IntoIterator<Item = &'a P>,
+    large: impl IntoIterator<Item = &'a P>,
+    what: &str,
+) {
+    let (small, large): (Vec<&P>, BTreeSet<&P>) = (small.into_iter().collect(), large.into_iter().collect());
+    let lost: Vec<_> = small.iter().filter(|p| !large.contains(*p)).collect();
+    assert!(
+        lost.is_empty(),
+        "{what}: {} of {} missing, e.g. {:?}",
+        lost.len(),
+        small.len(),
+        &lost[..lost.len().min(5)]
+    );
 }
 
 /// Zero false negatives and the containment chain of every mode, for VT and EE.
