@@ -1,0 +1,246 @@
+// The CUDA backend's stream-ordered calls (minkq.h, "Stream-ordered calls") on a stream of the
+// test's own with device memory: async_checks.h's contract checks (the same ones test_async.cpp
+// runs on the CPU), and the calls captured into CUDA graphs and replayed over moving vertices,
+// rebuilds included, against the blocking calls. Needs the CUDA runtime; skips without a device.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "async_checks.h"
+#include "cuda_checks.h"
+#include "tree_counts.h"
+
+#if defined(MINKQ_TEST_HAVE_CUDART)
+
+namespace minkq {
+namespace {
+
+using namespace cuda_test;
+
+// Device memory and a stream of the test's own (not the per-thread default stream the
+// blocking calls use), for async_checks.h.
+class DeviceAsyncMemory final : public test::AsyncMemory {
+ public:
+  DeviceAsyncMemory() { EXPECT_EQ(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), cudaSuccess); }
+  ~DeviceAsyncMemory() override {
+    cudaStreamSynchronize(stream_);
+    for (void* p : blocks_) cudaFree(p);
+    cudaStreamDestroy(stream_);
+  }
+  void* allocate(size_t bytes) override {
+    void* p = nullptr;
+    EXPECT_EQ(cudaMalloc(&p, bytes ? bytes : 1), cudaSuccess);
+    blocks_.push_back(p);
+    return p;
+  }
+  void write(void* dst, const void* host, size_t bytes) override {
+    EXPECT_EQ(cudaMemcpyAsync(dst, host, bytes, cudaMemcpyHostToDevice, stream_), cudaSuccess);
+    EXPECT_EQ(cudaStreamSynchronize(stream_), cudaSuccess);
+  }
+  void read(void* host, const void* src, size_t bytes) override {
+    EXPECT_EQ(cudaMemcpyAsync(host, src, bytes, cudaMemcpyDeviceToHost, stream_), cudaSuccess);
+    EXPECT_EQ(cudaStreamSynchronize(stream_), cudaSuccess);
+  }
+  minkq_stream stream() override { return stream_; }
+  void wait() override { EXPECT_EQ(cudaStreamSynchronize(stream_), cudaSuccess); }
+  minkq_memory kind() override { return MINKQ_MEMORY_DEVICE; }
+
+ private:
+  cudaStream_t stream_ = nullptr;
+  std::vector<void*> blocks_;
+};
+
+// A CUDA graph recorded from what `record(check)` enqueues on `stream` (global capture mode)
+// and instantiated: `record` passes each minkq call's status to check(), which expects success
+// and keeps the message. ok() once recorded and instantiated without an error.
+class CapturedGraph {
+ public:
+  template <class Record>
+  CapturedGraph(cudaStream_t stream, Record record) : stream_(stream) {
+    EXPECT_EQ(cudaStreamBeginCapture(stream, cudaStreamCaptureModeGlobal), cudaSuccess);
+    bool called = true;
+    record([&](minkq_status status) {
+      EXPECT_EQ(status, MINKQ_SUCCESS) << minkq_last_error_message();
+      called = called && status == MINKQ_SUCCESS;
+    });
+    EXPECT_EQ(cudaStreamEndCapture(stream, &graph_), cudaSuccess);
+    if (called && graph_) EXPECT_EQ(cudaGraphInstantiate(&exec_, graph_, 0), cudaSuccess);
+  }
+  CapturedGraph(const CapturedGraph&) = delete;
+  CapturedGraph& operator=(const CapturedGraph&) = delete;
+  ~CapturedGraph() {
+    if (exec_) cudaGraphExecDestroy(exec_);
+    if (graph_) cudaGraphDestroy(graph_);
+  }
+  bool ok() const { return exec_ != nullptr; }
+  cudaError_t launch() const { return cudaGraphLaunch(exec_, stream_); }
+
+ private:
+  cudaStream_t stream_;
+  cudaGraph_t graph_ = nullptr;
+  cudaGraphExec_t exec_ = nullptr;
+};
+
+class CudaAsync : public Cuda {
+ protected:
+  void SetUp() override {
+    Cuda::SetUp();
+    if (IsSkipped()) return;
+    cpu = std::make_unique<test::Device>("cpu");
+    cuda = std::make_unique<test::Device>("cuda");
+    device_memory = std::make_unique<DeviceAsyncMemory>();
+  }
+  std::unique_ptr<test::Device> cpu, cuda;
+  std::unique_ptr<DeviceAsyncMemory> device_memory;  // made only where a GPU is present
+  DeviceAsyncMemory& memory() { return *device_memory; }
+};
+
+TEST_F(CudaAsync, queries_match_the_blocking_calls_over_refits_and_rebuilds) {
+  test::check_async_matches_blocking(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaAsync, float64_queries_match_the_blocking_calls_over_refits_and_rebuilds) {
+  test::check_async_matches_blocking(memory(), cuda->get(), cpu->get(), MINKQ_SCENE_FLOAT64);
+}
+
+TEST_F(CudaAsync, swept_steps_match_the_blocking_swept_calls) {
+  test::check_async_swept_matches_blocking(memory(), cuda->get(), cpu->get());
+  test::check_async_swept_matches_blocking(memory(), cuda->get(), cpu->get(), MINKQ_SCENE_FLOAT64);
+}
+
+TEST_F(CudaAsync, non_finite_vertices_keep_the_positions_and_are_reported_once) {
+  test::check_async_non_finite_is_pending(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaAsync, bad_arguments_and_missing_reservations_are_refused_at_once) {
+  test::check_async_argument_errors(memory(), cuda->get(), cpu->get());
+}
+
+// A simulator's captured step: refit (or rebuild) + VT + EE recorded once into a CUDA graph by
+// stream capture, then replayed over new positions written into the same device buffer; every
+// replay gives the pairs of the blocking calls on the CPU at those positions.
+TEST_F(CudaAsync, captured_refit_and_queries_replay_over_moving_vertices) {
+  // Launches that block (the sanitizer stages set it) do not mix with stream capture; the gpu
+  // stage runs this test without it.
+  if (const char* blocking = std::getenv("CUDA_LAUNCH_BLOCKING"); blocking && std::string(blocking) == "1")
+    GTEST_SKIP() << "CUDA_LAUNCH_BLOCKING=1: stream capture is not tested with blocking launches";
+  const Mesh mesh = reference::twisted_sheet(40, 3.0);
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  DeviceAsyncMemory& memory = this->memory();
+  test::AsyncScene s(memory, cuda->get(), cpu->get(), mesh);
+  for (bool rebuild : {false, true}) {
+    SCOPED_TRACE(rebuild ? "rebuild" : "refit");
+    const size_t capacity = 1 << 15;
+    ASSERT_EQ(minkq_scene_reserve(s.scene.get(), MINKQ_RESERVE_REBUILD, capacity), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    float* positions = memory.copy_of(mesh.xyz);
+    int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    int32_t* ee_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    uint64_t* counts = static_cast<uint64_t*>(memory.allocate(2 * sizeof(uint64_t)));
+    const minkq_buffer vertices{positions, 0, mesh.vertex_count(), MINKQ_MEMORY_DEVICE};
+    const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL, r};
+    const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL, r};
+    cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
+    const CapturedGraph graph(stream, [&](auto check) {
+      check(rebuild ? minkq_scene_rebuild_async(s.scene.get(), vertices, stream)
+                    : minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
+                                          counts + 1, stream));
+    });
+    ASSERT_TRUE(graph.ok());
+    for (int step = 1; step <= 4; ++step) {
+      Mesh next = mesh;
+      reference::transform(next, 1.0 + 0.05 * step, 0.002 * step);
+      for (size_t v = 0; v < next.vertex_count(); ++v) next.xyz[3 * v + 1] += 0.01f * float(std::cos(0.05 * double(v) * step));
+      memory.write(positions, next.xyz.data(), next.xyz.size() * sizeof(float));
+      ASSERT_EQ(graph.launch(), cudaSuccess);
+      const std::vector<uint64_t> count = memory.read_back(counts, 2);
+      const minkq_buffer host = host_buffer(next.xyz.data(), next.vertex_count());
+      ASSERT_EQ(rebuild ? minkq_scene_rebuild(s.blocking.get(), host) : minkq_scene_refit(s.blocking.get(), host),
+                MINKQ_SUCCESS);
+      const test::Pairs vt_expected = s.blocking.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      const test::Pairs ee_expected = s.blocking.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_EQ(count[0], vt_expected.size()) << "replay " << step;
+      ASSERT_EQ(count[1], ee_expected.size()) << "replay " << step;
+      EXPECT_EQ(test::pairs_of(memory.read_back(vt_pairs, 2 * count[0]), count[0]), vt_expected) << "replay " << step;
+      EXPECT_EQ(test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1]), ee_expected) << "replay " << step;
+    }
+    EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
+  }
+}
+
+// Issue 30: a captured graph keeps the addresses and launch sizes of the scene's device memory,
+// so the blocking calls between its replays must neither move nor outgrow them. A refit + VT +
+// EE graph is captured at positions whose trees keep fewer nodes; between replays a blocking
+// rebuild goes to positions whose trees keep more, and blocking canonical queries find more
+// pairs than the reserved canonical capacity (they grow the blocking queries' scratch). Every
+// replay must still give the CPU's pairs at its positions: with MINKQ_RESERVE_REBUILD, with
+// MINKQ_RESERVE_REFIT only, and with no reservation (a captured query alone, not canonical).
+TEST_F(CudaAsync, blocking_rebuilds_and_queries_between_replays_keep_a_captured_graph_valid) {
+  if (const char* blocking = std::getenv("CUDA_LAUNCH_BLOCKING"); blocking && std::string(blocking) == "1")
+    GTEST_SKIP() << "CUDA_LAUNCH_BLOCKING=1: stream capture is not tested with blocking launches";
+  Mesh few = reference::twisted_sheet(40, 0.0), more = reference::twisted_sheet(40, 3.0);
+  test::TreeCounts few_nodes = test::tree_counts(few), more_nodes = test::tree_counts(more);
+  if (few_nodes.triangles > more_nodes.triangles) {
+    std::swap(few, more);
+    std::swap(few_nodes, more_nodes);
+  }
+  ASSERT_LT(few_nodes.triangles, more_nodes.triangles) << "the rebuild must keep more triangle-tree nodes";
+  const float r = float(0.5 * reference::mean_edge_length(few));
+  const size_t capacity = 1 << 15;  // also the canonical reservation, which the blocking queries pass
+  DeviceAsyncMemory& memory = this->memory();
+  for (uint32_t flags : {uint32_t(MINKQ_RESERVE_REBUILD), uint32_t(MINKQ_RESERVE_REFIT), 0u}) {
+    SCOPED_TRACE("reserve flags " + std::to_string(flags));
+    test::AsyncScene s(memory, cuda->get(), cpu->get(), few);
+    const bool refits = flags != 0, canonical = flags != 0;
+    if (flags != 0)
+      ASSERT_EQ(minkq_scene_reserve(s.scene.get(), flags, capacity), MINKQ_SUCCESS) << minkq_last_error_message();
+    float* positions = memory.copy_of(few.xyz);
+    int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    int32_t* ee_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    uint64_t* counts = static_cast<uint64_t*>(memory.allocate(2 * sizeof(uint64_t)));
+    const minkq_buffer vertices{positions, 0, few.vertex_count(), MINKQ_MEMORY_DEVICE};
+    const uint32_t query_flags = MINKQ_QUERY_LEAF_EXACT | (canonical ? uint32_t(MINKQ_QUERY_CANONICAL) : 0u);
+    const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, query_flags, r};
+    const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, query_flags, r};
+    cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
+    const CapturedGraph graph(stream, [&](auto check) {
+      if (refits) check(minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
+                                          counts + 1, stream));
+    });
+    ASSERT_TRUE(graph.ok());
+    for (int step = 0; step < 3; ++step) {
+      SCOPED_TRACE("replay " + std::to_string(step));
+      // Blocking calls between replays: a rebuild at the positions with more nodes (then the
+      // replay's refit or query runs on that tree), and canonical queries past the reservation.
+      Mesh next = more;
+      reference::transform(next, 1.0 + 0.03 * step, 0.001 * step);
+      ASSERT_EQ(minkq_scene_rebuild(s.scene.get(), host_buffer(next.xyz.data(), next.vertex_count())), MINKQ_SUCCESS)
+          << minkq_last_error_message();
+      const test::Pairs wide = s.scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 4 * r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_GT(wide.size(), 2 * capacity);
+      s.scene.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, 4 * r, MINKQ_QUERY_LEAF_EXACT);
+      memory.write(positions, next.xyz.data(), next.xyz.size() * sizeof(float));
+      ASSERT_EQ(graph.launch(), cudaSuccess);
+      const std::vector<uint64_t> count = memory.read_back(counts, 2);
+      ASSERT_EQ(minkq_scene_rebuild(s.blocking.get(), host_buffer(next.xyz.data(), next.vertex_count())), MINKQ_SUCCESS);
+      const test::Pairs vt_expected = s.blocking.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      const test::Pairs ee_expected = s.blocking.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_EQ(count[0], vt_expected.size());
+      ASSERT_EQ(count[1], ee_expected.size());
+      const test::Pairs vt_got = test::pairs_of(memory.read_back(vt_pairs, 2 * count[0]), count[0]);
+      const test::Pairs ee_got = test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1]);
+      EXPECT_EQ(canonical ? vt_got : test::sorted(vt_got), vt_expected);  // canonical: sorted on the device
+      EXPECT_EQ(canonical ? ee_got : test::sorted(ee_got), ee_expected);
+    }
+    EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
+  }
+}
+
+}  // namespace
+}  // namespace minkq
+
+#endif  // MINKQ_TEST_HAVE_CUDART
