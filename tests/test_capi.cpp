@@ -204,6 +204,65 @@ TEST_F(Fixture, scene_edges_come_back_derived_in_lexicographic_order_or_as_given
   }
 }
 
+// A scene with an edge tree keeps its edges only in the tree's leaf order, and a rebuild
+// reorders that; minkq_scene_edges gives them back by id all the same, derived or given (here in
+// a shuffled order), and the EE pairs of a rebuilt scene are a new scene's at those positions.
+TEST_F(Fixture, scene_edges_keep_their_numbering_over_refits_and_rebuilds) {
+  std::vector<std::string> specs = {"cpu"};
+  if (minkq_cuda_device_count() > 0) specs.push_back("cuda");
+  const reference::Mesh flat = reference::twisted_sheet(30, 0.0);
+  std::vector<int32_t> given = reference::derive_edges(flat.tris);
+  test::Random rng(test::fresh_seed());
+  for (int e = int(given.size() / 2) - 1; e > 0; --e) {  // a shuffle of the edges and of each one's ends
+    const int f = rng.integer(0, e);
+    std::swap(given[2 * e], given[2 * f]);
+    std::swap(given[2 * e + 1], given[2 * f + 1]);
+    if (rng.integer(0, 1)) std::swap(given[2 * e], given[2 * e + 1]);
+  }
+  for (const std::string& spec : specs) {
+    test::Device dev(spec.c_str());
+    for (const bool give : {false, true})
+      for (const uint32_t flags : {uint32_t(MINKQ_SCENE_EE), uint32_t(MINKQ_SCENE_VT | MINKQ_SCENE_EE)}) {
+        minkq_scene_desc d{};
+        d.flags = flags;
+        d.vertices = host_buffer(flat.xyz.data(), flat.vertex_count());
+        d.triangles = host_buffer(flat.tris.data(), flat.triangle_count());
+        if (give) d.edges = host_buffer(given.data(), given.size() / 2);
+        cxx::Scene scene = test::new_scene(dev.get(), d);
+        ASSERT_TRUE(scene);
+        auto edges_of = [&] {
+          std::vector<int32_t> edges(2 * minkq_scene_edge_count(scene.get()));
+          EXPECT_EQ(minkq_scene_edges(scene.get(), edges.data(), edges.size() / 2), MINKQ_SUCCESS) << message();
+          return edges;
+        };
+        const std::vector<int32_t> created = edges_of();
+        EXPECT_EQ(created, give ? given : reference::derive_edges(flat.tris));  // the library's numbering
+        const std::string what = spec + (give ? " given" : " derived") + " flags " + std::to_string(flags);
+        for (double turns : {3.0, -2.0}) {
+          const reference::Mesh wrung = reference::twisted_sheet(30, turns);
+          const minkq_buffer moved = host_buffer(wrung.xyz.data(), wrung.vertex_count());
+          ASSERT_EQ(minkq_scene_refit(scene.get(), moved), MINKQ_SUCCESS) << message();
+          EXPECT_EQ(edges_of(), created) << what << " after a refit to " << turns << " turns";
+          ASSERT_EQ(minkq_scene_rebuild(scene.get(), moved), MINKQ_SUCCESS) << message();
+          EXPECT_EQ(edges_of(), created) << what << " after a rebuild at " << turns << " turns";
+          d.vertices = moved;
+          cxx::Scene fresh = test::new_scene(dev.get(), d);
+          ASSERT_TRUE(fresh);
+          const float r = float(0.5 * reference::mean_edge_length(wrung));
+          const minkq_query_desc q{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST, r};
+          minkq_query_info rebuilt{}, made{};
+          EXPECT_EQ(minkq_scene_query(scene.get(), &q, nullptr, 0, MINKQ_MEMORY_HOST, &rebuilt), MINKQ_ERROR_CAPACITY);
+          EXPECT_EQ(minkq_scene_query(fresh.get(), &q, nullptr, 0, MINKQ_MEMORY_HOST, &made), MINKQ_ERROR_CAPACITY);
+          std::vector<int32_t> a(2 * rebuilt.count), b(2 * made.count);
+          ASSERT_EQ(minkq_scene_query(scene.get(), &q, a.data(), rebuilt.count, MINKQ_MEMORY_HOST, &rebuilt), MINKQ_SUCCESS);
+          ASSERT_EQ(minkq_scene_query(fresh.get(), &q, b.data(), made.count, MINKQ_MEMORY_HOST, &made), MINKQ_SUCCESS);
+          EXPECT_GT(made.count, 0u) << what;
+          EXPECT_EQ(a, b) << what << " EE pairs after a rebuild at " << turns << " turns";
+        }
+      }
+  }
+}
+
 TEST_F(Fixture, capacity_reports_the_exact_count_and_writes_nothing_past_the_buffer) {
   test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   const test::Pairs all = scene.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0.1f);
