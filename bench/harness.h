@@ -34,14 +34,20 @@ struct Timing {
   }
 };
 
+// The median of a non-empty set of values (any order): the middle one, or the mean of the two.
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 // Median and range of a non-empty set of times (any order).
-inline Timing summarize(std::vector<double> t) {
-  std::sort(t.begin(), t.end());
+inline Timing summarize(const std::vector<double>& t) {
   Timing out;
   out.repeats = int(t.size());
-  out.min = t.front();
-  out.max = t.back();
-  out.median = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+  out.min = *std::min_element(t.begin(), t.end());
+  out.max = *std::max_element(t.begin(), t.end());
+  out.median = median(t);
   return out;
 }
 
@@ -60,7 +66,7 @@ Timing measure(int warmup, int repeats, Fn&& fn, Before&& before) {
     fn();
     t.push_back(now_ms() - start);
   }
-  return summarize(std::move(t));
+  return summarize(t);
 }
 template <class Fn>
 Timing measure(int warmup, int repeats, Fn&& fn) {

@@ -19,12 +19,6 @@ namespace minkq::bench::float64_swept {
 
 namespace ref = minkq::reference;
 
-inline double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 inline double geomean(const std::vector<double>& v) {
   if (v.empty()) return NAN;
   double s = 0;
