@@ -91,19 +91,28 @@ def _longest_pause_while(work) -> tuple:
     return spent[0], longest
 
 
-def test_gil_is_released_during_build_refit_rebuild_and_query(device):
+@pytest.fixture(scope="module")
+def gil_sheet(device):
+    """sheet(n): (vertices, triangles, moved vertices, radius, scene) of an n x n twisted sheet,
+    made once for the GIL tests of this module."""
     from minkq import demo
 
     sheets = {}
 
     def sheet(n):
-        """(vertices, triangles, moved vertices, radius, scene) of an n x n twisted sheet."""
         if n not in sheets:
             xyz, tris = demo.twisted_sheet(n, 3.0)
             r = 0.25 * demo.mean_edge_length(xyz, demo.derive_edges(tris))
             sheets[n] = (xyz, tris, xyz * np.float32(1.001), r, minkq.Scene(device, xyz, tris))
         return sheets[n]
 
+    return sheet
+
+
+# One test per call, so that a call too fast to time here skips alone, not the calls after it.
+@pytest.mark.parametrize("name", ["build", "refit", "rebuild", "query"])
+def test_gil_is_released_during_build_refit_rebuild_and_query(device, gil_sheet, name):
+    sheet = gil_sheet
     calls = {
         "build": lambda n: lambda: minkq.Scene(device, sheet(n)[0], sheet(n)[1]),
         "refit": lambda n: lambda: sheet(n)[4].refit(sheet(n)[2]),
@@ -111,22 +120,22 @@ def test_gil_is_released_during_build_refit_rebuild_and_query(device):
         "query": lambda n: lambda: sheet(n)[4].query("ee", "capsule_exact", sheet(n)[3],
                                                      leaf_exact=True),
     }
-    for name, make_call in calls.items():
-        # One call must last long enough that scheduling noise on a busy machine (the counting
-        # thread shares the cores with the library's threads) is small beside it: the scene
-        # grows until it does, so fast machines are tested as strictly as slow ones.
-        for n in (160, 320, 640, 1280):
-            call = make_call(n)
-            call()  # warm: the sheet and its scene exist before timing
-            start = time.perf_counter()
-            call()
-            if time.perf_counter() - start >= 0.1:
-                break
-        else:
-            pytest.skip(f"{name}: one call on a 1280 x 1280 sheet takes under 0.1 s here")
-        spent, longest = _longest_pause_while(call)
-        # A call that kept the GIL would stall this thread for its whole duration.
-        assert longest < 0.5 * spent, f"{name}: this thread stalled {longest:.3f} s of {spent:.3f} s"
+    make_call = calls[name]
+    # One call must last long enough that scheduling noise on a busy machine (the counting
+    # thread shares the cores with the library's threads) is small beside it: the scene
+    # grows until it does, so fast machines are tested as strictly as slow ones.
+    for n in (160, 320, 640, 1280):
+        call = make_call(n)
+        call()  # warm: the sheet and its scene exist before timing
+        start = time.perf_counter()
+        call()
+        if time.perf_counter() - start >= 0.1:
+            break
+    else:
+        pytest.skip(f"{name}: one call on a 1280 x 1280 sheet takes under 0.1 s here")
+    spent, longest = _longest_pause_while(call)
+    # A call that kept the GIL would stall this thread for its whole duration.
+    assert longest < 0.5 * spent, f"{name}: this thread stalled {longest:.3f} s of {spent:.3f} s"
 
 
 def test_threads_share_a_scene_and_a_device(device):
