@@ -133,6 +133,14 @@ void run_step(const Step& step, Side& s, const minkq_buffer& vertices, float r, 
   }
 }
 
+// The items of a comma-separated option value, in order (empty ones kept: they name nothing).
+std::vector<std::string> comma_list(const std::string& value) {
+  std::vector<std::string> items;
+  std::stringstream list(value);
+  for (std::string item; std::getline(list, item, ',');) items.push_back(item);
+  return items;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -151,14 +159,10 @@ int main(int argc, char** argv) try {
     else if (arg == "--rounds") rounds = std::max(1, std::atoi(value().c_str()));
     else if (arg == "--data") data = value();
     else if (arg == "--out") out = value();
-    else if (arg == "--scenes") {
-      scenes.clear();
-      std::stringstream list(value());
-      for (std::string s; std::getline(list, s, ',');) scenes.push_back(s);
-    } else if (arg == "--steps") {
+    else if (arg == "--scenes") scenes = comma_list(value());
+    else if (arg == "--steps") {
       steps.clear();
-      std::stringstream list(value());
-      for (std::string label; std::getline(list, label, ',');) {
+      for (const std::string& label : comma_list(value())) {
         const auto it = std::find_if(std::begin(kAllSteps), std::end(kAllSteps),
                                      [&](const Step& step) { return label == step.label; });
         if (it == std::end(kAllSteps)) throw std::runtime_error("--steps: no step named \"" + label + "\"");

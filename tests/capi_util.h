@@ -64,9 +64,12 @@ inline cxx::Result new_result() {
 struct Scene : cxx::Scene {
   Scene(minkq_device* device, const reference::Mesh& mesh, uint32_t flags) : cxx::Scene(new_scene(device, mesh, flags)) {}
 
-  std::vector<int32_t> edges() const {
-    std::vector<int32_t> out(2 * minkq_scene_edge_count(get()));
-    EXPECT_EQ(minkq_scene_edges(get(), out.data(), out.size() / 2), MINKQ_SUCCESS);
+  std::vector<int32_t> edges() const { return edges_of(get()); }
+
+  // The same for any scene: its edges in the numbering EE pairs use.
+  static std::vector<int32_t> edges_of(const minkq_scene* scene) {
+    std::vector<int32_t> out(2 * minkq_scene_edge_count(scene));
+    EXPECT_EQ(minkq_scene_edges(scene, out.data(), out.size() / 2), MINKQ_SUCCESS) << minkq_last_error_message();
     return out;
   }
 

@@ -103,21 +103,16 @@ TEST_F(Cuda, scene_edges_keep_their_numbering_over_rebuilds) {
   for (uint32_t flags : {kBoth, uint32_t(MINKQ_SCENE_EE), uint32_t(MINKQ_SCENE_VT)}) {
     cxx::Scene a = make_scene(cpu.get(), flat, flags), b = make_scene(cuda.get(), flat, flags);
     ASSERT_TRUE(a && b);
-    auto edges_of = [](minkq_scene* scene) {
-      std::vector<int32_t> edges(2 * minkq_scene_edge_count(scene));
-      EXPECT_EQ(minkq_scene_edges(scene, edges.data(), edges.size() / 2), MINKQ_SUCCESS) << minkq_last_error_message();
-      return edges;
-    };
-    const std::vector<int32_t> created = edges_of(a.get());
+    const std::vector<int32_t> created = test::Scene::edges_of(a.get());
     const std::string what = "flags " + std::to_string(flags);
-    expect_same_pairs(created, edges_of(b.get()), what + " at creation");
+    expect_same_pairs(created, test::Scene::edges_of(b.get()), what + " at creation");
     for (double turns : {3.0, -2.0}) {
       const Mesh wrung = reference::twisted_sheet(40, turns);
       const minkq_buffer moved = host_buffer(wrung.xyz.data(), wrung.vertex_count());
       ASSERT_EQ(minkq_scene_rebuild(a.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
       ASSERT_EQ(minkq_scene_rebuild(b.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
       const std::string at = what + " after rebuild at " + std::to_string(turns) + " turns";
-      expect_same_pairs(created, edges_of(b.get()), at);
+      expect_same_pairs(created, test::Scene::edges_of(b.get()), at);
       if (flags & MINKQ_SCENE_EE) {
         const uint32_t q = MINKQ_QUERY_CANONICAL | MINKQ_QUERY_DIGEST;
         const float r = float(0.5 * reference::mean_edge_length(wrung));
