@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -124,6 +125,24 @@ inline std::string fmt_count(double v) {
   else
     std::snprintf(b, sizeof b, "%.0f", v);
   return b;
+}
+
+// Geometric mean of the finite, positive values of v (NaN where there are none): speed-up and
+// count ratios over scenes.
+inline double geomean(const std::vector<double>& v) {
+  double s = 0;
+  int n = 0;
+  for (double x : v)
+    if (std::isfinite(x) && x > 0) s += std::log(x), ++n;
+  return n ? std::exp(s / n) : NAN;
+}
+
+// The time a result file is written, "2026-12-06 08:13 UTC".
+inline std::string utc_now() {
+  char when[64];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(when, sizeof when, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+  return when;
 }
 
 }  // namespace minkq::bench

@@ -1,10 +1,11 @@
-// minkq_bench: the benchmark driver of issue 7. For each scene, frame, backend and mode it
+// minkq_bench: the product benchmark (issue 7). For each scene, frame, backend and mode it
 // measures BVH build, refit, VT and EE query time (warm-up, repeats, median and range),
 // candidates, true contacts (the double-precision reference oracle), false-positive ratio and
 // false negatives (any non-zero count fails the run), the speedup against box mode and against
 // Embree's point query on the CPU, and a measured narrow-phase cost per candidate for the
-// end-to-end estimate. Writes Markdown tables and CSV files naming the machine; see
-// bench/README.md and `minkq_bench --help`.
+// end-to-end estimate; the C API suites of bench/suites/ (count-only queries, the float64 input
+// path, swept queries) each set one path against its baseline. Writes Markdown tables and CSV
+// files naming the machine; see bench/README.md and `minkq_bench --help`.
 // The command line, the suites and the writing of every file are here; the options and the
 // measured records are in minkq_bench.h, one scene's measurement in minkq_bench_measure.cpp, the
 // tables in minkq_bench_tables.cpp.
@@ -16,9 +17,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "embree_vt.h"
+#include "peers/embree_vt.h"
 #include "minkq_bench.h"
 #include "scenes.h"
+#include "suites/suites.h"
 
 namespace fs = std::filesystem;
 using namespace minkq::bench;
@@ -30,21 +32,35 @@ const char* const kUsage = R"(usage: minkq_bench [options]
 
 Runs the benchmark suites and writes Markdown tables and CSV files to --out.
 
-suites (--suites, comma separated; default scenes,real,sweep,scale):
+suites (--suites, comma separated; default all of them):
   scenes  the eight Newton scenes at reference size plus REFERENCES.md's twisted sheet
           (256^2), every frame: build, refit, VT/EE in every mode, Embree VT, narrow phase
   real    the real meshes (data/meshes.tar.xz, the larger ones from --data) at r = 0.25 x mean edge
   sweep   radius sweep 0.1x-8x mean edge on the last frame of each scene (real meshes to 2x)
   scale   large instances (--scale-triangles) of --scale-scenes
+  count   MINKQ_QUERY_COUNT against the same queries storing their pairs, every procedural
+          scene and the 130k twisted sheet (--large: also the 1M sheet), each backend;
+          count.md (count_cuda.md on CUDA); counts checked equal
+  float64 MINKQ_SCENE_FLOAT64 scenes against float32 ones of the same floats (procedural
+          scenes, the 130k sheet, also at +1e3 / +1e4, the real meshes), CPU; float64.md;
+          pairs checked against float32's and the double oracle
+  swept   swept steps (minkq_scene_refit_swept) by VT mode against box mode and the static
+          queries, CPU; swept.md; modes' nesting and a sampled-time oracle checked
+  scenes, real, sweep and scale write scenes.md, real.md, sweep.md, scale.md and, over all
+  of them, summary.md, targets.md, memory.md, work.md, error_vs_time.md/.csv, rows.csv,
+  steps.csv
 
 options:
   --data DIR              the benchmark-only meshes (default: ../shared/data beside the source tree;
                           a mesh in neither it nor data/meshes.tar.xz is skipped, by name)
   --out DIR               result folder (default: bench/results in the source tree)
   --quick                 smoke run (seconds): reference scenes, 2 frames, 1 repeat, no
-                          warm-up, suites scenes only, written to --out (give one!)
+                          warm-up, suites scenes only unless --suites is given, small
+                          scenes for count, float64 and swept; written to --out (give one!)
   --frames N              frames per scene in the scenes suite (default 4)
-  --repeats N             timed repeats per measurement (default 5; sweep/scale use fewer)
+  --repeats N             timed repeats per measurement (default 5; sweep/scale use fewer;
+                          count 15, float64 and swept 7)
+  --large                 count suite: add the 1M-triangle twisted sheet
   --warmup N              untimed runs before them (default 1)
   --threads N             limit TBB (minkq CPU backend, oracle, Embree loop) to N threads
   --backends LIST         cpu,cuda (default: cpu, and cuda where a GPU is usable)
@@ -57,7 +73,8 @@ options:
   --list                  print the scenes (vertices, triangles, edges, radius) and exit
   --list-at T             the same for the procedural scenes scaled to about T triangles
 
-exit status: 0 success, 1 false negatives found, 2 bad arguments, 3 failure
+exit status: 0 success, 1 false negatives found (or a suite's check failed), 2 bad
+arguments, 3 failure
 )";
 
 std::vector<std::string> split(const std::string& s) {
@@ -67,6 +84,29 @@ std::vector<std::string> split(const std::string& s) {
   while (std::getline(ss, item, ','))
     if (!item.empty()) out.push_back(item);
   return out;
+}
+
+// The C API suites (bench/suites/), each writing its own file; false when a check failed.
+bool run_api_suites(const Options& opt) {
+  bool ok = true;
+  const std::string by = std::string("`minkq_bench") + (opt.quick ? " --quick" : "") + (opt.large ? " --large" : "");
+  auto run_of = [&](minkq_device* device, int repeats, const std::string& suite) {
+    return suites::SuiteRun{device, opt.data_dir, opt.quick ? 1 : (opt.suite_repeats > 0 ? opt.suite_repeats : repeats),
+                            opt.quick, machine_line(minkq_device_name(device)), by + " --suites " + suite + "`"};
+  };
+  if (opt.suites.count("count"))
+    for (const auto& backend : opt.backends) {
+      Device device = open_device(backend.c_str());
+      const std::string name = backend == "cpu" ? "count.md" : "count_" + backend.substr(0, backend.find(':')) + ".md";
+      write_file(opt.out_dir + "/" + name, suites::count_report(run_of(device.get(), 15, "count"), opt.large, ok));
+    }
+  Device cpu = open_device("cpu");
+  if (opt.suites.count("float64"))
+    write_file(opt.out_dir + "/float64.md", suites::float64_report(run_of(cpu.get(), 7, "float64"), ok));
+  if (opt.suites.count("swept"))
+    write_file(opt.out_dir + "/swept.md", suites::swept_report(run_of(cpu.get(), 7, "swept"), ok));
+  if (!ok) std::fprintf(stderr, "FAIL: a check of the count, float64 or swept suite failed (see above)\n");
+  return ok;
 }
 
 int run(int argc, char** argv) {
@@ -83,7 +123,8 @@ int run(int argc, char** argv) {
     else if (a == "--out") opt.out_dir = value();
     else if (a == "--quick") opt.quick = true;
     else if (a == "--frames") opt.frames = std::stoi(value()), frames_given = true;
-    else if (a == "--repeats") opt.repeats = std::stoi(value()), repeats_given = true;
+    else if (a == "--repeats") opt.repeats = opt.suite_repeats = std::stoi(value()), repeats_given = true;
+    else if (a == "--large") opt.large = true;
     else if (a == "--warmup") opt.warmup = std::stoi(value());
     else if (a == "--threads") opt.threads = std::stoi(value());
     else if (a == "--backends") opt.backends = split(value());
@@ -195,6 +236,8 @@ int run(int argc, char** argv) {
   }
 
   if (opt.export_only) return 0;
+  const bool suites_ok = run_api_suites(opt);
+  if (rep.scenes.empty()) return suites_ok ? 0 : 1;
   // ---- write ----
   const std::string& out = opt.out_dir;
   if (opt.suites.count("scenes"))
@@ -243,7 +286,7 @@ int run(int argc, char** argv) {
     return 1;
   }
   std::fprintf(stderr, "no false negatives\n");
-  return 0;
+  return suites_ok ? 0 : 1;
 }
 
 }  // namespace

@@ -26,7 +26,9 @@ struct Options {
   double list_at = 0;  // --list-at: list the scenes at this many triangles
   bool export_only = false;
   int frames = 4, repeats = 5, warmup = 1, threads = 0;
-  std::set<std::string> suites = {"scenes", "real", "sweep", "scale"};
+  std::set<std::string> suites = {"scenes", "real", "sweep", "scale", "count", "float64", "swept"};
+  int suite_repeats = 0;  // --repeats as given, else 0: the count, float64 and swept suites' own default
+  bool large = false;     // --large: the count suite adds the 1M-triangle twisted sheet
   std::vector<std::string> backends;
   std::vector<std::string> scenes;
   std::vector<std::string> scale_scenes = {"twist_target"};
@@ -44,7 +46,7 @@ struct ModeSpec {
 };
 // VT capsule_ray / capsule_exact are box / sphere for points (minkq.h), so they are not repeated.
 // leaf_exact (the contacts) runs behind the box node test: 1.03-1.21x (VT) and 2.12-2.82x (EE)
-// faster than behind sphere / capsule_exact (minkq_ablation --only contacts).
+// faster than behind sphere / capsule_exact (docs/design-notes.md).
 inline const ModeSpec kModes[] = {
     {MINKQ_QUERY_VT, "box", MINKQ_MODE_BOX, 0},
     {MINKQ_QUERY_VT, "sphere", MINKQ_MODE_SPHERE, 0},

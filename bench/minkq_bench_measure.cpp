@@ -14,7 +14,7 @@
 
 #include "cpu/tree.h"
 #include "minkq/queries.h"
-#include "embree_vt.h"
+#include "peers/embree_vt.h"
 #include "minkq/predicates.h"
 #include "minkq_bench.h"
 

@@ -55,25 +55,14 @@ std::string scene_line(const SceneInfo& s) {
   return o.str();
 }
 
-double geomean(const std::vector<double>& v) {
-  double s = 0;
-  int n = 0;
-  for (double x : v)
-    if (std::isfinite(x) && x > 0) s += std::log(x), ++n;
-  return n ? std::exp(s / n) : NAN;
-}
-
 }  // namespace
 
 std::string header(const std::string& title, const std::string& machine, const Options& opt, double load_start) {
   std::ostringstream o;
-  char when[64];
-  const std::time_t now = std::time(nullptr);
-  std::strftime(when, sizeof when, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
   o << "# " << title << "\n\n";
   o << "Machine: " << machine << ". TBB threads: " << (opt.threads > 0 ? std::to_string(opt.threads) : "all") << ". ";
   o << "Load average (1 min) at start " << fmt(load_start, 3) << ", at write " << fmt(load_average(), 3) << ". ";
-  o << "Written " << when << " by `minkq_bench`" << (opt.quick ? " --quick" : "") << "; repeats " << opt.repeats
+  o << "Written " << utc_now() << " by `minkq_bench`" << (opt.quick ? " --quick" : "") << "; repeats " << opt.repeats
     << " after " << opt.warmup << " warm-up; times are medians in ms with the range of the repeats in brackets.\n\n";
   return o.str();
 }

@@ -4,7 +4,6 @@
   error_vs_time_<scene>.png  per scene: candidates / true contacts against query time and against
                              end-to-end time (query + measured narrow phase), VT and EE, every mode
   error_vs_time_all.png      the same for every reference scene on one page
-  hr_study.png               candidate drop against h/r, with the prototype's reference figures
   sweep_speed.png            speed of each mode over box against r / mean edge (radius sweep)
 
 usage: plot.py RESULTS_DIR
@@ -125,49 +124,6 @@ def error_vs_time(results, machine):
         print("wrote", out)
 
 
-def hr_study(results, machine):
-    rows = read(os.path.join(results, "hr_study.csv"))
-    if not rows:
-        return
-    fig, ax = plt.subplots(figsize=(9, 5.5))
-    series = {}
-    for r in rows:
-        key = (r["input"], r["query"], r["mode"])
-        series.setdefault(key, []).append((float(r["h_over_r"]), float(r["drop_percent"])))
-    styles = {"3-D spread cubes": "-", "twist_target": "--", "cloth_hanging": ":"}
-    for (inp, query, mode), pts in series.items():
-        pts.sort()
-        marker, color = MODE_STYLE.get(mode, ("x", "k"))
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], styles.get(inp, "-"), marker=marker, color=color,
-                label=f"{inp}: {query} {mode}", ms=5)
-    synth = sorted(p[0] for k, v in series.items() if k[0] == "3-D spread cubes" for p in v)
-    if synth:
-        xs = [synth[0] * (synth[-1] / synth[0]) ** (i / 100) for i in range(101)]
-
-        def theory(hr):
-            a, r = 2 * hr, 1.0
-            swept = a**3 + 6 * a * a * r + 3 * math.pi * a * r * r + 4 / 3 * math.pi * r**3
-            return 100 * (1 - swept / (a + 2 * r) ** 3)
-
-        ax.plot(xs, [theory(x) for x in xs], color="#1f77b4", lw=3, alpha=0.25, label="sphere theory (Steiner)")
-    ax.axhline(46.8, color="#1f77b4", ls="-.", lw=1)
-    ax.axhline(51.7, color="#2ca02c", ls="-.", lw=1)
-    ax.text(ax.get_xlim()[0] if False else 0.004, 47.5, "prototype: sphere 46.8%", color="#1f77b4", fontsize=8)
-    ax.text(0.004, 52.4, "prototype: capsule 51.7%", color="#2ca02c", fontsize=8)
-    ax.set_xscale("log")
-    ax.set_xlabel("h / r (primitive box half-size over query radius)")
-    ax.set_ylabel("candidate drop vs padded box, %")
-    ax.set_ylim(-2, 102)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=6.5, loc="upper right", ncol=2)
-    ax.set_title("h/r study\n" + machine, fontsize=9)
-    fig.tight_layout()
-    out = os.path.join(results, "hr_study.png")
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
-    print("wrote", out)
-
-
 def sweep(results, machine):
     rows = [r for r in read(os.path.join(results, "rows.csv")) if r["suite"] == "sweep" and r["backend"] == "cpu"]
     if not rows:
@@ -211,7 +167,6 @@ def main():
     results = sys.argv[1]
     machine = machine_line(results)
     error_vs_time(results, machine)
-    hr_study(results, machine)
     sweep(results, machine)
     return 0
 

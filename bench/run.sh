@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # Regenerates every benchmark table and plot of bench/results with one command.
 #
-#   bench/run.sh            full run (about 45 min on 2 cores, Warp stage included): scenes, real meshes, radius
-#                           sweep, 1M/2M twisted sheets, stability report, h/r study, plots,
-#                           Warp/Newton CPU baselines, float64 and swept queries, ipctk CCD
-#                           broad phases (when the Scalable CCD sample data is found); writes
-#                           bench/results/
-#   bench/run.sh --quick    smoke run (seconds): reference scenes (2 frames, 1 repeat), quick
-#                           stability and h/r runs; writes build-bench/quick-results/ and exits
-#                           non-zero on any false negative or bound violation
+#   bench/run.sh            full run (about 45 min on 2 cores, Warp stage included): minkq_bench's
+#                           suites (scenes, real meshes, radius sweep, 1M/2M twisted sheets,
+#                           count-only, float64 and swept queries), plots, Warp/Newton CPU
+#                           baselines, ipctk CCD broad phases (when the Scalable CCD sample data
+#                           is found); writes bench/results/
+#   bench/run.sh --quick    smoke run (about a minute): reference scenes (2 frames, 1 repeat) and
+#                           the count, float64 and swept suites on small scenes; writes
+#                           build-bench/quick-results/ and exits non-zero on any false negative
+#                           or failed check
 #   options: --out DIR (results folder), --no-warp (skip the Python/Warp stage),
 #            --no-install (do not apt-get/pip anything)
 # Environment: MINKQ_BENCH_BUILD (build folder, default build-bench), MINKQ_WITH_CUDA (AUTO|ON|OFF),
@@ -23,7 +24,7 @@ while [ $# -gt 0 ]; do
     --no-warp) warp=0 ;;
     --no-install) install=0 ;;
     --out) out=$2; shift ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -43,37 +44,22 @@ if [ $install = 1 ]; then
 fi
 
 cmake -S "$root/bench" -B "$build" -DCMAKE_BUILD_TYPE=Release -DMINKQ_WITH_CUDA="${MINKQ_WITH_CUDA:-AUTO}" >/dev/null
-cmake --build "$build" -j "$(nproc)" --target minkq_bench minkq_stability minkq_hr_study minkq_ablation \
-  minkq_float64_swept minkq_count minkq_build_study minkq_traversal_study >/dev/null
+cmake --build "$build" -j "$(nproc)" --target minkq_bench >/dev/null
 bin=$build/bin
 mkdir -p "$out"
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-), $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg)"
 
 status=0
 if [ $quick = 1 ]; then
-  "$bin/minkq_bench" --quick --out "$out" || status=$?
-  "$bin/minkq_stability" --quick --out "$out" || status=$?
-  "$bin/minkq_hr_study" --quick --out "$out" || status=$?
-  "$bin/minkq_ablation" --quick --out "$out" || status=$?
-  "$bin/minkq_float64_swept" --quick --out "$out" || status=$?
-  "$bin/minkq_count" --quick --out "$out" || status=$?
-  "$bin/minkq_build_study" --quick --out "$out" || status=$?
-  "$bin/minkq_traversal_study" --quick --out "$out" || status=$?
+  "$bin/minkq_bench" --quick --suites scenes,count,float64,swept --out "$out" || status=$?
   [ $status = 0 ] && echo "bench quick run: 1 passed, 0 failed (no false negatives; results in $out)" \
                   || echo "bench quick run: 0 passed, 1 failed (status $status; see $out)"
   exit $status
 fi
 
-# Full run. Each program exits 1 on a false negative (or, for stability, a bound violation);
-# the tables are written either way, so keep going and report at the end.
-"$bin/minkq_bench" --out "$out" || status=$?
-"$bin/minkq_stability" --out "$out" || status=$?
-"$bin/minkq_hr_study" --out "$out" || status=$?
-"$bin/minkq_ablation" --out "$out" || status=$?
-"$bin/minkq_float64_swept" --out "$out" || status=$?
-"$bin/minkq_count" --large --out "$out" || status=$?
-"$bin/minkq_build_study" --large --out "$out" || status=$?
-"$bin/minkq_traversal_study" --large --out "$out" || status=$?
+# Full run: every suite. minkq_bench exits 1 on a false negative or a failed check; the tables
+# are written either way, so keep going and report at the end.
+"$bin/minkq_bench" --large --out "$out" || status=$?
 
 venv=$build/venv
 if [ $install = 1 ] && [ ! -x "$venv/bin/python" ]; then python3 -m venv "$venv"; fi
@@ -92,14 +78,14 @@ if [ $warp = 1 ] && [ -x "$venv/bin/python" ]; then
   # float coordinates (exported), last frame each.
   rm -rf "$build/export" "$build/threads1"
   "$bin/minkq_bench" --suites scenes --frames 2 --repeats 3 --threads 1 --export "$build/export" --out "$build/threads1" || status=$?
-  "$venv/bin/python" "$root/bench/warp_baseline.py" "$build/export" "$build/threads1/rows.csv" "$out/warp.md" ||
+  "$venv/bin/python" "$root/bench/peers/warp_baseline.py" "$build/export" "$build/threads1/rows.csv" "$out/warp.md" ||
     echo "warp_baseline.py failed (see $out/warp.md)"
   cp "$build/threads1/summary.md" "$out/summary_threads1.md"
   # The 1M twisted sheet, where Newton's absolute epsilon loses EE contacts; minkq's columns from the
   # main (all-threads) run.
   rm -rf "$build/export1M"
   "$bin/minkq_bench" --suites scale --scale-scenes twist_target --scale-triangles 1e6 --export-only "$build/export1M"
-  "$venv/bin/python" "$root/bench/warp_baseline.py" "$build/export1M" "$out/rows.csv" "$out/warp_1M.md" --minkq-threads all ||
+  "$venv/bin/python" "$root/bench/peers/warp_baseline.py" "$build/export1M" "$out/rows.csv" "$out/warp_1M.md" --minkq-threads all ||
     echo "warp_baseline.py (1M) failed"
 fi
 
@@ -117,7 +103,7 @@ ccd_env=(env PYTHONPATH="$root/bindings/python/python${PYTHONPATH:+:$PYTHONPATH}
 if [ ! -x "$ccd_venv/bin/python" ] || ! "${ccd_env[@]}" "$ccd_venv/bin/python" -c 'import minkq, ipctk' 2>/dev/null; then
   echo "ccd_peers: skipped (needs ipctk in $ccd_venv and minkq's Python module: bindings/test.sh builds it)" >&2
 else
-  "${ccd_env[@]}" "$ccd_venv/bin/python" "$root/bench/ccd_peers.py" --out "$out/ccd_peers.md" || status=$?
+  "${ccd_env[@]}" "$ccd_venv/bin/python" "$root/bench/peers/ccd_peers.py" --out "$out/ccd_peers.md" || status=$?
 fi
 echo "results in $out (status $status)"
 exit $status

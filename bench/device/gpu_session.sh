@@ -48,8 +48,7 @@
 #   fuzz       fuzz_campaign (fuzz/campaign): the differential checks on the corpus and
 #              $MINKQ_FUZZ_INPUTS (default 3000) random inputs, CPU == CUDA == Embree == oracle
 #   bench      minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale),
-#              frames exported for Warp, minkq_ablation --only fused --backend cuda and
-#              minkq_count --backend cuda --large;
+#              frames exported for Warp, and minkq_bench --suites count --backends cuda --large;
 #              $OUT/results.tar.gz holds bench/results-style tables
 #   warp       bench/warp_baseline.py --device cuda:0 on the exported frames ($OUT/warp_gpu.md)
 #   python     the Python package's gpu tests (pytest -m gpu on bindings/python/tests: Warp
@@ -195,15 +194,10 @@ stage_bench() {
   "$build/bin/minkq_bench" "${args[@]}" > "$logs/bench.log" 2>&1
   local status=$?
   tail -20 "$logs/bench.log"
-  # One fused VT + EE launch against two (fused_cuda.md), beside the CPU's fused.md.
-  local fused=(--only fused --backend cuda --out "$results")
-  [ $smoke = 1 ] && fused=(--only fused --backend auto --quick --out "$results")  # no GPU there
-  "$build/bin/minkq_ablation" "${fused[@]}" > "$logs/fused.log" 2>&1 || status=1
-  tail -3 "$logs/fused.log"
   # Count-only queries against stored ones on the GPU (count_cuda.md), beside the CPU's count.md.
-  local count=(--backend cuda --large --out "$results")
-  [ $smoke = 1 ] && count=(--backend auto --quick --out "$results")
-  "$build/bin/minkq_count" "${count[@]}" > "$logs/count.log" 2>&1 || status=1
+  local count=(--suites count --backends cuda --large --out "$results")
+  [ $smoke = 1 ] && count=(--suites count --backends cpu --quick --out "$results")  # no GPU there
+  "$build/bin/minkq_bench" "${count[@]}" > "$logs/count.log" 2>&1 || status=1
   tail -2 "$logs/count.log"
   nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv > "$results/device.txt" 2>&1 || true
   tar czf "$out/results.tar.gz" -C "$results" .
@@ -213,7 +207,7 @@ stage_bench() {
 stage_warp() {
   [ -d /tmp/site/warp ] || { echo "no Warp in /tmp/site: unpack it first (../shared/tools/warp-for-device.sh)"; return 1; }
   [ -f "$results/rows.csv" ] || { echo "no $results/rows.csv: run the bench stage on this machine first"; return 1; }
-  PYTHONPATH=/tmp/site${PYTHONPATH:+:$PYTHONPATH} python3 bench/warp_baseline.py "$export_dir" "$results/rows.csv" \
+  PYTHONPATH=/tmp/site${PYTHONPATH:+:$PYTHONPATH} python3 bench/peers/warp_baseline.py "$export_dir" "$results/rows.csv" \
     "$out/warp_gpu.md" --device cuda:0
 }
 
