@@ -50,7 +50,7 @@
 #   bench      minkq_bench --backends cpu,cuda on $MINKQ_SUITES (default scenes,real,scale),
 #              frames exported for Warp, and minkq_bench --suites count --backends cuda --large;
 #              $OUT/results.tar.gz holds bench/results-style tables
-#   warp       bench/warp_baseline.py --device cuda:0 on the exported frames ($OUT/warp_gpu.md)
+#   warp       bench/peers/warp_baseline.py --device cuda:0 on the exported frames ($OUT/warp_gpu.md)
 #   python     the Python package's gpu tests (pytest -m gpu on bindings/python/tests: Warp
 #              ScopedCapture, the Newton detector's CUDA capture, torch CUDA graphs, CUDA
 #              tensors through DLPack) on python3 with .carry/py's wheels (pack_python.sh) and

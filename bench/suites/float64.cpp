@@ -221,23 +221,19 @@ SceneFrames offset_scene(SceneFrames sc, double offset) {
 }  // namespace
 
 std::string float64_report(const SuiteRun& run, bool& ok) {
-  minkq_device* const device = run.device;
-  const std::string& data = run.data;
-  const int repeats = run.repeats;
-  const bool quick = run.quick;
   const double load0 = load_average();
   std::ostringstream o;
   Float64Summary proc, real, offsets;
   std::string rows;
   for (const std::string& name : procedural_scene_names())
-    rows += compare_float64(device, make_scene(name, 0, 2, data), repeats, true, proc, ok);
-  if (!quick) {
-    const SceneFrames sheet = make_scene("twist_target", 0, 2, data);
-    rows += compare_float64(device, sheet, repeats, true, proc, ok);
-    for (const RealMesh& m : available_real_meshes(data))
-      rows += compare_float64(device, load_real_scene(m, data), repeats, true, real, ok);
+    rows += compare_float64(run.device, make_scene(name, 0, 2, run.data), run.repeats, true, proc, ok);
+  if (!run.quick) {
+    const SceneFrames sheet = make_scene("twist_target", 0, 2, run.data);
+    rows += compare_float64(run.device, sheet, run.repeats, true, proc, ok);
+    for (const RealMesh& m : available_real_meshes(run.data))
+      rows += compare_float64(run.device, load_real_scene(m, run.data), run.repeats, true, real, ok);
     for (const double offset : {1e3, 1e4})
-      rows += compare_float64(device, offset_scene(sheet, offset), repeats, true, offsets, ok);
+      rows += compare_float64(run.device, offset_scene(sheet, offset), run.repeats, true, offsets, ok);
   }
   o << "# The double path's cost against float32 on the same scenes\n\nMachine: " << run.machine
     << ". Load average (1 min) at start " << fmt(load0, 3) << ", at write " << fmt(load_average(), 3) << ". Written "
@@ -251,12 +247,12 @@ std::string float64_report(const SuiteRun& run, bool& ok) {
     << "radius r + 2 rho differ). Each scene is created at its first frame and refit to its last (real meshes: "
     << "their one frame, refit to itself), then queried there: VT + EE in box mode (candidates) and with "
     << "MINKQ_QUERY_LEAF_EXACT (contacts), two calls each into reused results. The three run round-robin, one "
-    << "warm-up round then " << repeats << " rounds (each round: create, refit, box queries, leaf_exact queries of "
+    << "warm-up round then " << run.repeats << " rounds (each round: create, refit, box queries, leaf_exact queries of "
     << "every variant); ms = the median over the rounds; 'x f32' = this variant's ms (or count) over float32's in the "
     << "same run (> 1: the double path costs more). rho / r: the farthest the rounding moved a vertex (Euclidean, "
     << "over both frames), over r. Checked: rho = 0 gives exactly float32's pairs (every query), rho > 0 a superset, "
     << "and the double oracle's contacts (reference::vt/ee_contacts, long double on the perturbed doubles at r) all "
-    << "lie in the float64 leaf_exact set" << (quick ? " (--quick: the eight procedural scenes only)" : "")
+    << "lie in the float64 leaf_exact set" << (run.quick ? " (--quick: the eight procedural scenes only)" : "")
     << ". The last two rows move the twisted sheet to x + 1e3 and x + 1e4 (floats there, same r), where a float "
     << "ulp is no longer small against r.\n\n"
     << "## Geomeans of the ratios float64 / float32\n\n"

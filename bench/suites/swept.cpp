@@ -292,10 +292,6 @@ std::vector<float> rigid_step(const std::vector<float>& x, double m, double r) {
 }  // namespace
 
 std::string swept_report(const SuiteRun& run, bool& ok) {
-  minkq_device* const device = run.device;
-  const std::string& data = run.data;
-  const int repeats = run.repeats;
-  const bool quick = run.quick;
   const double load0 = load_average();
   // Procedural scenes: 21 frames (20 steps of 5% of the motion); the twisted sheet: 4 frames
   // (its frame k has 3 - 0.05 k turns: 3 steps of 0.05 turns). --quick: the first step of
@@ -304,26 +300,26 @@ std::string swept_report(const SuiteRun& run, bool& ok) {
   SweptSummary summary;
   std::string vt_rows, ee_rows;
   std::vector<std::string> names = procedural_scene_names();
-  if (!quick) names.push_back("twist_target");
+  if (!run.quick) names.push_back("twist_target");
   for (const std::string& name : names) {
-    const SceneFrames sc = make_scene(name, 0, name == "twist_target" ? sheet_frames : frames, data);
+    const SceneFrames sc = make_scene(name, 0, name == "twist_target" ? sheet_frames : frames, run.data);
     std::vector<Step> steps;
-    for (size_t k = 0; k + 1 < sc.frames.size() && !(quick && k > 0); ++k) steps.push_back({&sc.frames[k], &sc.frames[k + 1]});
-    const SweptTotals t = compare_swept(device, sc, steps, repeats, samples, ok);
+    for (size_t k = 0; k + 1 < sc.frames.size() && !(run.quick && k > 0); ++k) steps.push_back({&sc.frames[k], &sc.frames[k + 1]});
+    const SweptTotals t = compare_swept(run.device, sc, steps, run.repeats, samples, ok);
     const std::string what = "frames k -> k + 1 of " + std::to_string(sc.frames.size());
     vt_rows += swept_rows(sc.name, what, t, scene_radius(sc), summary, ee_rows);
   }
   SweptSummary rigid;
   {
-    SceneFrames sheet = make_scene("twist_target", quick ? 8000 : 0, 1, data);
+    SceneFrames sheet = make_scene("twist_target", run.quick ? 8000 : 0, 1, run.data);
     const float r = scene_radius(sheet);
     const int n = int(std::lround(std::sqrt(double(sheet.mesh.vertex_count()))));
-    for (const double m : quick ? std::vector<double>{2} : std::vector<double>{0.5, 2, 8}) {
+    for (const double m : run.quick ? std::vector<double>{2} : std::vector<double>{0.5, 2, 8}) {
       const std::vector<float> x1 = rigid_step(sheet.frames[0], m, r);
       const std::vector<Step> steps = {{&sheet.frames[0], &x1}};
       SceneFrames named = sheet;
       named.name = "twisted sheet " + std::to_string(n) + "^2, rigid step " + fmt(m, 3) + " r";
-      const SweptTotals t = compare_swept(device, named, steps, repeats, samples, ok);
+      const SweptTotals t = compare_swept(run.device, named, steps, run.repeats, samples, ok);
       vt_rows += swept_rows(named.name, "rotation + translation, one step", t, r, rigid, ee_rows);
     }
   }
@@ -334,14 +330,14 @@ std::string swept_report(const SuiteRun& run, bool& ok) {
     << "created at the first position and refit to each step with minkq_scene_refit_swept(x0, x1); its queries "
     << "report the pairs that come within r at some t in [0, 1]. The procedural scenes over " << frames
     << " frames of their motion (every consecutive pair of frames a step: 5% of the motion; figures summed over "
-    << "the steps" << (quick ? "; --quick: the first step only" : "") << "), "
-    << (quick ? "" : "REFERENCES.md's twisted sheet over its frames 0-3 (3 - 0.05 k turns: 3 steps), ")
-    << "and the twisted sheet (3 turns" << (quick ? ", 8k triangles in --quick" : "") << ") under one rigid step (rotation about the axis (1, 2, 3) "
+    << "the steps" << (run.quick ? "; --quick: the first step only" : "") << "), "
+    << (run.quick ? "" : "REFERENCES.md's twisted sheet over its frames 0-3 (3 - 0.05 k turns: 3 steps), ")
+    << "and the twisted sheet (3 turns" << (run.quick ? ", 8k triangles in --quick" : "") << ") under one rigid step (rotation about the axis (1, 2, 3) "
     << "through (0.5, 0, 0) and translation along (1, 1, 1), each moving a vertex by at most m r / 2). r = the "
     << "scene's radius. VT modes: box (the path's box grown by r), capsule_ray (the path against the r-inflated "
     << "boxes, slab test) and capsule_exact (segment-box distance; the sphere mode gives the same pairs, checked); "
     << "EE: box. For context the static box queries (VT + EE) of a second scene refit to x0 and to x1. Per step, "
-    << "every contestant runs round-robin, one warm-up round then " << repeats << " rounds (the refits in each "
+    << "every contestant runs round-robin, one warm-up round then " << run.repeats << " rounds (the refits in each "
     << "round too); ms = the sum over the steps of each step's median. 'x box' = candidates over VT box's; speed = "
     << "VT box ms / this ms (> 1: faster than box). Motion = the largest and the mean vertex displacement of a "
     << "step, over r. Sampled oracle: each box candidate's distance (reference oracle, long double) at " << samples + 1
