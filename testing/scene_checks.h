@@ -2,7 +2,7 @@
 // tests (tests/test_fuzz_regressions.cpp): every mode through the C API, against
 //   - the mode's definition applied to every primitive (brute force, minkq's own shape tests),
 //   - an independent traversal computing the same definition (the Embree reference, fuzz only),
-//   - the long-double contact oracle of testing/oracle (zero false negatives, leaf-exact
+//   - the long-double contact oracle of oracle/ (zero false negatives, leaf-exact
 //     extras within r + 2^-19 * S),
 //   - the containment chain, the pair-buffer contract (canonical order, digest, no duplicates,
 //     nothing written past the count) and refit == fresh build,

@@ -1,5 +1,5 @@
 // The oracle's side of the scene checks: the leaf-exact extras' bound (r + 2^-19 S, S the
-// pair's size) against the long-double distances of testing/oracle, and long-double point-box
+// pair's size) against the long-double distances of oracle/, and long-double point-box
 // and segment-box distances for user-box queries. Part of the scene checks (scene_checks.h
 // includes every part).
 #pragma once

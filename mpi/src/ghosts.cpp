@@ -17,7 +17,7 @@
 #include <unordered_map>
 
 #include "collective.h"
-#include "minkq/tree.h"  // spread_bits_21
+#include "morton.h"
 #include "scene.h"
 
 namespace minkq::mpi {
@@ -85,14 +85,13 @@ void group_boxes(const std::vector<Box>& boxes, std::vector<uint32_t>& order, Bo
         bounds.lo[k] = std::min(bounds.lo[k], b.lo[k]), bounds.hi[k] = std::max(bounds.hi[k], b.hi[k]);
     std::vector<std::pair<uint64_t, uint32_t>> coded(boxes.size());
     for (size_t i = 0; i < boxes.size(); ++i) {
-      uint64_t code = 0;
+      double unit[3];
       for (int k = 0; k < 3; ++k) {
         const double extent = bounds.hi[k] - bounds.lo[k];
         const double centre = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
-        const double unit = extent > 0 ? (centre - bounds.lo[k]) / extent : 0.0;
-        code |= minkq::spread_bits_21(uint32_t(std::min(std::max(unit, 0.0), 1.0) * 2097151.0)) << k;
+        unit[k] = extent > 0 ? (centre - bounds.lo[k]) / extent : 0.0;
       }
-      coded[i] = {code, uint32_t(i)};
+      coded[i] = {morton_code_unit(unit), uint32_t(i)};
     }
     std::sort(coded.begin(), coded.end());
     order.resize(boxes.size());

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "minkq/tree.h"  // spread_bits_21
+#include "../src/morton.h"  // the MPI layer's Morton code, shared with its reach boxes
 
 namespace minkq::mpi_tools {
 
@@ -70,13 +70,12 @@ inline Owners partition(const std::vector<float>& xyz, const std::vector<int32_t
   } else {
     std::vector<uint64_t> code(nt);
     for (size_t t = 0; t < nt; ++t) {
-      uint64_t m = 0;
+      double unit[3];
       for (int k = 0; k < 3; ++k) {
         const float extent = hi[k] - lo[k];
-        const double unit = extent > 0 ? (c[3 * t + k] - lo[k]) / extent : 0.0;
-        m |= minkq::spread_bits_21(uint32_t(std::min(unit, 1.0) * double((1 << 21) - 1))) << k;
+        unit[k] = extent > 0 ? (c[3 * t + k] - lo[k]) / extent : 0.0;
       }
-      code[t] = m;
+      code[t] = minkq::mpi::morton_code_unit(unit);
     }
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return code[a] < code[b]; });
   }

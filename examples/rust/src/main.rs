@@ -27,7 +27,7 @@ struct Mesh {
 }
 
 /// n x n vertices on [0,1]^2 at z = 0, vertex (i, j) at index j * n + i; cell (i, j) gives
-/// triangles (v00, v10, v11) and (v00, v11, v01). As testing/oracle's grid_sheet.
+/// triangles (v00, v10, v11) and (v00, v11, v01). As the oracle's grid_sheet (oracle/).
 fn grid_sheet(n: usize) -> Mesh {
     assert!(n >= 2, "n must be >= 2");
     let mut vertices = Vec::with_capacity(n * n);
@@ -50,7 +50,7 @@ fn grid_sheet(n: usize) -> Mesh {
 }
 
 /// grid_sheet(n) twisted about the x axis: (u, v) -> (u, (v - 1/2) cos t, (v - 1/2) sin t),
-/// t = turns * 2 pi * u, bit for bit as testing/oracle's twisted_sheet (double arithmetic,
+/// t = turns * 2 pi * u, bit for bit as the oracle's twisted_sheet (double arithmetic,
 /// rounded to float).
 fn twisted_sheet(n: usize, turns: f64) -> Mesh {
     let mut mesh = grid_sheet(n);

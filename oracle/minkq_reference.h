@@ -1,4 +1,5 @@
-// minkq::reference: the independent double-precision oracle for tests, benchmarks and the demo.
+// minkq::reference (target minkq_reference): the independent double-precision oracle of the
+// `minkq demo` false-negative check, the tests, the fuzzers and the benchmarks.
 //
 // It shares no code with the core on purpose: a bug in the core's predicates or traversal must
 // not be able to hide itself by also living in the oracle. Distances are evaluated in long
@@ -14,26 +15,17 @@
 #include <utility>
 #include <vector>
 
+#include "mesh_io.h"
+
 namespace minkq::reference {
 
-// A triangle mesh with optional explicit edges. The scene generators and load_mesh fill `edges`
-// with derive_edges(tris); the contact queries derive them too when `edges` is empty, as the
-// C API does for a scene created with no edges.
-struct Mesh {
-  std::vector<float> xyz;      // 3 per vertex
-  std::vector<int32_t> tris;   // 3 vertex indices per triangle
-  std::vector<int32_t> edges;  // 2 vertex indices per edge
-  // Double-precision input, when not empty: 3 per vertex, the positions the contact queries
-  // use; xyz then holds them rounded to nearest float (set_float64 keeps the two in step).
-  std::vector<double> xyz64;
-  size_t vertex_count() const { return xyz.size() / 3; }
-  size_t triangle_count() const { return tris.size() / 3; }
-  size_t edge_count() const { return edges.size() / 2; }
-};
-
-// Every distinct undirected triangle edge as (min vertex, max vertex), sorted lexicographically:
-// the numbering the C API uses. A triangle with a repeated vertex v contributes (v, v).
-std::vector<int32_t> derive_edges(const std::vector<int32_t>& tris);
+// The mesh type and its loader are the mesh I/O library's (apps/meshio), named here too so
+// that the oracle's users read one vocabulary.
+using meshio::derive_edges;
+using meshio::load_mesh;
+using meshio::Mesh;
+using meshio::mean_edge_length;
+using meshio::set_float64;
 
 // ---- Distances (long double, robust to degenerate input) -----------------------------------
 // Each is the minimum over the boundary features (endpoints, edges) plus the interior case,
@@ -71,20 +63,8 @@ Mesh stacked_sheets(int n, int layers, double gap);
 // numbers come from splitmix64(seed), so the soup is the same on every platform.
 Mesh random_soup(int triangles, uint64_t seed, double size);
 
-// Mean length of the edges (mesh.edges, or derive_edges(tris) when empty); 0 for no edges.
-double mean_edge_length(const Mesh& mesh);
 // x -> x * scale + offset on every coordinate, in double, then rounded to float (double input:
 // xyz64 transformed, xyz its rounding).
 void transform(Mesh& mesh, double scale, double offset);
-// Makes `xyz64` the mesh's positions (3 per vertex) and xyz their rounding to nearest float.
-void set_float64(Mesh& mesh, std::vector<double> xyz64);
-
-// Loads an OBJ (tinyobjloader: polygons triangulated, all shapes merged into one mesh) or a PLY
-// (ascii, binary_little_endian or binary_big_endian; vertex x, y, z of any scalar type, faces
-// as a list, polygons fan-triangulated). Fills edges with derive_edges. Throws
-// std::runtime_error naming the file and the problem. With float64, xyz64 holds the file's
-// coordinates in double (OBJ text parsed as doubles, PLY values as stored) and xyz their
-// rounding to nearest float.
-Mesh load_mesh(const std::string& path, bool float64 = false);
 
 }  // namespace minkq::reference

@@ -18,7 +18,7 @@
 #include "distributed.h"
 #include "minkq.hpp"
 #include "minkq_mpi.h"
-#include "minkq_reference.h"
+#include "mesh_io.h"
 
 namespace {
 
@@ -114,7 +114,7 @@ void agreed(int rank, Work&& work) {
 int query(const Args& args, int rank, int size) {
   float radius = 0;
   std::vector<std::pair<std::string, QueryModes>> modes;
-  minkq::reference::Mesh mesh;
+  minkq::meshio::Mesh mesh;
   tools::Part part;
   minkq::cxx::Device device;
   const int local_rank = node_rank();
@@ -135,8 +135,8 @@ int query(const Args& args, int rank, int size) {
     }
     const double seed = args.get("--seed") ? parse_number("--seed", *args.get("--seed")) : 1;
     if (seed < 0 || seed != double(uint64_t(seed))) throw UsageError("--seed: a non-negative integer");
-    mesh = minkq::reference::load_mesh(args.positional[0]);
-    radius = query_radius(args, [&] { return minkq::reference::mean_edge_length(mesh); });
+    mesh = minkq::meshio::load_mesh(args.positional[0]);
+    radius = query_radius(args, [&] { return minkq::meshio::mean_edge_length(mesh); });
     const tools::Owners owners = tools::partition(mesh.xyz, mesh.tris, size, partition, uint64_t(seed));
     part = tools::part_of(mesh.xyz, mesh.tris, owners, rank);
     device = minkq::cxx::open_device(device_spec(args.get("--backend") ? *args.get("--backend") : "cpu", local_rank));

@@ -3,8 +3,9 @@
 // next) and prints comparable digests.
 #include "minkq.h"
 #include "minkq.hpp"
-#include "minkq_reference.h"
 #include "cli_common.h"
+#include "mesh_io.h"
+#include "minkq_reference.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,6 +20,7 @@
 #include <tuple>
 #include <vector>
 
+namespace meshio = minkq::meshio;
 namespace ref = minkq::reference;
 
 namespace {
@@ -69,7 +71,7 @@ using namespace minkq::cli;  // Args, UsageError, parse_number, query_radius, qu
 using namespace minkq::cxx;
 
 // A VT + EE scene with incident pairs dropped; edges are derived by the library.
-Scene make_scene(minkq_device* device, const ref::Mesh& m) {
+Scene make_scene(minkq_device* device, const meshio::Mesh& m) {
   return new_mesh_scene(device, m.xyz.data(), m.vertex_count(), m.tris.data(), m.triangle_count());
 }
 
@@ -102,7 +104,7 @@ int demo(const Args& args) {
 
   const int n = int(size);
   const ref::Mesh mesh = ref::twisted_sheet(n, 3.0);
-  const double h = ref::mean_edge_length(mesh);
+  const double h = meshio::mean_edge_length(mesh);
   // The library takes a float radius; the oracle gets the very same value.
   const float r = float(factor * h);
   if (!std::isfinite(r)) throw UsageError("--radius-factor: radius overflows a float");
@@ -194,8 +196,8 @@ void write_pairs(const std::string& path, const minkq_result* r) {
 // The scene of `query`: static on `first` (float, as loaded), or swept from `first` to `*to`
 // (float64 input, read in double; the same topology).
 Scene query_scene(minkq_device* device, const std::string& first, const std::string* to) {
-  if (!to) return make_scene(device, ref::load_mesh(first));
-  const ref::Mesh a = ref::load_mesh(first, true), b = ref::load_mesh(*to, true);
+  if (!to) return make_scene(device, meshio::load_mesh(first));
+  const meshio::Mesh a = meshio::load_mesh(first, true), b = meshio::load_mesh(*to, true);
   if (a.vertex_count() != b.vertex_count() || a.tris != b.tris)
     throw std::runtime_error("--to " + *to + ": not the same mesh as " + first + " (" + std::to_string(b.vertex_count()) +
                              " vertices and " + std::to_string(b.triangle_count()) + " triangles against " +
@@ -213,7 +215,7 @@ Scene query_scene(minkq_device* device, const std::string& first, const std::str
 
 int query(const Args& args) {
   if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
-  const float radius = query_radius(args, [&] { return ref::mean_edge_length(ref::load_mesh(args.positional[0])); });
+  const float radius = query_radius(args, [&] { return meshio::mean_edge_length(meshio::load_mesh(args.positional[0])); });
   const std::string* to = args.get("--to");
   const std::string mode = args.get("--mode") ? *args.get("--mode") : (to ? "box" : "leaf_exact");
   const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";

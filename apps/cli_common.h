@@ -1,4 +1,4 @@
-// What the command-line tools (`minkq`, and `minkq-mpi` in mpi/cli) share: option parsing and
+// What the programs `minkq` and `minkq-mpi` (both in apps/) share: option parsing and
 // the names of the query modes, so that both read the same arguments the same way.
 #pragma once
 

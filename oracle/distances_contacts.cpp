@@ -24,22 +24,6 @@ V cross(const V& a, const V& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x
 
 }  // namespace
 
-std::vector<int32_t> derive_edges(const std::vector<int32_t>& tris) {
-  std::vector<std::pair<int32_t, int32_t>> e;
-  e.reserve(tris.size());
-  for (size_t t = 0; t + 2 < tris.size(); t += 3)
-    for (int k = 0; k < 3; ++k) {
-      const int32_t a = tris[t + k], b = tris[t + (k + 1) % 3];
-      e.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  std::vector<int32_t> out;
-  out.reserve(2 * e.size());
-  for (const auto& [a, b] : e) out.insert(out.end(), {a, b});
-  return out;
-}
-
 // ---- Distances -----------------------------------------------------------------------------
 // A distance function is convex over the feature's parameter domain, so its minimum is either
 // the unconstrained (interior) minimum, when that lies strictly inside, or on the boundary.
