@@ -35,10 +35,16 @@ from ._errors import _from_status
 
 __all__ = ["Scene", "library_path", "local_device"]
 
+# The C declarations of minkq_mpi.h and minkq.h this module mirrors in ctypes. Each is named
+# after its C counterpart in _C_CONSTANTS and _C_STRUCTS below, which tests/test_mpi_header.py
+# compiles a probe against the real headers with (sizes, field names, offsets and kinds, constant
+# values): change the two together.
+_ABI_VERSION, _MPI_ABI_VERSION = 2, 1  # the SONAMEs libminkq.so.2, libminkq_mpi.so.1
 _KINDS = {"vt": 0, "ee": 1}
 _MODES = {"box": 0, "sphere": 1, "capsule_ray": 2, "capsule_exact": 3}
 _SCENE_VT, _SCENE_EE, _SCENE_DROP_INCIDENT = 1, 2, 4
 _LEAF_EXACT, _CANONICAL, _STATS, _COUNT = 1, 2, 8, 16
+_MEMORY_HOST, _SUCCESS = 0, 0
 
 
 class _Buffer(ctypes.Structure):
@@ -69,6 +75,33 @@ class _RankInfo(ctypes.Structure):
         (name, ctypes.c_double) for name in ("last_reach_ms", "last_ghost_ms", "last_trees_ms", "last_query_ms")]
 
 
+_C_STRUCTS: Dict[str, Any] = {
+    "minkq_buffer": _Buffer,
+    "minkq_mpi_scene_desc": _Desc,
+    "minkq_query_desc": _QueryDesc,
+    "minkq_query_stats": _Stats,
+    "minkq_mpi_rank_info": _RankInfo,
+}
+_C_CONSTANTS: Dict[str, int] = {
+    "MINKQ_ABI_VERSION": _ABI_VERSION,
+    "MINKQ_MPI_ABI_VERSION": _MPI_ABI_VERSION,
+    "MINKQ_QUERY_VT": _KINDS["vt"],
+    "MINKQ_QUERY_EE": _KINDS["ee"],
+    "MINKQ_MODE_BOX": _MODES["box"],
+    "MINKQ_MODE_SPHERE": _MODES["sphere"],
+    "MINKQ_MODE_CAPSULE_RAY": _MODES["capsule_ray"],
+    "MINKQ_MODE_CAPSULE_EXACT": _MODES["capsule_exact"],
+    "MINKQ_SCENE_VT": _SCENE_VT,
+    "MINKQ_SCENE_EE": _SCENE_EE,
+    "MINKQ_SCENE_DROP_INCIDENT": _SCENE_DROP_INCIDENT,
+    "MINKQ_QUERY_LEAF_EXACT": _LEAF_EXACT,
+    "MINKQ_QUERY_CANONICAL": _CANONICAL,
+    "MINKQ_QUERY_STATS": _STATS,
+    "MINKQ_QUERY_COUNT": _COUNT,
+    "MINKQ_MEMORY_HOST": _MEMORY_HOST,
+    "MINKQ_SUCCESS": _SUCCESS,
+}
+
 _lib: Optional[ctypes.CDLL] = None
 _core: Optional[ctypes.CDLL] = None
 _path: Optional[str] = None
@@ -80,7 +113,7 @@ def library_path() -> str:
         return os.environ["MINKQ_MPI_LIB"]
     if os.environ.get("MINKQ_MPI_LIB_DIR"):
         return os.path.join(os.environ["MINKQ_MPI_LIB_DIR"], "libminkq_mpi.so")
-    return "libminkq_mpi.so.1"
+    return f"libminkq_mpi.so.{_MPI_ABI_VERSION}"
 
 
 def _load() -> ctypes.CDLL:
@@ -96,7 +129,7 @@ def _load() -> ctypes.CDLL:
             "MINKQ_MPI_LIB_DIR to the folder of libminkq_mpi.so, or install it") from e
     # The libminkq that libminkq_mpi links: its SONAME (libminkq.so.<MINKQ_ABI_VERSION>) resolves
     # to the copy already loaded with it.
-    core = ctypes.CDLL("libminkq.so.2")
+    core = ctypes.CDLL(f"libminkq.so.{_ABI_VERSION}")
     P, S = ctypes.c_void_p, ctypes.c_int
     lib.minkq_mpi_last_error_message.restype = ctypes.c_char_p
     lib.minkq_mpi_scene_create.argtypes = [P, P, ctypes.POINTER(_Desc), ctypes.POINTER(P)]
@@ -144,7 +177,7 @@ def local_device(comm: Any) -> str:
 
 
 def _check(status: int, message: bytes) -> None:
-    if status != 0:
+    if status != _SUCCESS:
         raise _from_status(status, message.decode("utf-8", "replace"))
 
 
@@ -156,30 +189,44 @@ def _comm_handle(comm: Any) -> Any:
     return ctypes.c_void_p(handle) if MPI._sizeof(MPI.Comm) == ctypes.sizeof(ctypes.c_void_p) else ctypes.c_int(handle)
 
 
+def _vertices(value: Any, name: str) -> np.ndarray:
+    """Vertex rows as (n, 3) float32; TypeError for double (or wider) values, which would be
+    rounded: a distributed scene is float32 only (minkq_mpi_scene_create refuses
+    MINKQ_SCENE_FLOAT64), and minkq.Scene refuses the same rounding for a float32 scene."""
+    array = np.asarray(value)
+    if array.dtype.kind == "f" and array.dtype.itemsize > 4:
+        raise TypeError(
+            f"{name}: got {array.dtype} values for a minkq.mpi scene, which is float32 only: rounding them "
+            "could lose a pair within r in double; pass float32 values"
+        )
+    return np.ascontiguousarray(array, dtype=np.float32).reshape(-1, 3)
+
+
 def _host(array: np.ndarray, count: int) -> _Buffer:
-    return _Buffer(array.ctypes.data if array.size else None, 0, count, 0)
+    return _Buffer(array.ctypes.data if array.size else None, 0, count, _MEMORY_HOST)
 
 
 class Scene:
     """A mesh split over the ranks of ``comm`` (an mpi4py communicator): this rank's part.
 
-    ``vertices`` (n, 3) float32-convertible; ``triangles`` (m, 3) local vertex indices;
-    ``vertex_ids`` (n,) and ``triangle_ids`` (m,) global ids (int64 >= 0, distinct on a rank);
-    ``vertex_owned`` (n,) and ``triangle_owned`` (m,) booleans: whether this rank owns each.
-    ``vt`` and ``ee`` pick the queries the scene answers; ``drop_incident`` drops pairs that
+    ``vertices`` (n, 3) float32 (double values raise TypeError rather than be rounded);
+    ``triangles`` (m, 3) local vertex indices; ``vertex_ids`` (n,) and ``triangle_ids`` (m,)
+    global ids (int64 >= 0, distinct on a rank); ``vertex_owned`` (n,) and ``triangle_owned``
+    (m,) booleans: whether this rank owns each. ``vt`` and ``ee`` pick the queries the scene answers; ``drop_incident`` drops pairs that
     share a vertex. ``device`` is this rank's device spec ("cpu", "cuda:N"). Collective.
     """
 
     def __init__(self, comm: Any, vertices: Any, triangles: Any, vertex_ids: Any, triangle_ids: Any,
                  vertex_owned: Any, triangle_owned: Any, *, vt: bool = True, ee: bool = True,
                  drop_incident: bool = True, device: str = "cpu") -> None:
+        v = _vertices(vertices, "vertices")  # before anything is allocated
         lib = _load()
         self._scene = ctypes.c_void_p()
         self._result = ctypes.c_void_p()
         self._device = ctypes.c_void_p()
         self._comm = comm
-        # Arrays this rank checks (shape); the library checks the rest, collectively.
-        v = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        # Arrays this rank checks (shape, the vertices' dtype: every rank must pass the same
+        # kinds, as for any collective call); the library checks the rest, collectively.
         t = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
         arrays: Dict[str, np.ndarray] = {
             "vertices": v, "triangles": t,
@@ -223,7 +270,7 @@ class Scene:
         self.close()
 
     def _move(self, vertices: Any, rebuild: bool) -> None:
-        v = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        v = _vertices(vertices, "vertices")
         call = _lib.minkq_mpi_scene_rebuild if rebuild else _lib.minkq_mpi_scene_refit
         _check(call(self._scene, _host(v, len(v))), _lib.minkq_mpi_last_error_message())
 
