@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import ctypes
 import os
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -36,9 +36,9 @@ from ._errors import _from_status
 __all__ = ["Scene", "library_path", "local_device"]
 
 # The C declarations of minkq_mpi.h and minkq.h this module mirrors in ctypes. Each is named
-# after its C counterpart in _C_CONSTANTS and _C_STRUCTS below, which tests/test_mpi_header.py
-# compiles a probe against the real headers with (sizes, field names, offsets and kinds, constant
-# values): change the two together.
+# after its C counterpart in _C_CONSTANTS, _C_STRUCTS and _C_FUNCTIONS below, which
+# tests/test_mpi_header.py compiles a probe against the real headers with (struct sizes, field
+# names, offsets and kinds, constant values, function signatures): change them together.
 _ABI_VERSION, _MPI_ABI_VERSION = 2, 1  # the SONAMEs libminkq.so.2, libminkq_mpi.so.1
 _KINDS = {"vt": 0, "ee": 1}
 _MODES = {"box": 0, "sphere": 1, "capsule_ray": 2, "capsule_exact": 3}
@@ -102,6 +102,63 @@ _C_CONSTANTS: Dict[str, int] = {
     "MINKQ_SUCCESS": _SUCCESS,
 }
 
+# The functions this module calls, as the headers declare them: (result, parameters) in C,
+# from which _ctype makes their ctypes signatures.
+_C_FUNCTIONS: Dict[str, Tuple[str, Tuple[str, ...]]] = {  # libminkq_mpi (minkq_mpi.h)
+    "minkq_mpi_last_error_message": ("const char*", ()),
+    "minkq_mpi_scene_create": (
+        "minkq_status", ("MPI_Comm", "minkq_device*", "const minkq_mpi_scene_desc*", "minkq_mpi_scene**")),
+    "minkq_mpi_scene_release": ("void", ("minkq_mpi_scene*",)),
+    "minkq_mpi_scene_refit": ("minkq_status", ("minkq_mpi_scene*", "minkq_buffer")),
+    "minkq_mpi_scene_rebuild": ("minkq_status", ("minkq_mpi_scene*", "minkq_buffer")),
+    "minkq_mpi_scene_set_skin": ("minkq_status", ("minkq_mpi_scene*", "double")),
+    "minkq_mpi_scene_query": (
+        "minkq_status", ("minkq_mpi_scene*", "const minkq_query_desc*", "minkq_mpi_result*")),
+    "minkq_mpi_scene_rank_info": ("minkq_status", ("const minkq_mpi_scene*", "minkq_mpi_rank_info*")),
+    "minkq_mpi_result_create": ("minkq_status", ("minkq_mpi_result**",)),
+    "minkq_mpi_result_release": ("void", ("minkq_mpi_result*",)),
+    "minkq_mpi_result_count": ("uint64_t", ("const minkq_mpi_result*",)),
+    "minkq_mpi_result_pairs": ("const int64_t*", ("const minkq_mpi_result*",)),
+    "minkq_mpi_result_stats": ("minkq_query_stats", ("const minkq_mpi_result*",)),
+}
+_C_CORE_FUNCTIONS: Dict[str, Tuple[str, Tuple[str, ...]]] = {  # libminkq (minkq.h)
+    "minkq_last_error_message": ("const char*", ()),
+    "minkq_device_create": ("minkq_status", ("const char*", "minkq_device**")),
+    "minkq_device_release": ("void", ("minkq_device*",)),
+    "minkq_cuda_device_count": ("int", ()),
+}
+# The C types of those signatures that are not structs, pointers to them or handles. MPI_Comm:
+# a pointer, as in Open MPI (what the bindings are built and tested with; the test checks it).
+_C_SCALARS: Dict[str, Any] = {
+    "void": None,
+    "int": ctypes.c_int,
+    "double": ctypes.c_double,
+    "uint64_t": ctypes.c_uint64,
+    "minkq_status": ctypes.c_int,
+    "const char*": ctypes.c_char_p,
+    "const int64_t*": ctypes.POINTER(ctypes.c_int64),
+    "MPI_Comm": ctypes.c_void_p,
+}
+
+
+def _ctype(c_type: str) -> Any:
+    """The ctypes type of a C type of _C_FUNCTIONS: a scalar of _C_SCALARS, a struct of
+    _C_STRUCTS or a pointer to one, a pointer to a handle (``T**``), or a handle (an opaque
+    ``T*``: c_void_p)."""
+    if c_type in _C_SCALARS:
+        return _C_SCALARS[c_type]
+    bare = c_type.replace("const ", "")
+    if bare in _C_STRUCTS:
+        return _C_STRUCTS[bare]
+    if bare.endswith("**"):
+        return ctypes.POINTER(ctypes.c_void_p)
+    if bare.endswith("*") and bare[:-1] in _C_STRUCTS:
+        return ctypes.POINTER(_C_STRUCTS[bare[:-1]])
+    if bare.endswith("*") and bare.startswith("minkq_"):
+        return ctypes.c_void_p
+    raise ValueError(f"minkq.mpi: no ctypes type for the C type {c_type!r}")
+
+
 _lib: Optional[ctypes.CDLL] = None
 _core: Optional[ctypes.CDLL] = None
 _path: Optional[str] = None
@@ -130,31 +187,11 @@ def _load() -> ctypes.CDLL:
     # The libminkq that libminkq_mpi links: its SONAME (libminkq.so.<MINKQ_ABI_VERSION>) resolves
     # to the copy already loaded with it.
     core = ctypes.CDLL(f"libminkq.so.{_ABI_VERSION}")
-    P, S = ctypes.c_void_p, ctypes.c_int
-    lib.minkq_mpi_last_error_message.restype = ctypes.c_char_p
-    lib.minkq_mpi_scene_create.argtypes = [P, P, ctypes.POINTER(_Desc), ctypes.POINTER(P)]
-    lib.minkq_mpi_scene_release.argtypes = [P]
-    lib.minkq_mpi_scene_refit.argtypes = [P, _Buffer]
-    lib.minkq_mpi_scene_rebuild.argtypes = [P, _Buffer]
-    lib.minkq_mpi_result_create.argtypes = [ctypes.POINTER(P)]
-    lib.minkq_mpi_result_release.argtypes = [P]
-    lib.minkq_mpi_result_count.argtypes = [P]
-    lib.minkq_mpi_result_count.restype = ctypes.c_uint64
-    lib.minkq_mpi_result_pairs.argtypes = [P]
-    lib.minkq_mpi_result_pairs.restype = ctypes.POINTER(ctypes.c_int64)
-    lib.minkq_mpi_result_stats.argtypes = [P]
-    lib.minkq_mpi_result_stats.restype = _Stats
-    lib.minkq_mpi_scene_query.argtypes = [P, ctypes.POINTER(_QueryDesc), P]
-    lib.minkq_mpi_scene_rank_info.argtypes = [P, ctypes.POINTER(_RankInfo)]
-    lib.minkq_mpi_scene_set_skin.argtypes = [P, ctypes.c_double]
-    for f in ("minkq_mpi_scene_create", "minkq_mpi_scene_refit", "minkq_mpi_scene_rebuild",
-              "minkq_mpi_result_create", "minkq_mpi_scene_query", "minkq_mpi_scene_rank_info",
-              "minkq_mpi_scene_set_skin"):
-        getattr(lib, f).restype = S
-    core.minkq_device_create.argtypes = [ctypes.c_char_p, ctypes.POINTER(P)]
-    core.minkq_device_create.restype = S
-    core.minkq_device_release.argtypes = [P]
-    core.minkq_last_error_message.restype = ctypes.c_char_p
+    for library, functions in ((lib, _C_FUNCTIONS), (core, _C_CORE_FUNCTIONS)):
+        for name, (result, parameters) in functions.items():
+            function = getattr(library, name)
+            function.restype = _ctype(result)
+            function.argtypes = [_ctype(p) for p in parameters]
     _lib, _core = lib, core
     return lib
 
@@ -171,7 +208,6 @@ def local_device(comm: Any) -> str:
         node.Free()
     _load()
     assert _core is not None
-    _core.minkq_cuda_device_count.restype = ctypes.c_int
     gpus = _core.minkq_cuda_device_count()
     return f"cuda:{local % gpus}" if gpus > 0 else "cpu"
 
