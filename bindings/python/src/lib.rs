@@ -5,7 +5,8 @@
 //! memory kind and device, says which argument is wrong, and keeps the arrays alive for the
 //! call. The extension releases the GIL around every build, refit, rebuild and query (and the
 //! tree growth, which waits for the object's lock and, on CUDA, the device), and raises the
-//! package's exceptions (minkq._errors) named after the C error codes.
+//! exceptions named after the C error codes, which it defines (errors.rs; the package
+//! re-exports them from minkq._errors).
 //!
 //! Every object holds its minkq handle in a Mutex: the C API lets one thread at a time use an
 //! object, so Python threads sharing one Scene wait for each other instead of racing.
@@ -18,26 +19,12 @@ use pyo3::prelude::*;
 
 mod arrays;
 mod bvh;
+mod errors;
 mod scene;
 
 use bvh::PyBvh;
+pub(crate) use errors::to_py_err;
 use scene::PyScene;
-
-/// The package exception for a minkq error (minkq._errors._from_status builds it).
-pub(crate) fn to_py_err(py: Python<'_>, err: minkq::Error) -> PyErr {
-    let needed = match &err {
-        minkq::Error::Capacity { needed, .. } => Some(*needed),
-        _ => None,
-    };
-    let made = py
-        .import("minkq._errors")
-        .and_then(|m| m.getattr("_from_status"))
-        .and_then(|f| f.call1((err.status(), err.message(), needed)));
-    match made {
-        Ok(exception) => PyErr::from_value(exception),
-        Err(import_failed) => import_failed,
-    }
-}
 
 pub(crate) fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
     // A panic while locked cannot leave a minkq object half-changed (the C API keeps its state
@@ -127,7 +114,8 @@ fn raise_status(py: Python<'_>, status: u32, message: &str) -> PyResult<()> {
 }
 
 #[pymodule]
-fn _native(_py: Python<'_>, m: &PyModule) -> PyResult<()> {
+fn _native(py: Python<'_>, m: &PyModule) -> PyResult<()> {
+    errors::register(py, m)?;
     m.add_class::<PyDevice>()?;
     m.add_class::<PyScene>()?;
     m.add_class::<PyBvh>()?;

@@ -83,6 +83,13 @@ with minkq.mpi.Scene(comm, xyz[local_v], index[tris[mine_t]], local_v, mine_t, v
         if f"rank {size - 1}: vertex 0" not in str(e):
             failures.append(f"message {e}")
     check(scene, moved, "after a failed refit")
+    # Double values are refused on every rank, not rounded to float32 (before any collective).
+    try:
+        scene.refit(moved[local_v].astype(np.float64))
+        failures.append("float64 vertices were rounded")
+    except TypeError as e:
+        if "float32 only" not in str(e):
+            failures.append(f"message {e}")
     # A skin keeps the ghost layer over a small move: the pairs are the same.
     scene.set_skin(2 * r)
     check(scene, moved, "skin chosen")

@@ -2,6 +2,8 @@
 dtype or shape, and the exception named after the C error code, with the library's message,
 for what the library rejects."""
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -229,3 +231,12 @@ def test_each_c_status_raises_its_exception(status, cls, base):
         _native._raise_status(status, "the message")
     assert type(e.value) is cls and isinstance(e.value, minkq.MinkqError) and isinstance(e.value, base)
     assert e.value.status == status and e.value.message == "the message"
+
+
+def test_the_exceptions_are_the_extensions_and_pickle():
+    # Defined once, by the extension that raises them; the package re-exports the same classes.
+    for name in minkq._errors.__all__:
+        cls = getattr(minkq, name)
+        assert cls is getattr(_native, name) and cls.__module__ == "minkq" and cls.__doc__, name
+    e = pickle.loads(pickle.dumps(minkq.CapacityError("the message", 12)))
+    assert type(e) is minkq.CapacityError and str(e) == "the message" and e.needed == 12 and e.status == 5

@@ -26,18 +26,7 @@ Errors raise subclasses of :class:`MinkqError` named after the C error codes.
 
 from . import _native
 from ._api import BVH, KINDS, MODES, Device, QueryInfo, Scene, WorkStats, abi_version, cuda_device_count, version
-from ._errors import (
-    CapacityError,
-    DeviceError,
-    IndexOutOfRangeError,
-    InternalError,
-    InvalidArgumentError,
-    MinkqError,
-    NonFiniteError,
-    OutOfMemoryError,
-    SizeOverflowError,
-    UnsupportedError,
-)
+from ._errors import *  # noqa: F401, F403 - the exceptions, _errors.__all__ (listed below)
 
 ABI_VERSION: int = _native.ABI_VERSION
 """The ABI version the bindings were generated against (MINKQ_ABI_VERSION)."""

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import ctypes
 import os
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -35,10 +35,16 @@ from ._errors import _from_status
 
 __all__ = ["Scene", "library_path", "local_device"]
 
+# The C declarations of minkq_mpi.h and minkq.h this module mirrors in ctypes. Each is named
+# after its C counterpart in _C_CONSTANTS, _C_STRUCTS and _C_FUNCTIONS below, which
+# tests/test_mpi_header.py compiles a probe against the real headers with (struct sizes, field
+# names, offsets and kinds, constant values, function signatures): change them together.
+_ABI_VERSION, _MPI_ABI_VERSION = 2, 1  # the SONAMEs libminkq.so.2, libminkq_mpi.so.1
 _KINDS = {"vt": 0, "ee": 1}
 _MODES = {"box": 0, "sphere": 1, "capsule_ray": 2, "capsule_exact": 3}
 _SCENE_VT, _SCENE_EE, _SCENE_DROP_INCIDENT = 1, 2, 4
 _LEAF_EXACT, _CANONICAL, _STATS, _COUNT = 1, 2, 8, 16
+_MEMORY_HOST, _SUCCESS = 0, 0
 
 
 class _Buffer(ctypes.Structure):
@@ -69,6 +75,90 @@ class _RankInfo(ctypes.Structure):
         (name, ctypes.c_double) for name in ("last_reach_ms", "last_ghost_ms", "last_trees_ms", "last_query_ms")]
 
 
+_C_STRUCTS: Dict[str, Any] = {
+    "minkq_buffer": _Buffer,
+    "minkq_mpi_scene_desc": _Desc,
+    "minkq_query_desc": _QueryDesc,
+    "minkq_query_stats": _Stats,
+    "minkq_mpi_rank_info": _RankInfo,
+}
+_C_CONSTANTS: Dict[str, int] = {
+    "MINKQ_ABI_VERSION": _ABI_VERSION,
+    "MINKQ_MPI_ABI_VERSION": _MPI_ABI_VERSION,
+    "MINKQ_QUERY_VT": _KINDS["vt"],
+    "MINKQ_QUERY_EE": _KINDS["ee"],
+    "MINKQ_MODE_BOX": _MODES["box"],
+    "MINKQ_MODE_SPHERE": _MODES["sphere"],
+    "MINKQ_MODE_CAPSULE_RAY": _MODES["capsule_ray"],
+    "MINKQ_MODE_CAPSULE_EXACT": _MODES["capsule_exact"],
+    "MINKQ_SCENE_VT": _SCENE_VT,
+    "MINKQ_SCENE_EE": _SCENE_EE,
+    "MINKQ_SCENE_DROP_INCIDENT": _SCENE_DROP_INCIDENT,
+    "MINKQ_QUERY_LEAF_EXACT": _LEAF_EXACT,
+    "MINKQ_QUERY_CANONICAL": _CANONICAL,
+    "MINKQ_QUERY_STATS": _STATS,
+    "MINKQ_QUERY_COUNT": _COUNT,
+    "MINKQ_MEMORY_HOST": _MEMORY_HOST,
+    "MINKQ_SUCCESS": _SUCCESS,
+}
+
+# The functions this module calls, as the headers declare them: (result, parameters) in C,
+# from which _ctype makes their ctypes signatures.
+_C_FUNCTIONS: Dict[str, Tuple[str, Tuple[str, ...]]] = {  # libminkq_mpi (minkq_mpi.h)
+    "minkq_mpi_last_error_message": ("const char*", ()),
+    "minkq_mpi_scene_create": (
+        "minkq_status", ("MPI_Comm", "minkq_device*", "const minkq_mpi_scene_desc*", "minkq_mpi_scene**")),
+    "minkq_mpi_scene_release": ("void", ("minkq_mpi_scene*",)),
+    "minkq_mpi_scene_refit": ("minkq_status", ("minkq_mpi_scene*", "minkq_buffer")),
+    "minkq_mpi_scene_rebuild": ("minkq_status", ("minkq_mpi_scene*", "minkq_buffer")),
+    "minkq_mpi_scene_set_skin": ("minkq_status", ("minkq_mpi_scene*", "double")),
+    "minkq_mpi_scene_query": (
+        "minkq_status", ("minkq_mpi_scene*", "const minkq_query_desc*", "minkq_mpi_result*")),
+    "minkq_mpi_scene_rank_info": ("minkq_status", ("const minkq_mpi_scene*", "minkq_mpi_rank_info*")),
+    "minkq_mpi_result_create": ("minkq_status", ("minkq_mpi_result**",)),
+    "minkq_mpi_result_release": ("void", ("minkq_mpi_result*",)),
+    "minkq_mpi_result_count": ("uint64_t", ("const minkq_mpi_result*",)),
+    "minkq_mpi_result_pairs": ("const int64_t*", ("const minkq_mpi_result*",)),
+    "minkq_mpi_result_stats": ("minkq_query_stats", ("const minkq_mpi_result*",)),
+}
+_C_CORE_FUNCTIONS: Dict[str, Tuple[str, Tuple[str, ...]]] = {  # libminkq (minkq.h)
+    "minkq_last_error_message": ("const char*", ()),
+    "minkq_device_create": ("minkq_status", ("const char*", "minkq_device**")),
+    "minkq_device_release": ("void", ("minkq_device*",)),
+    "minkq_cuda_device_count": ("int", ()),
+}
+# The C types of those signatures that are not structs, pointers to them or handles. MPI_Comm:
+# a pointer, as in Open MPI (what the bindings are built and tested with; the test checks it).
+_C_SCALARS: Dict[str, Any] = {
+    "void": None,
+    "int": ctypes.c_int,
+    "double": ctypes.c_double,
+    "uint64_t": ctypes.c_uint64,
+    "minkq_status": ctypes.c_int,
+    "const char*": ctypes.c_char_p,
+    "const int64_t*": ctypes.POINTER(ctypes.c_int64),
+    "MPI_Comm": ctypes.c_void_p,
+}
+
+
+def _ctype(c_type: str) -> Any:
+    """The ctypes type of a C type of _C_FUNCTIONS: a scalar of _C_SCALARS, a struct of
+    _C_STRUCTS or a pointer to one, a pointer to a handle (``T**``), or a handle (an opaque
+    ``T*``: c_void_p)."""
+    if c_type in _C_SCALARS:
+        return _C_SCALARS[c_type]
+    bare = c_type.replace("const ", "")
+    if bare in _C_STRUCTS:
+        return _C_STRUCTS[bare]
+    if bare.endswith("**"):
+        return ctypes.POINTER(ctypes.c_void_p)
+    if bare.endswith("*") and bare[:-1] in _C_STRUCTS:
+        return ctypes.POINTER(_C_STRUCTS[bare[:-1]])
+    if bare.endswith("*") and bare.startswith("minkq_"):
+        return ctypes.c_void_p
+    raise ValueError(f"minkq.mpi: no ctypes type for the C type {c_type!r}")
+
+
 _lib: Optional[ctypes.CDLL] = None
 _core: Optional[ctypes.CDLL] = None
 _path: Optional[str] = None
@@ -80,7 +170,7 @@ def library_path() -> str:
         return os.environ["MINKQ_MPI_LIB"]
     if os.environ.get("MINKQ_MPI_LIB_DIR"):
         return os.path.join(os.environ["MINKQ_MPI_LIB_DIR"], "libminkq_mpi.so")
-    return "libminkq_mpi.so.1"
+    return f"libminkq_mpi.so.{_MPI_ABI_VERSION}"
 
 
 def _load() -> ctypes.CDLL:
@@ -96,32 +186,12 @@ def _load() -> ctypes.CDLL:
             "MINKQ_MPI_LIB_DIR to the folder of libminkq_mpi.so, or install it") from e
     # The libminkq that libminkq_mpi links: its SONAME (libminkq.so.<MINKQ_ABI_VERSION>) resolves
     # to the copy already loaded with it.
-    core = ctypes.CDLL("libminkq.so.2")
-    P, S = ctypes.c_void_p, ctypes.c_int
-    lib.minkq_mpi_last_error_message.restype = ctypes.c_char_p
-    lib.minkq_mpi_scene_create.argtypes = [P, P, ctypes.POINTER(_Desc), ctypes.POINTER(P)]
-    lib.minkq_mpi_scene_release.argtypes = [P]
-    lib.minkq_mpi_scene_refit.argtypes = [P, _Buffer]
-    lib.minkq_mpi_scene_rebuild.argtypes = [P, _Buffer]
-    lib.minkq_mpi_result_create.argtypes = [ctypes.POINTER(P)]
-    lib.minkq_mpi_result_release.argtypes = [P]
-    lib.minkq_mpi_result_count.argtypes = [P]
-    lib.minkq_mpi_result_count.restype = ctypes.c_uint64
-    lib.minkq_mpi_result_pairs.argtypes = [P]
-    lib.minkq_mpi_result_pairs.restype = ctypes.POINTER(ctypes.c_int64)
-    lib.minkq_mpi_result_stats.argtypes = [P]
-    lib.minkq_mpi_result_stats.restype = _Stats
-    lib.minkq_mpi_scene_query.argtypes = [P, ctypes.POINTER(_QueryDesc), P]
-    lib.minkq_mpi_scene_rank_info.argtypes = [P, ctypes.POINTER(_RankInfo)]
-    lib.minkq_mpi_scene_set_skin.argtypes = [P, ctypes.c_double]
-    for f in ("minkq_mpi_scene_create", "minkq_mpi_scene_refit", "minkq_mpi_scene_rebuild",
-              "minkq_mpi_result_create", "minkq_mpi_scene_query", "minkq_mpi_scene_rank_info",
-              "minkq_mpi_scene_set_skin"):
-        getattr(lib, f).restype = S
-    core.minkq_device_create.argtypes = [ctypes.c_char_p, ctypes.POINTER(P)]
-    core.minkq_device_create.restype = S
-    core.minkq_device_release.argtypes = [P]
-    core.minkq_last_error_message.restype = ctypes.c_char_p
+    core = ctypes.CDLL(f"libminkq.so.{_ABI_VERSION}")
+    for library, functions in ((lib, _C_FUNCTIONS), (core, _C_CORE_FUNCTIONS)):
+        for name, (result, parameters) in functions.items():
+            function = getattr(library, name)
+            function.restype = _ctype(result)
+            function.argtypes = [_ctype(p) for p in parameters]
     _lib, _core = lib, core
     return lib
 
@@ -138,13 +208,12 @@ def local_device(comm: Any) -> str:
         node.Free()
     _load()
     assert _core is not None
-    _core.minkq_cuda_device_count.restype = ctypes.c_int
     gpus = _core.minkq_cuda_device_count()
     return f"cuda:{local % gpus}" if gpus > 0 else "cpu"
 
 
 def _check(status: int, message: bytes) -> None:
-    if status != 0:
+    if status != _SUCCESS:
         raise _from_status(status, message.decode("utf-8", "replace"))
 
 
@@ -156,30 +225,44 @@ def _comm_handle(comm: Any) -> Any:
     return ctypes.c_void_p(handle) if MPI._sizeof(MPI.Comm) == ctypes.sizeof(ctypes.c_void_p) else ctypes.c_int(handle)
 
 
+def _vertices(value: Any, name: str) -> np.ndarray:
+    """Vertex rows as (n, 3) float32; TypeError for double (or wider) values, which would be
+    rounded: a distributed scene is float32 only (minkq_mpi_scene_create refuses
+    MINKQ_SCENE_FLOAT64), and minkq.Scene refuses the same rounding for a float32 scene."""
+    array = np.asarray(value)
+    if array.dtype.kind == "f" and array.dtype.itemsize > 4:
+        raise TypeError(
+            f"{name}: got {array.dtype} values for a minkq.mpi scene, which is float32 only: rounding them "
+            "could lose a pair within r in double; pass float32 values"
+        )
+    return np.ascontiguousarray(array, dtype=np.float32).reshape(-1, 3)
+
+
 def _host(array: np.ndarray, count: int) -> _Buffer:
-    return _Buffer(array.ctypes.data if array.size else None, 0, count, 0)
+    return _Buffer(array.ctypes.data if array.size else None, 0, count, _MEMORY_HOST)
 
 
 class Scene:
     """A mesh split over the ranks of ``comm`` (an mpi4py communicator): this rank's part.
 
-    ``vertices`` (n, 3) float32-convertible; ``triangles`` (m, 3) local vertex indices;
-    ``vertex_ids`` (n,) and ``triangle_ids`` (m,) global ids (int64 >= 0, distinct on a rank);
-    ``vertex_owned`` (n,) and ``triangle_owned`` (m,) booleans: whether this rank owns each.
-    ``vt`` and ``ee`` pick the queries the scene answers; ``drop_incident`` drops pairs that
+    ``vertices`` (n, 3) float32 (double values raise TypeError rather than be rounded);
+    ``triangles`` (m, 3) local vertex indices; ``vertex_ids`` (n,) and ``triangle_ids`` (m,)
+    global ids (int64 >= 0, distinct on a rank); ``vertex_owned`` (n,) and ``triangle_owned``
+    (m,) booleans: whether this rank owns each. ``vt`` and ``ee`` pick the queries the scene answers; ``drop_incident`` drops pairs that
     share a vertex. ``device`` is this rank's device spec ("cpu", "cuda:N"). Collective.
     """
 
     def __init__(self, comm: Any, vertices: Any, triangles: Any, vertex_ids: Any, triangle_ids: Any,
                  vertex_owned: Any, triangle_owned: Any, *, vt: bool = True, ee: bool = True,
                  drop_incident: bool = True, device: str = "cpu") -> None:
+        v = _vertices(vertices, "vertices")  # before anything is allocated
         lib = _load()
         self._scene = ctypes.c_void_p()
         self._result = ctypes.c_void_p()
         self._device = ctypes.c_void_p()
         self._comm = comm
-        # Arrays this rank checks (shape); the library checks the rest, collectively.
-        v = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        # Arrays this rank checks (shape, the vertices' dtype: every rank must pass the same
+        # kinds, as for any collective call); the library checks the rest, collectively.
         t = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
         arrays: Dict[str, np.ndarray] = {
             "vertices": v, "triangles": t,
@@ -223,7 +306,7 @@ class Scene:
         self.close()
 
     def _move(self, vertices: Any, rebuild: bool) -> None:
-        v = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        v = _vertices(vertices, "vertices")
         call = _lib.minkq_mpi_scene_rebuild if rebuild else _lib.minkq_mpi_scene_refit
         _check(call(self._scene, _host(v, len(v))), _lib.minkq_mpi_last_error_message())
 

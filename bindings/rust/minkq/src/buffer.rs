@@ -8,7 +8,7 @@ use std::marker::PhantomData;
 use std::mem;
 use std::ptr;
 
-use crate::bvh::Aabb;
+use crate::aabb::Aabb;
 use crate::sys;
 
 /// Where a buffer's memory lives (`minkq_memory`).

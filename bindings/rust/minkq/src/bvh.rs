@@ -2,6 +2,7 @@ use std::fmt;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
 
+use crate::aabb::Aabb;
 use crate::buffer::sealed::Precision;
 use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
@@ -9,34 +10,6 @@ use crate::error::{check, Error, Result};
 use crate::pairs::query_vec;
 use crate::query::{Mode, QueryFlags, QueryInfo};
 use crate::sys;
-
-/// An axis-aligned box, `lo <= hi` on every axis: 6 floats, the C API's box layout.
-///
-/// ```
-/// let b = minkq::Aabb::new([0.0, 0.0, 0.0], [1.0, 2.0, 3.0]);
-/// assert_eq!(b.hi[2], 3.0);
-/// assert_eq!(std::mem::size_of::<minkq::Aabb>(), 24);
-/// ```
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Aabb {
-    /// The low corner.
-    pub lo: [f32; 3],
-    /// The high corner.
-    pub hi: [f32; 3],
-}
-
-impl Aabb {
-    /// The box from `lo` to `hi`.
-    ///
-    /// ```
-    /// let b = minkq::Aabb::new([0.0; 3], [1.0; 3]);
-    /// assert_eq!(b.lo, [0.0; 3]);
-    /// ```
-    pub fn new(lo: [f32; 3], hi: [f32; 3]) -> Aabb {
-        Aabb { lo, hi }
-    }
-}
 
 /// The query shapes of a [`BvhQuery`] (`minkq_shape` with its buffers).
 ///

@@ -157,6 +157,7 @@
 //! builds it with CMake; this crate's tests and examples find it at run time through an rpath.
 #![deny(missing_docs)]
 
+mod aabb;
 mod buffer;
 mod bvh;
 mod device;
@@ -173,8 +174,9 @@ mod stream;
 /// ```
 pub use minkq_sys as sys;
 
+pub use aabb::Aabb;
 pub use buffer::{Buffer, Memory, PairsOut, Record, Vertex};
-pub use bvh::{Aabb, Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
+pub use bvh::{Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
 pub use pairs::PairBuffer;

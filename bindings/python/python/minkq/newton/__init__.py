@@ -123,9 +123,10 @@ Deliberate differences (documented choices):
 """
 
 
-# The package's parts, by concern: _kernels (Warp functions and kernels), _capture (Warp graph
-# capture: host calls replayed by CPU graphs, paused captures, pass buffers), _detector (the
-# detector class) and _install (install / uninstall). The names used from outside them (the
+# The package's parts, by concern: _compat (the only module that imports Newton's and Warp's
+# private modules), _kernels (Warp functions and kernels), _capture (Warp graph capture: host
+# calls replayed by CPU graphs, paused captures, pass buffers), _detector (the detector class)
+# and _install (install / uninstall). The names used from outside them (the
 # tests, minkq.newton.examples) are re-exported here.
 
 import warp as wp  # noqa: F401 - minkq.newton.wp (the tests patch Warp through it)

@@ -10,6 +10,8 @@ from typing import Any, Optional
 
 import warp as wp
 
+from . import _compat
+
 
 # ---- Graph capture on the CPU: host calls recorded as kernel launches ----------------------
 #
@@ -75,10 +77,8 @@ def _host_call_kernel(fn: wp.uint64, token: wp.uint64):
 
 
 def _graph_being_captured() -> Any:
-    # The Graph object a CPU capture is recording into (Warp keeps it on its runtime).
-    runtime = getattr(getattr(wp, "_src", None), "context", None)
-    runtime = getattr(runtime, "runtime", None)
-    return getattr(runtime, "_apic_graph", None)
+    # The Graph object a CPU capture is recording into.
+    return _compat.cpu_graph_being_captured()
 
 
 def capture_launch(graph: Any) -> None:
@@ -103,13 +103,11 @@ def _capture_paused(device: Any):
     if not getattr(device, "is_capturing", False):
         yield
         return
-    from warp._src.context import capture_pause, capture_resume
-
-    graph = capture_pause(device=device)
+    graph = _compat.capture_pause(device)
     try:
         yield
     finally:
-        capture_resume(graph, device=device)
+        _compat.capture_resume(graph, device)
 
 
 class _Scratch:

@@ -10,18 +10,10 @@ from typing import Any, Callable, Optional, Tuple
 
 import numpy as np
 import warp as wp
-from newton._src.geometry import tri_mesh_collision as _newton_tmc
-from newton._src.geometry.bvh import compute_bvh_group_roots
-from newton._src.geometry.kernels import (
-    compute_edge_aabbs,
-    compute_edge_groups,
-    compute_tri_aabbs,
-    compute_tri_groups,
-    init_triangle_collision_data_kernel,
-)
 
 from .. import _api
 from .._errors import CapacityError, UnsupportedError
+from . import _compat
 from ._capture import (
     _DISPATCH,
     ReplayError,
@@ -31,6 +23,14 @@ from ._capture import (
     _next_token,
     _recorded,
     _Scratch,
+)
+from ._compat import (
+    compute_bvh_group_roots,
+    compute_edge_aabbs,
+    compute_edge_groups,
+    compute_tri_aabbs,
+    compute_tri_groups,
+    init_triangle_collision_data_kernel,
 )
 from ._kernels import (
     _edge_edge_pairs_kernel,
@@ -52,7 +52,7 @@ def _minkq_device_for(device: Any) -> _api.Device:
         ) from None
 
 
-_NewtonDetector = _newton_tmc.TriMeshCollisionDetector  # Newton's class, whatever install() swaps
+_NewtonDetector = _compat.newton_tri_mesh_collision.TriMeshCollisionDetector  # Newton's class, whatever install() swaps
 
 
 class TriMeshCollisionDetector(_NewtonDetector):
@@ -142,7 +142,7 @@ class TriMeshCollisionDetector(_NewtonDetector):
         if collision_info is not None and init_collision_info:
             raise ValueError("pass either collision_info or init_collision_info=True, not both")
         if init_collision_info:
-            collision_info = _newton_tmc.build_tri_mesh_collision_info(
+            collision_info = _compat.newton_tri_mesh_collision.build_tri_mesh_collision_info(
                 model.particle_count,
                 model.tri_count,
                 model.edge_count,

@@ -5,24 +5,13 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
+from ._compat import DETECTOR_MODULES, SOLVER_EPSILON_ATTRIBUTE, solver_vbd_class
 from ._detector import TriMeshCollisionDetector
 
 
 # ---- Swapping it into Newton -------------------------------------------------------------------
 
-_PATCHED = (
-    "newton._src.solvers.vbd.solver_vbd",
-    "newton._src.sim.collide",
-    "newton._src.solvers.vbd.tri_mesh_collision",  # the VBD package's name for the class (Newton's tests use it)
-)
 _originals: dict = {}
-_SOLVER_EPSILON_ATTRIBUTE = "_self_contact_edge_edge_parallel_epsilon"  # SolverVBD's, read by its force kernels
-
-
-def _solver_vbd_class() -> Any:
-    from newton._src.solvers.vbd.solver_vbd import SolverVBD
-
-    return SolverVBD
 
 
 def _patch_solver_epsilon(epsilon: Optional[float]) -> None:
@@ -30,7 +19,7 @@ def _patch_solver_epsilon(epsilon: Optional[float]) -> None:
     ``particle_edge_parallel_epsilon`` for its self-contact force kernels) so that solvers built
     from now on use ``epsilon`` there; Newton's value stays readable as
     ``solver.newton_edge_edge_parallel_epsilon``."""
-    solver = _solver_vbd_class()
+    solver = solver_vbd_class()
     original = _originals.setdefault("SolverVBD._init_particle_system", solver.__dict__["_init_particle_system"])
     if epsilon is None:
         solver._init_particle_system = original
@@ -39,9 +28,9 @@ def _patch_solver_epsilon(epsilon: Optional[float]) -> None:
 
     def _init_particle_system(self, *args, **kwargs):
         original(self, *args, **kwargs)
-        if _SOLVER_EPSILON_ATTRIBUTE in self.__dict__:  # self-contact on
-            self.newton_edge_edge_parallel_epsilon = self.__dict__[_SOLVER_EPSILON_ATTRIBUTE]
-            setattr(self, _SOLVER_EPSILON_ATTRIBUTE, value)
+        if SOLVER_EPSILON_ATTRIBUTE in self.__dict__:  # self-contact on
+            self.newton_edge_edge_parallel_epsilon = self.__dict__[SOLVER_EPSILON_ATTRIBUTE]
+            setattr(self, SOLVER_EPSILON_ATTRIBUTE, value)
 
     _init_particle_system.__wrapped__ = original
     _init_particle_system.__doc__ = original.__doc__
@@ -58,7 +47,7 @@ def install(edge_edge_parallel_epsilon: Optional[float] = 0.0) -> None:
     calling it again replaces the epsilon."""
     import importlib
 
-    for name in _PATCHED:
+    for name in DETECTOR_MODULES:
         module = importlib.import_module(name)
         _originals.setdefault(name, module.TriMeshCollisionDetector)
         module.TriMeshCollisionDetector = TriMeshCollisionDetector
@@ -72,7 +61,7 @@ def uninstall() -> None:
 
     for name, original in list(_originals.items()):
         if name == "SolverVBD._init_particle_system":
-            _solver_vbd_class()._init_particle_system = original
+            solver_vbd_class()._init_particle_system = original
         else:
             importlib.import_module(name).TriMeshCollisionDetector = original
         del _originals[name]
