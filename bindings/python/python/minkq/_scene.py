@@ -264,7 +264,7 @@ class Scene(_StreamOrdered, _SizedQueries):
         1.0 after a build. It sees boxes that stretch, not a mesh folding or flattening into new
         neighbours (where a rebuild can still help). Rebuild when it passes about 1.5, and every
         so many steps when the mesh changes shape a lot (the C header; what rebuilds bought on
-        the benchmark scenes is in ``bench/README.md``). A tree whose elements all lie on one
+        the benchmark scenes is in ``docs/design-notes.md``). A tree whose elements all lie on one
         line parallel to an axis (or at one point) has no area: 1.0 while it stays so, ``inf``
         once it has any.
 
@@ -356,7 +356,7 @@ class Scene(_StreamOrdered, _SizedQueries):
         one kernel launch and one count readback on CUDA): exactly what ``query("vt", vt_mode,
         ...)`` and ``query("ee", ee_mode, ...)`` return (VV and EV queries run through
         :meth:`query`). ``leaf_exact=True`` gives the contacts (meant for the default box modes:
-        bench/README.md). Results as :meth:`query`.
+        docs/design-notes.md). Results as :meth:`query`.
 
         >>> import numpy as np, minkq
         >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]], np.float32)

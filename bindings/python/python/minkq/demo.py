@@ -32,7 +32,7 @@ REFERENCE_CONTACTS = {"vt": 62694, "ee": 192090}
 
 def grid_sheet(n: int) -> Tuple[np.ndarray, np.ndarray]:
     """n x n vertices on [0,1]^2 at z = 0, vertex (i, j) at index j * n + i; cell (i, j) gives
-    triangles (v00, v10, v11) and (v00, v11, v01). As testing/oracle's grid_sheet."""
+    triangles (v00, v10, v11) and (v00, v11, v01). As oracle/'s grid_sheet."""
     if n < 2:
         raise ValueError("n must be >= 2")
     coords = (np.arange(n, dtype=np.float64) / (n - 1)).astype(np.float32)
@@ -51,7 +51,7 @@ def grid_sheet(n: int) -> Tuple[np.ndarray, np.ndarray]:
 
 def twisted_sheet(n: int, turns: float = 3.0) -> Tuple[np.ndarray, np.ndarray]:
     """grid_sheet(n) twisted about the x axis: (u, v) -> (u, (v - 1/2) cos t, (v - 1/2) sin t),
-    t = turns * 2 pi * u, bit for bit as testing/oracle's twisted_sheet (double arithmetic,
+    t = turns * 2 pi * u, bit for bit as oracle/'s twisted_sheet (double arithmetic,
     the C library's cos and sin through math, rounded to float)."""
     xyz, tris = grid_sheet(n)
     u = xyz[:, 0].astype(np.float64)

@@ -280,7 +280,7 @@ flags! {
         /// Primitive distance test at the leaves: candidates are the true contacts (plus, at
         /// most, pairs within r + 2^-19 S). Mesh scenes only. Meant for [`Mode::Box`]: once the
         /// leaves test distances, the finer node tests cost more than they save (measured in
-        /// `bench/README.md`).
+        /// `docs/design-notes.md`).
         LEAF_EXACT = sys::MINKQ_QUERY_LEAF_EXACT;
         /// Pairs sorted lexicographically.
         CANONICAL = sys::MINKQ_QUERY_CANONICAL;

@@ -305,7 +305,7 @@ impl Scene {
     /// sees boxes that stretch, not a mesh folding or flattening into new neighbours (where a
     /// rebuild can still help). Rebuild when it passes about 1.5, and every so many steps when
     /// the mesh changes shape a lot (`minkq_scene_tree_growth` in `minkq.h`; what rebuilds
-    /// bought on the benchmark scenes is in `bench/README.md`). A tree whose elements all lie
+    /// bought on the benchmark scenes is in `docs/design-notes.md`). A tree whose elements all lie
     /// on one line parallel to an axis (or at one point) has no area: 1 while it stays so,
     /// infinity once it has any.
     ///

@@ -63,7 +63,7 @@ class TriMeshCollisionDetector(_NewtonDetector):
 
     The VT pass runs minkq's ``vt_mode`` node test and the EE pass ``ee_mode``, both with
     the leaf-exact primitive test; the node test changes the speed, not the pairs (box, the
-    default, is the one meant for contacts: bench/README.md).
+    default, is the one meant for contacts: docs/design-notes.md).
     """
 
     vt_mode = "box"
