@@ -7,8 +7,9 @@
 #include <cstring>
 #include <type_traits>
 
+#include "minkq/bvh.h"
 #include "minkq/float64.h"
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "scene_types.h"
 
 namespace minkq::fuzz {
@@ -51,7 +52,7 @@ Pairs definition_set(const Queries& queries, int32_t num_queries, const Boxes& b
 }
 
 // The geometry of a mesh scene in the core's types; swept (after set_end), the vertices move
-// from `vertices` to `vertices1` and the queries and boxes are the swept ones (queries.h).
+// from `vertices` to `vertices1` and the queries and boxes are the swept ones (elements.h).
 struct MeshGeometry {
   std::vector<Vec3> vertices;
   std::vector<Triangle> triangles;

@@ -1,4 +1,4 @@
-// The leaf filter (queries.h) a group of hits at a time: the incidence test on four edges or
+// The leaf filter (leaf_filter.h) a group of hits at a time: the incidence test on four edges or
 // triangles in leaf order (LeafGroup) against share_vertex / has_vertex one by one, and the EE,
 // EV and VT queries with the elements in leaf order (also only so, none by id), without them
 // (element by element, by id) and pair by pair (accept) giving the same pairs, in the same
@@ -13,7 +13,7 @@
 
 #include "cpu/passes.h"
 #include "cpu/tree.h"
-#include "minkq/queries.h"
+#include "minkq/leaf_filter.h"
 #include "test_util.h"
 
 namespace minkq {

@@ -22,7 +22,7 @@
 //   sort_by_morton(boxes, n, Array<int32_t>& ids)
 //                                  ids 0..n-1 in the Morton order of the boxes' centres.
 //   fill_groups(prims, sorted_prims, n, Array<LeafGroup<Prim>>& out)
-//                                  the n elements (by id) in a tree's leaf order (queries.h's
+//                                  the n elements (by id) in a tree's leaf order (leaf_groups.h's
 //                                  LeafGroup, fill_leaf_group), sized for them.
 //   scatter_groups(groups, sorted_prims, n, Array<Prim>& out)
 //                                  the inverse: the elements by id, sized for them.

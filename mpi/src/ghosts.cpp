@@ -17,7 +17,7 @@
 #include <unordered_map>
 
 #include "collective.h"
-#include "minkq/tree.h"  // spread_bits_21
+#include "minkq/morton.h"  // spread_bits_21
 #include "scene.h"
 
 namespace minkq::mpi {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "minkq/tree.h"  // spread_bits_21
+#include "minkq/morton.h"  // spread_bits_21
 
 namespace minkq::mpi_tools {
 

@@ -1,12 +1,12 @@
 // The traversal, written once for every query shape and both backends: a query walks the
-// tree (tree.h) top-down with a small stack, tests child boxes with the shape's box test and
+// tree (bvh.h) top-down with a small stack, tests child boxes with the shape's box test and
 // scans leaf ranges four boxes at a time with the shape's leaf test (shapes.h states the
 // contract a shape fulfils), handing each group's hits to the leaf filter at once; a
 // self-query walks only the half after its own leaf. Work is counted when asked for and
 // compiled out when not.
 #pragma once
 
-#include "minkq/tree.h"
+#include "minkq/bvh.h"
 
 namespace minkq {
 
@@ -128,7 +128,7 @@ MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRang
 // sorted positions after `after` whose box the shape overlaps (the contract at the top of
 // shapes.h makes that exact: may_overlap accepts every ancestor box of such a box), bit k of
 // hits for position base + k; a self-query thus meets each pair once. The leaf filter
-// (queries.h) takes a group's hits at once.
+// (leaf_filter.h) takes a group's hits at once.
 template <class Shape, class OnHits, class Work>
 MINKQ_HD void traverse_groups(const BvhView& bvh, const Shape& shape, int32_t after, OnHits& on_hits, Work& work) {
   auto on_range = [&](int32_t first, int32_t last, const Box& range_box, bool) {

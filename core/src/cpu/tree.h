@@ -1,4 +1,4 @@
-// The CPU tree: tree.h's per-element build and refit steps run in parallel with TBB, the
+// The CPU tree: the per-element build and refit steps run in parallel with TBB, the
 // counterpart of cuda/tree.cuh (the same steps, so the trees are bit-identical). Used by the
 // CPU executor (cpu/backend.cpp) and, through the minkq_internal target, by the tree tests and
 // the benchmarks' studies.
@@ -13,7 +13,10 @@
 
 #include "cpu/radix_sort.h"
 #include "cpu/runtime.h"
-#include "minkq/tree.h"
+#include "minkq/build.h"
+#include "minkq/cost.h"
+#include "minkq/morton.h"
+#include "minkq/refit.h"
 
 namespace minkq {
 
@@ -249,7 +252,7 @@ class CpuTree {
     refit_slots(boxes, nodes_, sorted_prims_.data(), leaf_groups_.data(), arrivals_);
   }
 
-  // The tree's area cost (tree.h's area_cost).
+  // The tree's area cost (cost.h's area_cost).
   double area_cost() const { return minkq::area_cost(nodes_.data(), int64_t(nodes_.size())); }
   // area_cost() right after the last build.
   double cost_at_build() const { return cost_at_build_; }

@@ -1,4 +1,4 @@
-// The CUDA tree: tree.h's per-element build and refit steps, one thread per element, with
+// The CUDA tree: the per-element build and refit steps, one thread per element, with
 // CUB's radix sort, scan and reductions; the counterpart of cpu/tree.h, whose trees it matches bit
 // for bit. Included by cuda/backend.cu only.
 #pragma once
@@ -9,7 +9,10 @@
 #include <thrust/iterator/counting_iterator.h>
 
 #include "cuda/runtime.cuh"
-#include "minkq/tree.h"
+#include "minkq/build.h"
+#include "minkq/cost.h"
+#include "minkq/morton.h"
+#include "minkq/refit.h"
 
 namespace minkq::cuda {
 

@@ -1,153 +1,18 @@
-// Query sources: where query q's geometry comes from, which primitive boxes a tree holds, and
-// which (query, primitive) pairs the leaf filter keeps. run_query ties a source to a shape
-// and to the one traversal; backends call it per query and supply only emit(first, second).
+// Query sources: where query q's geometry comes from and which (query, primitive) pairs the leaf
+// filter (leaf_filter.h) keeps, for the five query kinds: VT and EV (vertex against a tree of
+// triangles or edges), EE and VV (a tree against itself) and user queries against user boxes.
 #pragma once
 
-#include <type_traits>
-
 #include "minkq/float64.h"
-#include "minkq/traversal.h"
+#include "minkq/leaf_groups.h"
 #include "minkq/shapes.h"
 
 namespace minkq {
-
-struct Triangle {
-  int32_t v[3];
-};
-struct Edge {
-  int32_t v[2];
-};
-
-// Whether triangle t (edge e) has vertex v, and whether two edges share a vertex: the incidence
-// the kDropIncident filter drops.
-MINKQ_HD bool has_vertex(const Triangle& t, int32_t v) { return t.v[0] == v || t.v[1] == v || t.v[2] == v; }
-MINKQ_HD bool has_vertex(const Edge& e, int32_t v) { return e.v[0] == v || e.v[1] == v; }
-MINKQ_HD bool share_vertex(const Edge& a, const Edge& b) {
-  return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
-}
-
-// A tree's elements (triangles or edges) at four consecutive leaf positions, by lane as a
-// BoxGroup holds their boxes: the store keeps a tree's elements in this form only, so that its
-// leaf filters read them in leaf order, four at a time on the host, and a refit reads them
-// sequentially (LeafBoxes). Lanes past the last element hold -1 (no vertex).
-template <class Prim>
-struct LeafGroup {
-  static constexpr int kVertices = int(sizeof(Prim) / sizeof(int32_t));
-  int32_t v[kVertices][4];
-  // The element in lane k.
-  MINKQ_HD Prim at(int k) const {
-    Prim e;
-    for (int j = 0; j < kVertices; ++j) e.v[j] = v[j][k];
-    return e;
-  }
-  MINKQ_HD void set(int k, const Prim& e) {
-    for (int j = 0; j < kVertices; ++j) v[j][k] = e.v[j];
-  }
-};
-// The element at leaf position p of a tree whose elements `groups` holds.
-template <class Prim>
-MINKQ_HD Prim leaf_element(const LeafGroup<Prim>* groups, int64_t p) {
-  return groups[p >> 2].at(int(p & 3));
-}
-// Element `id`, at leaf position p (-1: not known): from the elements in leaf order where given,
-// else by id (the query sources' two forms).
-template <class Prim>
-MINKQ_HD Prim element_at(const Prim* by_id, const LeafGroup<Prim>* leaf, int32_t id, int64_t p) {
-  return p >= 0 && leaf ? leaf_element(leaf, p) : by_id[id];
-}
-using TriangleGroup = LeafGroup<Triangle>;
-using EdgeGroup = LeafGroup<Edge>;
-static_assert(sizeof(TriangleGroup) == 48 && sizeof(EdgeGroup) == 32, "a group holds four elements and nothing else");
-
-// Group g of the tree whose leaf order is sorted_prims (n elements), from the elements by id.
-template <class Prim>
-MINKQ_HD void fill_leaf_group(int64_t g, const Prim* prims, const int32_t* sorted_prims, int32_t n,
-                              LeafGroup<Prim>& out) {
-  for (int k = 0; k < 4; ++k) {
-    const int64_t p = 4 * g + k;
-    Prim none;
-    for (int j = 0; j < LeafGroup<Prim>::kVertices; ++j) none.v[j] = -1;
-    out.set(k, p < n ? prims[sorted_prims[p]] : none);
-  }
-}
-// The inverse: group g's elements back to their ids (a rebuild reads the elements by id).
-template <class Prim>
-MINKQ_HD void scatter_leaf_group(int64_t g, const LeafGroup<Prim>& group, const int32_t* sorted_prims, int32_t n,
-                                 Prim* prims) {
-  for (int k = 0; k < 4; ++k)
-    if (4 * g + k < n) prims[sorted_prims[4 * g + k]] = group.at(k);
-}
-
-// The lanes of `lanes` whose element has vertex a or vertex b (a vertex's own triangles or
-// edges: a == b; the edges sharing a vertex with edge (a, b)): has_vertex and share_vertex,
-// lane by lane.
-template <class Prim>
-MINKQ_HD unsigned incident_lanes(const LeafGroup<Prim>& g, int32_t a, int32_t b, unsigned lanes) {
-#if defined(__CUDACC__)
-  return lanes_where(lanes, [&](int k) {
-    bool any = false;
-    for (int j = 0; j < LeafGroup<Prim>::kVertices; ++j) any |= g.v[j][k] == a || g.v[j][k] == b;
-    return any;
-  });
-#else
-  simd4::M4 any = {0, 0, 0, 0};
-  for (int j = 0; j < LeafGroup<Prim>::kVertices; ++j) {
-    const simd4::M4 u = simd4::load(g.v[j]);
-    any |= (u == a) | (u == b);
-  }
-  return lanes & simd4::mask_bits(any);
-#endif
-}
 
 // Filter bits of a query (capi/query.cpp sets them from the C flags one by one).
 constexpr uint32_t kDropIncident = 1u;  // VT: vertex of the triangle; EE: edges sharing a vertex
 constexpr uint32_t kLeafExact = 2u;     // primitive distance test at the leaves
 
-// ---- Primitive boxes -----------------------------------------------------------------------
-// A swept scene (vertices moving linearly from `vertices` to `vertices1`) boxes each element
-// over both positions: every position between holds it, since each of its points at time t is
-// a convex combination of its vertices' two positions.
-MINKQ_HD Box element_box(const Vec3* vertices, const Vec3* vertices1, const Triangle& tri) {
-  Box b = box_expand(box_expand(Box::of_point(vertices[tri.v[0]]), vertices[tri.v[1]]), vertices[tri.v[2]]);
-  if (vertices1)
-    for (int k = 0; k < 3; ++k) b = box_expand(b, vertices1[tri.v[k]]);
-  return b;
-}
-MINKQ_HD Box element_box(const Vec3* vertices, const Vec3* vertices1, const Edge& edge) {
-  Box b = box_expand(Box::of_point(vertices[edge.v[0]]), vertices[edge.v[1]]);
-  if (vertices1) b = box_expand(box_expand(b, vertices1[edge.v[0]]), vertices1[edge.v[1]]);
-  return b;
-}
-// The box of element i, by id.
-template <class Prim>
-struct ElementBoxes {
-  const Vec3* vertices;
-  const Prim* prims;
-  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  MINKQ_HD Box operator()(int32_t i) const { return element_box(vertices, vertices1, prims[i]); }
-};
-using TriangleBoxes = ElementBoxes<Triangle>;
-using EdgeBoxes = ElementBoxes<Edge>;
-// The box of the element at leaf position p, from the elements in leaf order (a refit's
-// source: kByLeafPosition, tree.h).
-template <class Prim>
-struct LeafBoxes {
-  static constexpr bool kByLeafPosition = true;
-  const Vec3* vertices;
-  const LeafGroup<Prim>* groups;
-  const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  MINKQ_HD Box operator()(int32_t p) const { return element_box(vertices, vertices1, leaf_element(groups, p)); }
-};
-struct PointBoxes {
-  const Vec3* points;
-  const Vec3* points1 = nullptr;  // swept: the positions at t = 1 (the box of the path)
-  MINKQ_HD Box operator()(int32_t i) const {
-    const Box b = Box::of_point(points[i]);
-    return points1 ? box_expand(b, points1[i]) : b;
-  }
-};
-
-// ---- Query sources ---------------------------------------------------------------------------
 // Query i of a batch: the element that asks, and the sorted leaf position its leaves must lie
 // after (-1: any leaf; see traverse()).
 struct QueryTarget {
@@ -162,13 +27,6 @@ struct Pair {
 MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uint32_t(first)) << 32 | uint32_t(second); }
 MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(key & 0xffffffffu)}; }
 
-// The leaf-exact test of a vertex against a triangle or an edge.
-MINKQ_HD bool point_within(const Vec3* vertices, Vec3 p, const Triangle& t, float r) {
-  return point_triangle_within(p, vertices[t.v[0]], vertices[t.v[1]], vertices[t.v[2]], r);
-}
-MINKQ_HD bool point_within(const Vec3* vertices, Vec3 p, const Edge& e, float r) {
-  return point_segment_within(p, vertices[e.v[0]], vertices[e.v[1]], r);
-}
 
 // Vertex v against the tree of `Prim`s, triangles (VT) or edges (EV); pairs (v, p). Queries run
 // in `order` when given (the vertices' Morton order: neighbouring queries then walk the same
@@ -346,61 +204,5 @@ struct UserQueries {
   MINKQ_HD bool accept_rest(QueryTarget, int32_t, int64_t) const { return true; }
   MINKQ_HD Pair pair(int32_t q, int32_t b) const { return {q, b}; }
 };
-
-// Whether an emitter only counts pairs (a static kCountsOnly member and add(n)): the leaf
-// filter then adds a group's candidates at once instead of emitting them one by one.
-template <class Emit>
-MINKQ_HD constexpr auto counts_only(int) -> decltype(bool(Emit::kCountsOnly)) {
-  return Emit::kCountsOnly;
-}
-template <class Emit>
-MINKQ_HD constexpr bool counts_only(long) {
-  return false;
-}
-
-// The leaf filter of a query target (element q; a self-query's at leaf position `after`), a leaf
-// group's hits at a time (positions base + k for the bits k of hits, each a primitive whose box
-// the shape overlaps): each is counted, the incidence filter drops lanes (dropped_lanes: four at
-// once where the source can), the source's other tests (accept_rest, told the leaf position)
-// keep or drop the rest one by one where it has any, and each kept one is emitted as the
-// source's pair. accept(q, prim) is the same verdict for one pair, by id. The sources read a
-// query's element and the primitives by leaf position where they keep them in leaf order.
-template <class Shape, class Queries, class Emit, class Work>
-struct LeafFilter {
-  const Queries& queries;
-  const int32_t* sorted_prims;
-  QueryTarget target;
-  Emit& emit;
-  Work& work;
-  MINKQ_HD void operator()(int64_t base, unsigned hits, const BoxGroup& /*group*/) const {
-    work.test_primitives(unsigned(popcount(hits)));
-    hits &= ~queries.dropped_lanes(target, base, hits, sorted_prims);
-    const bool rest = queries.template tests_rest<Shape>();
-    if constexpr (counts_only<Emit>(0)) {
-      if (!rest) {
-        work.emit_candidates(unsigned(popcount(hits)));
-        emit.add(unsigned(popcount(hits)));
-        return;
-      }
-    }
-    for (; hits != 0; hits &= hits - 1u) {
-      const int k = lowest_bit(hits);
-      const int32_t prim = sorted_prims[base + k];
-      if (rest && !queries.template accept_rest<Shape>(target, prim, base + k)) continue;
-      work.emit_candidate();
-      const Pair pair = queries.pair(target.q, prim);
-      emit(pair.first, pair.second);
-    }
-  }
-};
-
-// Query i of the batch: emit(first, second) for each pair it finds; work counts (or not).
-template <class Shape, class Queries, class Emit, class Work>
-MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
-  const QueryTarget target = queries.target(i);
-  const Shape shape = Shape::from(queries.geometry(target));
-  LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target, emit, work};
-  traverse_groups(bvh, shape, target.after, on_hits, work);
-}
 
 }  // namespace minkq

@@ -1,0 +1,68 @@
+// The leaf filter: what a query does with a leaf group's hits (drop the incident ones, run the
+// source's other tests, emit the source's pairs), and run_query, which ties a query source
+// (query_sources.h) to a shape and to the one traversal (traversal.h). Backends call it per
+// query and supply only emit(first, second).
+#pragma once
+
+#include "minkq/query_sources.h"
+#include "minkq/traversal.h"
+
+namespace minkq {
+
+// Whether an emitter only counts pairs (a static kCountsOnly member and add(n)): the leaf
+// filter then adds a group's candidates at once instead of emitting them one by one.
+template <class Emit>
+MINKQ_HD constexpr auto counts_only(int) -> decltype(bool(Emit::kCountsOnly)) {
+  return Emit::kCountsOnly;
+}
+template <class Emit>
+MINKQ_HD constexpr bool counts_only(long) {
+  return false;
+}
+
+// The leaf filter of a query target (element q; a self-query's at leaf position `after`), a leaf
+// group's hits at a time (positions base + k for the bits k of hits, each a primitive whose box
+// the shape overlaps): each is counted, the incidence filter drops lanes (dropped_lanes: four at
+// once where the source can), the source's other tests (accept_rest, told the leaf position)
+// keep or drop the rest one by one where it has any, and each kept one is emitted as the
+// source's pair. accept(q, prim) is the same verdict for one pair, by id. The sources read a
+// query's element and the primitives by leaf position where they keep them in leaf order.
+template <class Shape, class Queries, class Emit, class Work>
+struct LeafFilter {
+  const Queries& queries;
+  const int32_t* sorted_prims;
+  QueryTarget target;
+  Emit& emit;
+  Work& work;
+  MINKQ_HD void operator()(int64_t base, unsigned hits, const BoxGroup& /*group*/) const {
+    work.test_primitives(unsigned(popcount(hits)));
+    hits &= ~queries.dropped_lanes(target, base, hits, sorted_prims);
+    const bool rest = queries.template tests_rest<Shape>();
+    if constexpr (counts_only<Emit>(0)) {
+      if (!rest) {
+        work.emit_candidates(unsigned(popcount(hits)));
+        emit.add(unsigned(popcount(hits)));
+        return;
+      }
+    }
+    for (; hits != 0; hits &= hits - 1u) {
+      const int k = lowest_bit(hits);
+      const int32_t prim = sorted_prims[base + k];
+      if (rest && !queries.template accept_rest<Shape>(target, prim, base + k)) continue;
+      work.emit_candidate();
+      const Pair pair = queries.pair(target.q, prim);
+      emit(pair.first, pair.second);
+    }
+  }
+};
+
+// Query i of the batch: emit(first, second) for each pair it finds; work counts (or not).
+template <class Shape, class Queries, class Emit, class Work>
+MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
+  const QueryTarget target = queries.target(i);
+  const Shape shape = Shape::from(queries.geometry(target));
+  LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target, emit, work};
+  traverse_groups(bvh, shape, target.after, on_hits, work);
+}
+
+}  // namespace minkq
