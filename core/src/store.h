@@ -309,8 +309,8 @@ class MeshStoreOn final : public MeshStore {
       case QueryKind::kVertexTriangle: return with_vt_pass(request, out, fn);
       case QueryKind::kEdgeEdge: return with_ee_pass(request, out, fn);
       case QueryKind::kVertexEdge: {
-        const VertexEdgeQueries queries{vertices_.data(), nullptr, vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1(), leaf_edges_.data()};
+        const VertexEdgeQueries queries{vertices_.data(), leaf_edges_.data(), vertex_order_.data(), request.r,
+                                        request.filters, rho(), vertices1()};
         return with_vertex_pass(request, edge_tree_.view(), queries, out, fn);
       }
       case QueryKind::kVertexVertex: {
@@ -325,8 +325,8 @@ class MeshStoreOn final : public MeshStore {
   // Calls fn with the QueryPass of a VT request, or of an EE request.
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
-    const VertexTriangleQueries queries{vertices_.data(), nullptr, vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1(), leaf_triangles_.data()};
+    const VertexTriangleQueries queries{vertices_.data(), leaf_triangles_.data(), vertex_order_.data(), request.r,
+                                        request.filters, rho(), vertices1()};
     with_vertex_pass(request, triangle_tree_.view(), queries, out, fn);
   }
   // Vertex queries (VT, EV, VV): points, or swept each vertex's path, a segment: the segment
@@ -342,8 +342,8 @@ class MeshStoreOn final : public MeshStore {
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const BvhView edge_tree = edge_tree_.view();
-    const EdgeEdgeQueries queries{vertices_.data(), nullptr, edge_tree.sorted_prims, request.r, request.filters,
-                                  rho(), vertices1(), leaf_edges_.data()};
+    const EdgeEdgeQueries queries{vertices_.data(), leaf_edges_.data(), edge_tree.sorted_prims, request.r,
+                                  request.filters, rho(), vertices1()};
     with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
   }
 

@@ -22,11 +22,11 @@ MINKQ_HD constexpr bool counts_only(long) {
 
 // The leaf filter of a query target (element q; a self-query's at leaf position `after`), a leaf
 // group's hits at a time (positions base + k for the bits k of hits, each a primitive whose box
-// the shape overlaps): each is counted, the incidence filter drops lanes (dropped_lanes: four at
-// once where the source can), the source's other tests (accept_rest, told the leaf position)
-// keep or drop the rest one by one where it has any, and each kept one is emitted as the
-// source's pair. accept(q, prim) is the same verdict for one pair, by id. The sources read a
-// query's element and the primitives by leaf position where they keep them in leaf order.
+// the shape overlaps): each is counted, the incidence filter drops lanes (dropped_lanes, four at
+// once), the source's other tests (accept_rest, told the leaf position) keep or drop the rest
+// one by one where it has any, and each kept one is emitted as the source's pair. The sources
+// read a query's element and the primitives by leaf position (testing/by_id_queries.h states
+// the same verdict for one pair, by id).
 template <class Shape, class Queries, class Emit, class Work>
 struct LeafFilter {
   const Queries& queries;
@@ -36,7 +36,7 @@ struct LeafFilter {
   Work& work;
   MINKQ_HD void operator()(int64_t base, unsigned hits, const BoxGroup& /*group*/) const {
     work.test_primitives(unsigned(popcount(hits)));
-    hits &= ~queries.dropped_lanes(target, base, hits, sorted_prims);
+    hits &= ~queries.dropped_lanes(target, base, hits);
     const bool rest = queries.template tests_rest<Shape>();
     if constexpr (counts_only<Emit>(0)) {
       if (!rest) {

@@ -31,12 +31,6 @@ template <class Prim>
 MINKQ_HD Prim leaf_element(const LeafGroup<Prim>* groups, int64_t p) {
   return groups[p >> 2].at(int(p & 3));
 }
-// Element `id`, at leaf position p (-1: not known): from the elements in leaf order where given,
-// else by id (the query sources' two forms).
-template <class Prim>
-MINKQ_HD Prim element_at(const Prim* by_id, const LeafGroup<Prim>* leaf, int32_t id, int64_t p) {
-  return p >= 0 && leaf ? leaf_element(leaf, p) : by_id[id];
-}
 using TriangleGroup = LeafGroup<Triangle>;
 using EdgeGroup = LeafGroup<Edge>;
 static_assert(sizeof(TriangleGroup) == 48 && sizeof(EdgeGroup) == 32, "a group holds four elements and nothing else");

@@ -1,6 +1,9 @@
 // Query sources: where query q's geometry comes from and which (query, primitive) pairs the leaf
 // filter (leaf_filter.h) keeps, for the five query kinds: VT and EV (vertex against a tree of
 // triangles or edges), EE and VV (a tree against itself) and user queries against user boxes.
+// The sources read a tree's elements by leaf position only, as the stores keep them
+// (leaf_groups.h); testing/by_id_queries.h states the same verdicts pair by pair, by id, for the
+// tests and the references.
 #pragma once
 
 #include "minkq/float64.h"
@@ -27,6 +30,10 @@ struct Pair {
 MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uint32_t(first)) << 32 | uint32_t(second); }
 MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(key & 0xffffffffu)}; }
 
+// The geometry of vertex v as a query: the point, or swept (vertices1 set) its path.
+MINKQ_HD QueryGeometry vertex_geometry(const Vec3* vertices, const Vec3* vertices1, int32_t v, float r) {
+  return {vertices[v], vertices1 ? vertices1[v] : vertices[v], r};
+}
 
 // Vertex v against the tree of `Prim`s, triangles (VT) or edges (EV); pairs (v, p). Queries run
 // in `order` when given (the vertices' Morton order: neighbouring queries then walk the same
@@ -36,34 +43,19 @@ MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(ke
 template <class Prim>
 struct VertexPrimQueries {
   const Vec3* vertices;
-  const Prim* prims;     // by id: the one-pair verdict accept() reads them (nullptr: leaf_prims only)
+  const LeafGroup<Prim>* leaf_prims;  // the tree's elements in leaf order
   const int32_t* order;  // or nullptr: vertex i is query i
   float r;
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  const LeafGroup<Prim>* leaf_prims = nullptr;  // the tree's elements in leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
-  MINKQ_HD Prim element(int32_t t, int64_t p) const { return element_at(prims, leaf_prims, t, p); }
-  MINKQ_HD QueryGeometry geometry(int32_t v) const {
-    return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
-  }
-  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry(t.q); }
-  // Whether the leaf filter keeps (v, t), reached because Shape(v) overlaps t's box: not
-  // incident (where dropped), then accept_rest.
-  template <class Shape>
-  MINKQ_HD bool accept(int32_t v, int32_t t) const {
-    if ((filters & kDropIncident) && has_vertex(prims[t], v)) return false;
-    return accept_rest<Shape>({v, -1}, t, -1);
-  }
-  // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops:
-  // four at a time from leaf_prims, else element by element.
-  MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return vertex_geometry(vertices, vertices1, t.q, radius()); }
+  // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops.
+  MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits) const {
     if (!(filters & kDropIncident)) return 0;
-    const int32_t v = target.q;
-    if (leaf_prims) return incident_lanes(leaf_prims[base >> 2], v, v, hits);
-    return lanes_where(hits, [&](int k) { return has_vertex(prims[sorted_prims[base + k]], v); });
+    return incident_lanes(leaf_prims[base >> 2], target.q, target.q, hits);
   }
   // What the filter tests after incidence, and whether it tests anything (else every lane the
   // incidence filter leaves is a candidate).
@@ -71,12 +63,15 @@ struct VertexPrimQueries {
   MINKQ_HD bool tests_rest() const {
     return (filters & kLeafExact) != 0;
   }
-  // Primitive t is at leaf position p (-1: not known).
+  // Primitive t is at leaf position p.
   template <class Shape>
-  MINKQ_HD bool accept_rest(QueryTarget target, int32_t t, int64_t p) const {
-    const int32_t v = target.q;
-    if (filters & kLeafExact) return point_within(vertices, vertices[v], element(t, p), radius());
-    return true;
+  MINKQ_HD bool accept_rest(QueryTarget target, int32_t, int64_t p) const {
+    return keeps(target.q, leaf_element(leaf_prims, p));
+  }
+  // Whether the tests after incidence keep vertex v against element e: the leaf-exact test
+  // where asked.
+  MINKQ_HD bool keeps(int32_t v, const Prim& e) const {
+    return !(filters & kLeafExact) || point_within(vertices, vertices[v], e, radius());
   }
   MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
 };
@@ -90,16 +85,16 @@ using VertexEdgeQueries = VertexPrimQueries<Edge>;
 // {e, f} is a candidate when Shape(e) overlaps box(f) and Shape(f) overlaps box(e).
 struct EdgeEdgeQueries {
   const Vec3* vertices;
-  const Edge* edges;  // by id: the one-pair verdict accept() reads them (nullptr: leaf_edges only)
+  const EdgeGroup* leaf_edges;  // the edges in the tree's leaf order
   const int32_t* sorted_edges;  // the edge tree's leaf order
   float r;
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  const EdgeGroup* leaf_edges = nullptr;  // the edges in the tree's leaf order (or nullptr)
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
-  MINKQ_HD Edge edge(int32_t e, int64_t p) const { return element_at(edges, leaf_edges, e, p); }
+  // The edge at leaf position p.
+  MINKQ_HD Edge edge_at(int64_t p) const { return leaf_element(leaf_edges, p); }
   // Static: the edge as a segment. Swept: the edge's swept box, as the box from its low to its
   // high corner (box mode only: the front end refuses the segment modes).
   MINKQ_HD QueryGeometry geometry_of(const Edge& e) const {
@@ -109,22 +104,13 @@ struct EdgeEdgeQueries {
     }
     return {vertices[e.v[0]], vertices[e.v[1]], radius()};
   }
-  MINKQ_HD QueryGeometry geometry(int32_t e) const { return geometry_of(edges[e]); }
-  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry_of(edge(t.q, t.after)); }
-  // Whether the leaf filter keeps {e, f}, reached because Shape(e) overlaps f's box: not
-  // sharing a vertex (where dropped), then accept_rest.
-  template <class Shape>
-  MINKQ_HD bool accept(int32_t e, int32_t f) const {
-    if ((filters & kDropIncident) && share_vertex(edges[e], edges[f])) return false;
-    return accept_rest<Shape>({e, -1}, f, -1);
-  }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry_of(edge_at(t.after)); }
   // The lanes of `hits` (group `base` of the edge tree's leaf order) that the incidence filter
-  // drops: four at a time from leaf_edges, else edge by edge.
-  MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits, const int32_t* sorted_prims) const {
+  // drops.
+  MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits) const {
     if (!(filters & kDropIncident)) return 0;
-    const Edge a = edge(target.q, target.after);
-    if (leaf_edges) return incident_lanes(leaf_edges[base >> 2], a.v[0], a.v[1], hits);
-    return lanes_where(hits, [&](int k) { return share_vertex(a, edges[sorted_prims[base + k]]); });
+    const Edge a = edge_at(target.after);
+    return incident_lanes(leaf_edges[base >> 2], a.v[0], a.v[1], hits);
   }
   // The box test is symmetric (box_gap_within) and passed; the finer tests are not: Shape(f)'s
   // finer test against e's box (nothing for the box mode), then the leaf-exact test.
@@ -132,11 +118,14 @@ struct EdgeEdgeQueries {
   MINKQ_HD bool tests_rest() const {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
   }
-  // Edge f is at leaf position p (-1: not known).
+  // Edge f is at leaf position p.
   template <class Shape>
   MINKQ_HD bool accept_rest(QueryTarget target, int32_t f, int64_t p) const {
-    const int32_t e = target.q;
-    const Edge a = edge(e, target.after), b = edge(f, p);
+    return keeps<Shape>(target.q, edge_at(target.after), f, edge_at(p));
+  }
+  // Whether the tests after incidence keep edges e (a) and f (b), Shape(e) overlapping f's box.
+  template <class Shape>
+  MINKQ_HD bool keeps(int32_t e, const Edge& a, int32_t f, const Edge& b) const {
     if (!Shape::from(geometry_of(b)).finer(element_box(vertices, vertices1, a))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
@@ -150,7 +139,8 @@ struct EdgeEdgeQueries {
 // vertex at sorted leaf position i: as EdgeEdgeQueries, each unordered pair is met once,
 // reported as (v, w), v < w, and kept when the node test passes both ways. Swept, each vertex
 // is its path (segment shapes against the paths' boxes), with no leaf-exact test. No pair is
-// incident (a vertex never pairs with itself).
+// incident (a vertex never pairs with itself). The vertices have no leaf form: the tests read
+// them by id.
 struct VertexVertexQueries {
   const Vec3* vertices;
   const int32_t* sorted_vertices;  // the vertex tree's leaf order
@@ -160,15 +150,8 @@ struct VertexVertexQueries {
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_vertices[i], i}; }
-  MINKQ_HD QueryGeometry geometry(int32_t v) const {
-    return {vertices[v], vertices1 ? vertices1[v] : vertices[v], radius()};
-  }
-  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry(t.q); }
-  template <class Shape>
-  MINKQ_HD bool accept(int32_t v, int32_t w) const {
-    return accept_rest<Shape>({v, -1}, w, -1);
-  }
-  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned, const int32_t*) const { return 0; }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return vertex_geometry(vertices, vertices1, t.q, radius()); }
+  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned) const { return 0; }
   template <class Shape>
   MINKQ_HD bool tests_rest() const {
     return !is_box_shape<Shape>() || (filters & kLeafExact) != 0;
@@ -176,7 +159,8 @@ struct VertexVertexQueries {
   template <class Shape>
   MINKQ_HD bool accept_rest(QueryTarget target, int32_t w, int64_t) const {
     const int32_t v = target.q;
-    if (!Shape::from(geometry(w)).finer(PointBoxes{vertices, vertices1}(v))) return false;
+    if (!Shape::from(vertex_geometry(vertices, vertices1, w, radius())).finer(PointBoxes{vertices, vertices1}(v)))
+      return false;
     if (!(filters & kLeafExact)) return true;
     const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
     return point_point_within(vertices[lo], vertices[hi], radius());
@@ -191,11 +175,8 @@ struct UserQueries {
   const Vec3* p1;
   float r;
   MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
-  MINKQ_HD QueryGeometry geometry(int32_t q) const { return {p0[q], p1 ? p1[q] : p0[q], r}; }
-  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry(t.q); }
-  template <class Shape>
-  MINKQ_HD bool accept(int32_t, int32_t) const { return true; }
-  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned, const int32_t*) const { return 0; }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return {p0[t.q], p1 ? p1[t.q] : p0[t.q], r}; }
+  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned) const { return 0; }
   template <class Shape>
   MINKQ_HD bool tests_rest() const {
     return false;
