@@ -6,6 +6,9 @@
 // traversal.h walks it.
 #pragma once
 
+#include <utility>
+
+#include "minkq/detect.h"
 #include "minkq/hd.h"
 
 namespace minkq {
@@ -55,6 +58,18 @@ struct BvhView {
 struct GivenBoxes {
   const Box* boxes;
   MINKQ_HD Box operator()(int32_t i) const { return boxes[i]; }
+};
+
+// A Boxes functor: boxes(i), the box of primitive i (or, with kByLeafPosition, of leaf
+// position i: refit.h). Checked where a tree is built or refit.
+template <class B>
+using BoxOf = decltype(std::declval<const B&>()(int32_t()));
+template <class B>
+constexpr bool is_boxes = detected_as<Box, BoxOf, B>;
+template <class B>
+struct BoxesContract {
+  static_assert(is_boxes<B>, "Boxes: needs Box operator()(int32_t i) const, the box of primitive i");
+  static constexpr bool value = is_boxes<B>;
 };
 
 }  // namespace minkq

@@ -4,6 +4,8 @@
 // query and supply only emit(first, second).
 #pragma once
 
+#include <utility>
+
 #include "minkq/query_sources.h"
 #include "minkq/traversal.h"
 
@@ -19,6 +21,24 @@ template <class Emit>
 MINKQ_HD constexpr bool counts_only(long) {
   return false;
 }
+
+// An emitter: emit(first, second) for each pair, and for a count-only one add(n) as well (a
+// count-only emitter still takes the pairs one by one where the source tests them). Checked
+// where one is used (run_query).
+namespace emit_contract {
+template <class E>
+using Call = decltype(std::declval<E&>()(int32_t(), int32_t()));
+template <class E>
+using Add = decltype(std::declval<E&>().add(0u));
+}  // namespace emit_contract
+template <class E>
+constexpr bool is_emitter = is_detected<emit_contract::Call, E> && (!counts_only<E>(0) || is_detected<emit_contract::Add, E>);
+template <class E>
+struct EmitContract {
+  static_assert(is_detected<emit_contract::Call, E>, "emitter: needs operator()(int32_t first, int32_t second)");
+  static_assert(!counts_only<E>(0) || is_detected<emit_contract::Add, E>, "count-only emitter: needs add(unsigned n)");
+  static constexpr bool value = is_emitter<E>;
+};
 
 // The leaf filter of a query target (element q; a self-query's at leaf position `after`), a leaf
 // group's hits at a time (positions base + k for the bits k of hits, each a primitive whose box
@@ -59,6 +79,8 @@ struct LeafFilter {
 // Query i of the batch: emit(first, second) for each pair it finds; work counts (or not).
 template <class Shape, class Queries, class Emit, class Work>
 MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
+  static_assert(QuerySourceContract<Queries, Shape>::value, "not a query source (query_sources.h)");
+  static_assert(EmitContract<Emit>::value, "not an emitter");
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target));
   LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target, emit, work};

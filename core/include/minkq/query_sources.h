@@ -6,6 +6,9 @@
 // tests and the references.
 #pragma once
 
+#include <utility>
+
+#include "minkq/detect.h"
 #include "minkq/float64.h"
 #include "minkq/leaf_groups.h"
 #include "minkq/shapes.h"
@@ -29,6 +32,70 @@ struct Pair {
 // (ids are non-negative).
 MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uint32_t(first)) << 32 | uint32_t(second); }
 MINKQ_HD Pair unpack_pair(uint64_t key) { return {int32_t(key >> 32), int32_t(key & 0xffffffffu)}; }
+
+// What run_query asks of a query source Q run with shape S (each source below fulfils it):
+//
+//   QueryTarget target(int32_t i)      query i of the batch: the element that asks and the leaf
+//                                      position its leaves must lie after (-1: any).
+//   QueryGeometry geometry(QueryTarget)
+//                                      the query's shape is S::from of it.
+//   unsigned dropped_lanes(QueryTarget, int64_t base, unsigned hits)
+//                                      the lanes of hits (leaf group base / 4) whose primitive
+//                                      the incidence filter drops.
+//   bool tests_rest<S>()               whether accept_rest tests anything (else every lane
+//                                      left is a candidate).
+//   bool accept_rest<S>(QueryTarget, int32_t prim, int64_t p)
+//                                      the filter's other tests, prim being at leaf position p.
+//   Pair pair(int32_t q, int32_t prim) the pair reported.
+//
+// Checked member by member where a source is used (run_query); tests/test_contracts.cpp checks
+// the sources here fulfil it.
+namespace source_contract {
+template <class Q>
+using Target = decltype(std::declval<const Q&>().target(int32_t()));
+template <class Q>
+using Geometry = decltype(std::declval<const Q&>().geometry(std::declval<QueryTarget>()));
+template <class Q>
+using DroppedLanes = decltype(std::declval<const Q&>().dropped_lanes(std::declval<QueryTarget>(), int64_t(), 0u));
+template <class Q, class S>
+using TestsRest = decltype(std::declval<const Q&>().template tests_rest<S>());
+template <class Q, class S>
+using AcceptRest =
+    decltype(std::declval<const Q&>().template accept_rest<S>(std::declval<QueryTarget>(), int32_t(), int64_t()));
+template <class Q>
+using MakePair = decltype(std::declval<const Q&>().pair(int32_t(), int32_t()));
+template <class Q>
+constexpr bool kTarget = detected_as<QueryTarget, Target, Q>;
+template <class Q>
+constexpr bool kGeometry = detected_as<QueryGeometry, Geometry, Q>;
+template <class Q>
+constexpr bool kDroppedLanes = detected_as<unsigned, DroppedLanes, Q>;
+template <class Q, class S>
+constexpr bool kTestsRest = detected_as<bool, TestsRest, Q, S>;
+template <class Q, class S>
+constexpr bool kAcceptRest = detected_as<bool, AcceptRest, Q, S>;
+template <class Q>
+constexpr bool kPair = detected_as<Pair, MakePair, Q>;
+}  // namespace source_contract
+
+template <class Q, class S>
+constexpr bool is_query_source = source_contract::kTarget<Q> && source_contract::kGeometry<Q> &&
+                                 source_contract::kDroppedLanes<Q> && source_contract::kTestsRest<Q, S> &&
+                                 source_contract::kAcceptRest<Q, S> && source_contract::kPair<Q>;
+
+// Instantiated where a source is used: one message for each member Q lacks.
+template <class Q, class S>
+struct QuerySourceContract {
+  static_assert(source_contract::kTarget<Q>, "query source: needs QueryTarget target(int32_t i) const");
+  static_assert(source_contract::kGeometry<Q>, "query source: needs QueryGeometry geometry(QueryTarget) const");
+  static_assert(source_contract::kDroppedLanes<Q>,
+                "query source: needs unsigned dropped_lanes(QueryTarget, int64_t base, unsigned hits) const");
+  static_assert(source_contract::kTestsRest<Q, S>, "query source: needs template <class Shape> bool tests_rest() const");
+  static_assert(source_contract::kAcceptRest<Q, S>,
+                "query source: needs template <class Shape> bool accept_rest(QueryTarget, int32_t prim, int64_t p) const");
+  static_assert(source_contract::kPair<Q>, "query source: needs Pair pair(int32_t q, int32_t prim) const");
+  static constexpr bool value = is_query_source<Q, S>;
+};
 
 // The geometry of vertex v as a query: the point, or swept (vertices1 set) its path.
 MINKQ_HD QueryGeometry vertex_geometry(const Vec3* vertices, const Vec3* vertices1, int32_t v, float r) {

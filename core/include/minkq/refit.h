@@ -48,6 +48,7 @@ MINKQ_HD constexpr bool by_leaf_position(long) {
 template <class Boxes>
 MINKQ_HD Box leaf_range_box(int32_t first, int32_t last, const Boxes& boxes, const int32_t* sorted_prims,
                             BoxGroup* leaf_groups) {
+  static_assert(BoxesContract<Boxes>::value, "a refit reads its boxes from a Boxes functor (bvh.h)");
   Box box = Box::empty();
   for (int32_t q = first; q <= last; ++q) {
     const Box b = boxes(by_leaf_position<Boxes>(0) ? q : sorted_prims[q]);

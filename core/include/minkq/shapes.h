@@ -27,6 +27,9 @@
 // cost less than the candidates they remove (bench/README.md links the study).
 #pragma once
 
+#include <utility>
+
+#include "minkq/detect.h"
 #include "minkq/predicates.h"
 #include "minkq/simd.h"
 
@@ -39,6 +42,49 @@ enum class Mode : int { kBox = 0, kSphere = 1, kCapsuleRay = 2, kCapsuleExact = 
 struct QueryGeometry {
   Vec3 p0, p1;
   float r;
+};
+
+// The contract above, member by member, checked where a shape is used (traverse_groups in
+// traversal.h; walk, which tests node boxes only, checks may_overlap). What each test decides
+// is the tests' to check (test_bvh.cpp, test_queries.cpp); tests/test_contracts.cpp checks the
+// shapes here fulfil it.
+namespace shape_contract {
+template <class S>
+using From = decltype(S::from(std::declval<const QueryGeometry&>()));
+template <class S>
+using MayOverlap = decltype(std::declval<const S&>().may_overlap(std::declval<const Box&>()));
+template <class S>
+using Overlaps = decltype(std::declval<const S&>().overlaps(std::declval<const Box&>()));
+template <class S>
+using Finer = decltype(std::declval<const S&>().finer(std::declval<const Box&>()));
+template <class S>
+using OverlapsGroup = decltype(std::declval<const S&>().overlaps_group(std::declval<const BoxGroup&>(), 0u));
+template <class S>
+constexpr bool kFrom = detected_as<S, From, S>;
+template <class S>
+constexpr bool kMayOverlap = detected_as<bool, MayOverlap, S>;
+template <class S>
+constexpr bool kOverlaps = detected_as<bool, Overlaps, S>;
+template <class S>
+constexpr bool kFiner = detected_as<bool, Finer, S>;
+template <class S>
+constexpr bool kOverlapsGroup = detected_as<unsigned, OverlapsGroup, S>;
+}  // namespace shape_contract
+
+template <class S>
+constexpr bool is_shape = shape_contract::kFrom<S> && shape_contract::kMayOverlap<S> && shape_contract::kOverlaps<S> &&
+                          shape_contract::kFiner<S> && shape_contract::kOverlapsGroup<S>;
+
+// Instantiated where a shape is used: one message for each member S lacks.
+template <class S>
+struct ShapeContract {
+  static_assert(shape_contract::kFrom<S>, "Shape: needs static Shape from(const QueryGeometry&)");
+  static_assert(shape_contract::kMayOverlap<S>, "Shape: needs bool may_overlap(const Box&) const");
+  static_assert(shape_contract::kOverlaps<S>, "Shape: needs bool overlaps(const Box&) const");
+  static_assert(shape_contract::kFiner<S>, "Shape: needs bool finer(const Box&) const");
+  static_assert(shape_contract::kOverlapsGroup<S>,
+                "Shape: needs unsigned overlaps_group(const BoxGroup&, unsigned lanes) const");
+  static constexpr bool value = is_shape<S>;
 };
 
 // overlaps box by box over the lanes asked for: the shapes' leaf test in CUDA code (a thread

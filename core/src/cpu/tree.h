@@ -221,6 +221,7 @@ class CpuTree {
   // the Morton codes of the box centres, then the kept nodes with their boxes (build_nodes).
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
+    static_assert(BoxesContract<Boxes>::value, "a build reads its boxes from a Boxes functor (bvh.h)");
     BuildScratch local;
     BuildScratch& s = reserved_ ? scratch_ : local;
     if (n > 1) sort_by_morton(boxes, n, s.order, s.sort); else element_boxes(boxes, n, s.sort.element);

@@ -179,6 +179,7 @@ class CudaTree {
  public:
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
+    static_assert(BoxesContract<Boxes>::value, "a build reads its boxes from a Boxes functor (bvh.h)");
     n_ = n;
     sorted_prims_.ensure(size_t(n));
     leaf_groups_.ensure(size_t(box_group_count(n)));
