@@ -3,7 +3,7 @@
 // position in a tree. The brute-force definitions of the candidate sets (scene_definitions.h),
 // the Embree reference and the leaf filter tests apply it to every pair; the incidence test is
 // stated here element by element (the library tests four lanes at once: incident_lanes), and
-// every other test is the library source's own (keeps, accept_rest, geometry_of).
+// every other test is the library source's own (keeps, geometry_of, geometry).
 //
 // Each wraps a library source (its leaf-order members unused) with the elements by id, and
 // offers geometry(q), the query's geometry by id, accept<Shape>(q, p), whether the leaf filter

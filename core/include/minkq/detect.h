@@ -29,4 +29,11 @@ template <class To, template <class...> class Op, class... Args>
 constexpr bool detected_as =
     is_detected<Op, Args...> && std::is_convertible<typename detail::Detector<void, Op, Args...>::type, To>::value;
 
+// An optional static flag of T, read through Flag<T> (a std::integral_constant of it): its value
+// where T has it, false where not. The opt-in flags of box functors (kByLeafPosition, refit.h)
+// and emitters (kCountsOnly, leaf_filter.h).
+template <template <class...> class Flag, class T>
+constexpr bool flag_set =
+    std::conditional_t<is_detected<Flag, T>, typename detail::Detector<void, Flag, T>::type, std::false_type>::value;
+
 }  // namespace minkq

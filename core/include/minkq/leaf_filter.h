@@ -14,13 +14,9 @@ namespace minkq {
 // Whether an emitter only counts pairs (a static kCountsOnly member and add(n)): the leaf
 // filter then adds a group's candidates at once instead of emitting them one by one.
 template <class Emit>
-MINKQ_HD constexpr auto counts_only(int) -> decltype(bool(Emit::kCountsOnly)) {
-  return Emit::kCountsOnly;
-}
+using CountsOnly = std::integral_constant<bool, Emit::kCountsOnly>;
 template <class Emit>
-MINKQ_HD constexpr bool counts_only(long) {
-  return false;
-}
+constexpr bool counts_only = flag_set<CountsOnly, Emit>;
 
 // An emitter: emit(first, second) for each pair, and for a count-only one add(n) as well (a
 // count-only emitter still takes the pairs one by one where the source tests them). Checked
@@ -32,11 +28,11 @@ template <class E>
 using Add = decltype(std::declval<E&>().add(0u));
 }  // namespace emit_contract
 template <class E>
-constexpr bool is_emitter = is_detected<emit_contract::Call, E> && (!counts_only<E>(0) || is_detected<emit_contract::Add, E>);
+constexpr bool is_emitter = is_detected<emit_contract::Call, E> && (!counts_only<E> || is_detected<emit_contract::Add, E>);
 template <class E>
 struct EmitContract {
   static_assert(is_detected<emit_contract::Call, E>, "emitter: needs operator()(int32_t first, int32_t second)");
-  static_assert(!counts_only<E>(0) || is_detected<emit_contract::Add, E>, "count-only emitter: needs add(unsigned n)");
+  static_assert(!counts_only<E> || is_detected<emit_contract::Add, E>, "count-only emitter: needs add(unsigned n)");
   static constexpr bool value = is_emitter<E>;
 };
 
@@ -58,7 +54,7 @@ struct LeafFilter {
     work.test_primitives(unsigned(popcount(hits)));
     hits &= ~queries.dropped_lanes(target, base, hits);
     const bool rest = queries.template tests_rest<Shape>();
-    if constexpr (counts_only<Emit>(0)) {
+    if constexpr (counts_only<Emit>) {
       if (!rest) {
         work.emit_candidates(unsigned(popcount(hits)));
         emit.add(unsigned(popcount(hits)));

@@ -35,13 +35,9 @@ MINKQ_HD void store_child_box(BvhNode* nodes, int32_t slot, const Box& box) {
 // Whether a Boxes functor takes a leaf position (a static kByLeafPosition member: the elements
 // kept in leaf order, leaf_groups.h's LeafBoxes) rather than a primitive id.
 template <class Boxes>
-MINKQ_HD constexpr auto by_leaf_position(int) -> decltype(bool(Boxes::kByLeafPosition)) {
-  return Boxes::kByLeafPosition;
-}
+using ByLeafPosition = std::integral_constant<bool, Boxes::kByLeafPosition>;
 template <class Boxes>
-MINKQ_HD constexpr bool by_leaf_position(long) {
-  return false;
-}
+constexpr bool by_leaf_position = flag_set<ByLeafPosition, Boxes>;
 
 // A leaf range's box: the boxes of the primitives at sorted positions [first, last], each
 // written into its group lane on the way (two ranges may share a group, never a lane).
@@ -51,7 +47,7 @@ MINKQ_HD Box leaf_range_box(int32_t first, int32_t last, const Boxes& boxes, con
   static_assert(BoxesContract<Boxes>::value, "a refit reads its boxes from a Boxes functor (bvh.h)");
   Box box = Box::empty();
   for (int32_t q = first; q <= last; ++q) {
-    const Box b = boxes(by_leaf_position<Boxes>(0) ? q : sorted_prims[q]);
+    const Box b = boxes(by_leaf_position<Boxes> ? q : sorted_prims[q]);
     set_group_box(leaf_groups[q >> 2], q & 3, b);
     box = box_union(box, b);
   }

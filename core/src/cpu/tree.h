@@ -24,7 +24,7 @@ namespace minkq {
 // max are exact: any order gives them). The build reads the boxes from `out` from then on.
 template <class Boxes>
 Box element_boxes(Boxes boxes, int32_t n, HostVector<Box>& out) {
-  static_assert(!by_leaf_position<Boxes>(0), "a build reads its elements by id");
+  static_assert(!by_leaf_position<Boxes>, "a build reads its elements by id");
   out.resize(size_t(n));
   return tbb::parallel_reduce(
       tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),

@@ -29,7 +29,7 @@ struct CentreBox {
 // Every element's box once (cpu/tree.h's element_boxes): the build reads them from `out`.
 template <class Boxes>
 static __global__ void element_boxes_kernel(Boxes boxes, int32_t n, Box* out) {
-  static_assert(!by_leaf_position<Boxes>(0), "a build reads its elements by id");
+  static_assert(!by_leaf_position<Boxes>, "a build reads its elements by id");
   const int64_t i = global_index();
   if (i < n) out[i] = boxes(int32_t(i));
 }
