@@ -15,7 +15,7 @@
 #include "harness.h"
 #include "minkq.h"
 #include "minkq.hpp"
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "minkq_reference.h"
 
 namespace minkq::bench {

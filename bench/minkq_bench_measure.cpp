@@ -13,7 +13,7 @@
 #include <fstream>
 
 #include "cpu/tree.h"
-#include "minkq/queries.h"
+#include "minkq/leaf_groups.h"
 #include "peers/embree_vt.h"
 #include "minkq/predicates.h"
 #include "minkq_bench.h"

@@ -41,7 +41,7 @@ static_assert(same(minkq::QueryKind::kVertexTriangle, MINKQ_QUERY_VT) && same(mi
 static_assert(minkq::kDropIncident != 0 && minkq::kLeafExact != 0 && (minkq::kDropIncident & minkq::kLeafExact) == 0 &&
                   (minkq::kDropIncident & (minkq::kDropIncident - 1)) == 0 &&
                   (minkq::kLeafExact & (minkq::kLeafExact - 1)) == 0,
-              "kDropIncident and kLeafExact (core/include/minkq/queries.h) must be two distinct bits");
+              "kDropIncident and kLeafExact (core/include/minkq/query_sources.h) must be two distinct bits");
 
 using namespace minkq::capi;
 

@@ -206,8 +206,8 @@ bool EmbreeReference::accepts(const std::vector<float>& coordinates, float r) co
 
 MeshSets EmbreeReference::mesh_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) {
   MeshSets sets;
-  const VertexTriangleQueries vt = g.vt(r, filters), vt_leaf = g.vt(r, filters | kLeafExact);
-  const EdgeEdgeQueries ee = g.ee(r, filters), ee_leaf = g.ee(r, filters | kLeafExact);
+  const VertexTriangleById vt = g.vt(r, filters), vt_leaf = g.vt(r, filters | kLeafExact);
+  const EdgeEdgeById ee = g.ee(r, filters), ee_leaf = g.ee(r, filters | kLeafExact);
   const TriangleBoxes triangle_boxes = g.triangle_boxes();
   const EdgeBoxes edge_boxes = g.edge_boxes();
 
@@ -267,8 +267,8 @@ MeshSets EmbreeReference::mesh_sets(const MeshGeometry& g, float r, uint32_t fil
 
 SweptSets EmbreeReference::swept_sets(const MeshGeometry& g, float r, uint32_t filters, bool moved) {
   SweptSets sets;
-  const VertexTriangleQueries vt = g.vt(r, filters);
-  const EdgeEdgeQueries ee = g.ee(r, filters);
+  const VertexTriangleById vt = g.vt(r, filters);
+  const EdgeEdgeById ee = g.ee(r, filters);
   const TriangleBoxes triangle_boxes = g.triangle_boxes();  // swept: over both positions
   const EdgeBoxes edge_boxes = g.edge_boxes();
 
@@ -305,7 +305,7 @@ SweptSets EmbreeReference::swept_sets(const MeshGeometry& g, float r, uint32_t f
 
 BoxSets EmbreeReference::box_sets(const BoxGeometry& g, minkq_shape shape, float r, bool moved) {
   BoxSets sets;
-  const UserQueries queries = g.queries(r);
+  const UserById queries = g.queries(r);
   const GivenBoxes boxes = g.given_boxes();
   prepare(device_, user_boxes_, primitive_boxes(boxes, g.nb()), moved);
   if (shape == MINKQ_SHAPE_SPHERE) {

@@ -9,7 +9,7 @@
 
 #include "cpu/runtime.h"
 #include "cpu/tree.h"
-#include "minkq/tree.h"
+#include "minkq/build.h"
 
 namespace minkq::test {
 

@@ -7,8 +7,9 @@
 #include <cstring>
 #include <type_traits>
 
+#include "minkq/bvh.h"
 #include "minkq/float64.h"
-#include "minkq/queries.h"
+#include "by_id_queries.h"
 #include "scene_types.h"
 
 namespace minkq::fuzz {
@@ -44,14 +45,14 @@ Pairs definition_set(const Queries& queries, int32_t num_queries, const Boxes& b
   Pairs out;
   for (int32_t q = 0; q < num_queries; ++q) {
     const Shape shape = Shape::from(queries.geometry(q));
-    for (int32_t p = std::is_same<Queries, EdgeEdgeQueries>::value ? q + 1 : 0; p < num_prims; ++p)
+    for (int32_t p = std::is_same<Queries, EdgeEdgeById>::value ? q + 1 : 0; p < num_prims; ++p)
       if (shape.overlaps(boxes(p)) && queries.template accept<Shape>(q, p)) out.push_back({q, p});
   }
   return out;
 }
 
 // The geometry of a mesh scene in the core's types; swept (after set_end), the vertices move
-// from `vertices` to `vertices1` and the queries and boxes are the swept ones (queries.h).
+// from `vertices` to `vertices1` and the queries and boxes are the swept ones (elements.h).
 struct MeshGeometry {
   std::vector<Vec3> vertices;
   std::vector<Triangle> triangles;
@@ -73,11 +74,12 @@ struct MeshGeometry {
   }
   bool swept() const { return !vertices1.empty(); }
   const Vec3* end() const { return swept() ? vertices1.data() : nullptr; }
-  VertexTriangleQueries vt(float r, uint32_t filters) const {
-    return {vertices.data(), triangles.data(), nullptr, r, filters, nullptr, end()};
+  // The VT and EE sources by id (by_id_queries.h).
+  VertexTriangleById vt(float r, uint32_t filters) const {
+    return {{vertices.data(), nullptr, nullptr, r, filters, nullptr, end()}, triangles.data()};
   }
-  EdgeEdgeQueries ee(float r, uint32_t filters) const {
-    return {vertices.data(), edges.data(), nullptr, r, filters, nullptr, end()};
+  EdgeEdgeById ee(float r, uint32_t filters) const {
+    return {{vertices.data(), nullptr, nullptr, r, filters, nullptr, end()}, edges.data()};
   }
   TriangleBoxes triangle_boxes() const { return {vertices.data(), triangles.data(), end()}; }
   EdgeBoxes edge_boxes() const { return {vertices.data(), edges.data(), end()}; }
@@ -146,7 +148,7 @@ struct BoxGeometry {
     if (!f.empty()) std::memcpy(first.data(), f.data(), first.size() * sizeof(Vec3));
     if (!s.empty()) std::memcpy(second.data(), s.data(), second.size() * sizeof(Vec3));
   }
-  UserQueries queries(float r) const { return {first.data(), second.empty() ? nullptr : second.data(), r}; }
+  UserById queries(float r) const { return {{first.data(), second.empty() ? nullptr : second.data(), r}}; }
   GivenBoxes given_boxes() const { return {boxes.data()}; }
   int32_t nq() const { return int32_t(first.size()); }
   int32_t nb() const { return int32_t(boxes.size()); }

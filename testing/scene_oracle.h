@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "minkq_reference.h"
 #include "scene_types.h"
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "capi_util.h"
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "test_util.h"
 
 #if defined(MINKQ_TEST_HAVE_CUDART)

@@ -12,7 +12,7 @@
 #include "cpu/radix_sort.h"
 #include "cpu/tree.h"
 #include "karras_tree.h"
-#include "minkq/queries.h"
+#include "minkq/shapes.h"
 #include "test_util.h"
 #include "tree_counts.h"
 

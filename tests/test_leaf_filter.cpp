@@ -1,9 +1,9 @@
-// The leaf filter (queries.h) a group of hits at a time: the incidence test on four edges or
-// triangles in leaf order (LeafGroup) against share_vertex / has_vertex one by one, and the EE,
-// EV and VT queries with the elements in leaf order (also only so, none by id), without them
-// (element by element, by id) and pair by pair (accept) giving the same pairs, in the same
-// order, with the same work counts, into a pair emitter and a count-only one; and a refit from
-// the elements in leaf order (LeafBoxes) giving the tree a refit by id gives.
+// The leaf filter (leaf_filter.h) a group of hits at a time: the incidence test on four edges or
+// triangles in leaf order (LeafGroup) against share_vertex / has_vertex one by one; the EE, EV
+// and VT queries over the elements in leaf order giving, into a pair emitter and a count-only
+// one, the same count and work, and the pairs of the by-id verdict (testing/by_id_queries.h)
+// applied to every pair; and a refit from the elements in leaf order (LeafBoxes) giving the
+// tree a refit by id gives.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,7 +13,8 @@
 
 #include "cpu/passes.h"
 #include "cpu/tree.h"
-#include "minkq/queries.h"
+#include "by_id_queries.h"
+#include "minkq/leaf_filter.h"
 #include "test_util.h"
 
 namespace minkq {
@@ -145,8 +146,8 @@ void expect_same_set(std::vector<Pair> got, std::vector<Pair> want, const char* 
   }
 }
 
-// With and without the leaf-ordered edges, emitted and counted: one result; and the pairs those
-// of accept over every pair whose box test passes.
+// Emitted and counted: one result; and the pairs those of the by-id verdict (accept) over every
+// pair whose box test passes.
 template <class Shape>
 void check_sources(const std::vector<Vec3>& vertices, const std::vector<Edge>& edges, float r, uint32_t filters) {
   const int32_t n = int32_t(edges.size()), nv = int32_t(vertices.size());
@@ -157,41 +158,35 @@ void check_sources(const std::vector<Vec3>& vertices, const std::vector<Edge>& e
   std::vector<int32_t> order(static_cast<size_t>(nv));
   for (int32_t v = 0; v < nv; ++v) order[size_t(v)] = nv - 1 - v;
 
-  EdgeEdgeQueries ee{vertices.data(), edges.data(), bvh.sorted_prims, r, filters};
+  const EdgeEdgeQueries ee{vertices.data(), groups.data(), bvh.sorted_prims, r, filters};
+  const EdgeEdgeById ee_by_id{ee, edges.data()};
   const Run by_edge = run_all<Shape>(bvh, ee, n, false);
-  ee.leaf_edges = groups.data();
-  expect_same(by_edge, run_all<Shape>(bvh, ee, n, false), "EE, edges in leaf order");
   expect_same(by_edge, run_all<Shape>(bvh, ee, n, true), "EE, counted");
-  EdgeEdgeQueries leaf_only = ee;  // as the store holds them: no edge by id to read
-  leaf_only.edges = nullptr;
-  expect_same(by_edge, run_all<Shape>(bvh, leaf_only, n, false), "EE, edges in leaf order only");
   std::vector<Pair> want;
   const EdgeBoxes boxes{vertices.data(), edges.data()};
   for (int32_t p = 0; p < n; ++p) {
     const int32_t e = bvh.sorted_prims[p];
     for (int32_t s = p + 1; s < n; ++s) {
       const int32_t f = bvh.sorted_prims[s];
-      if (Shape::from(ee.geometry(e)).overlaps(boxes(f)) && ee.template accept<Shape>(e, f)) want.push_back(ee.pair(e, f));
+      if (Shape::from(ee_by_id.geometry(e)).overlaps(boxes(f)) && ee_by_id.template accept<Shape>(e, f))
+        want.push_back(ee_by_id.pair(e, f));
     }
   }
   expect_same_set(by_edge.pairs, want, "EE");
 
   if constexpr (is_box_shape<Shape>()) {  // EV: point queries take the point shapes
-    VertexEdgeQueries ev{vertices.data(), edges.data(), order.data(), r, filters};
+    const VertexEdgeQueries ev{vertices.data(), groups.data(), order.data(), r, filters};
+    const VertexEdgeById ev_by_id{ev, edges.data()};
     const Run ev_by_edge = run_all<Shape>(bvh, ev, nv, false);
-    ev.leaf_prims = groups.data();
-    expect_same(ev_by_edge, run_all<Shape>(bvh, ev, nv, false), "EV, edges in leaf order");
     expect_same(ev_by_edge, run_all<Shape>(bvh, ev, nv, true), "EV, counted");
-    VertexEdgeQueries leaf_only = ev;
-    leaf_only.prims = nullptr;
-    expect_same(ev_by_edge, run_all<Shape>(bvh, leaf_only, nv, false), "EV, edges in leaf order only");
     size_t k = 0;
     for (int32_t i = 0; i < nv; ++i) {
       const int32_t v = order[size_t(i)];
       std::vector<Pair> of_v;
       for (int32_t s = 0; s < n; ++s) {
         const int32_t f = bvh.sorted_prims[s];
-        if (Shape::from(ev.geometry(v)).overlaps(boxes(f)) && ev.template accept<Shape>(v, f)) of_v.push_back({v, f});
+        if (Shape::from(ev_by_id.geometry(v)).overlaps(boxes(f)) && ev_by_id.template accept<Shape>(v, f))
+          of_v.push_back({v, f});
       }
       std::sort(of_v.begin(), of_v.end(), [](Pair a, Pair b) { return a.second < b.second; });
       std::vector<Pair> got(ev_by_edge.pairs.begin() + ptrdiff_t(k), ev_by_edge.pairs.begin() + ptrdiff_t(k + of_v.size()));
@@ -206,7 +201,7 @@ void check_sources(const std::vector<Vec3>& vertices, const std::vector<Edge>& e
   }
 }
 
-TEST(LeafFilter, ee_and_ev_give_the_same_pairs_and_work_with_edges_in_leaf_order_or_by_id) {
+TEST(LeafFilter, ee_and_ev_over_edges_in_leaf_order_give_the_by_id_verdicts_emitted_or_counted) {
   test::Random rng(test::fresh_seed());
   for (int trial = 0; trial < 6; ++trial) {
     const int32_t nv = rng.integer(2, 400), n = rng.integer(1, 700);
@@ -222,8 +217,8 @@ TEST(LeafFilter, ee_and_ev_give_the_same_pairs_and_work_with_edges_in_leaf_order
   }
 }
 
-// VT with the triangles in leaf order only (no triangle by id to read) and by id, emitted and
-// counted: one result; the pairs those of accept over every pair whose box test passes.
+// VT over the triangles in leaf order, emitted and counted: one result; the pairs those of the
+// by-id verdict (accept) over every pair whose box test passes.
 template <class Shape>
 void check_vt_sources(const std::vector<Vec3>& vertices, const std::vector<Triangle>& triangles, float r,
                       uint32_t filters) {
@@ -235,10 +230,9 @@ void check_vt_sources(const std::vector<Vec3>& vertices, const std::vector<Trian
   std::vector<int32_t> order(static_cast<size_t>(nv));
   for (int32_t v = 0; v < nv; ++v) order[size_t(v)] = nv - 1 - v;
 
-  const VertexTriangleQueries by_id{vertices.data(), triangles.data(), order.data(), r, filters};
-  const Run run = run_all<Shape>(bvh, by_id, nv, false);
-  const VertexTriangleQueries leaf{vertices.data(), nullptr, order.data(), r, filters, nullptr, nullptr, groups.data()};
-  expect_same(run, run_all<Shape>(bvh, leaf, nv, false), "VT, triangles in leaf order");
+  const VertexTriangleQueries leaf{vertices.data(), groups.data(), order.data(), r, filters};
+  const VertexTriangleById by_id{leaf, triangles.data()};
+  const Run run = run_all<Shape>(bvh, leaf, nv, false);
   expect_same(run, run_all<Shape>(bvh, leaf, nv, true), "VT, counted");
   std::vector<Pair> want;
   const TriangleBoxes boxes{vertices.data(), triangles.data()};
@@ -248,7 +242,7 @@ void check_vt_sources(const std::vector<Vec3>& vertices, const std::vector<Trian
   expect_same_set(run.pairs, want, "VT");
 }
 
-TEST(LeafFilter, vt_gives_the_same_pairs_and_work_with_triangles_in_leaf_order_or_by_id) {
+TEST(LeafFilter, vt_over_triangles_in_leaf_order_gives_the_by_id_verdicts_emitted_or_counted) {
   test::Random rng(test::fresh_seed());
   for (int trial = 0; trial < 6; ++trial) {
     const int32_t nv = rng.integer(3, 300), n = rng.integer(1, 500);

@@ -10,7 +10,7 @@
 #include "scene_checks.h"
 #include "capi_util.h"
 #include "contact_checks.h"
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "test_util.h"
 
 namespace minkq {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "minkq/predicates.h"
-#include "minkq/queries.h"
+#include "minkq/elements.h"
 
 namespace minkq::bench {
 

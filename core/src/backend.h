@@ -14,7 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
+#include "minkq/traversal.h"
 
 namespace minkq {
 
@@ -131,7 +132,7 @@ class MeshStore : public Store {
   // The scene's edges, copied to host memory (edge_count entries).
   virtual void copy_edges(Edge* host_out) = 0;
   // Swept positions: the vertices move linearly from x0 to x1 over the step, and the trees box
-  // each element over both (refit or build afresh); queries are then swept (queries.h) until a
+  // each element over both (refit or build afresh); queries are then swept (query_sources.h) until a
   // plain refit or rebuild. The caller checks the buffers and the queries a swept scene runs.
   virtual void refit_swept(const Strided& x0, const Strided& x1) = 0;
   virtual void rebuild_swept(const Strided& x0, const Strided& x1) = 0;

@@ -1,60 +1,8 @@
 // The scene stores, written once for both backends: a mesh store (vertices, topology, the
 // triangle and edge trees, VT and EE queries) and a box store (user boxes, their tree, user
-// queries). What differs between the CPU and CUDA backends is supplied by an executor, X:
-//
-//   X::Device                      what the executor is constructed from (CUDA: the ordinal).
-//   X::Array<T>                    an owning array in the executor's memory, with data().
-//   X::Tree                        the backend's tree: build(boxes, n), refit(boxes),
-//                                  area_cost(), cost_at_build(), view().
-//   scope()                        an object held for the duration of each call (CUDA: the
-//                                  device made current, and the caller's given back after).
-//   hold() / release()             the same across construction; hold_for_teardown() (which
-//                                  cannot fail) before the members are destroyed.
-//   finish()                       completes the call's work and reports its errors.
-//   gather(values, Array<T>&)      packs strided Vec3 or Box records (host or, on CUDA, device
-//                                  memory) into an array.
-//   gather_float64(values, Array<Vec3>&, Array<float>& rho, accumulate)
-//                                  the same from float64 vertices, rounded to nearest, with
-//                                  rho[0] the farthest the rounding moved one (float64.h), or
-//                                  the larger of that and rho[0] as it was (accumulate).
-//   upload(Array<T>&, vector<T>)   takes host topology over.
-//   download(T* host, Array<T>, n) copies n records to the host.
-//   sort_by_morton(boxes, n, Array<int32_t>& ids)
-//                                  ids 0..n-1 in the Morton order of the boxes' centres.
-//   fill_groups(prims, sorted_prims, n, Array<LeafGroup<Prim>>& out)
-//                                  the n elements (by id) in a tree's leaf order (queries.h's
-//                                  LeafGroup, fill_leaf_group), sized for them.
-//   scatter_groups(groups, sorted_prims, n, Array<Prim>& out)
-//                                  the inverse: the elements by id, sized for them.
-//   run_passes<Work>(works, passes...)
-//                                  runs the QueryPasses of one call (one parallel loop, or one
-//                                  kernel launch) and returns each pass's exact pair count,
-//                                  its pairs written, and sorted when asked, where they fit;
-//                                  for outputs with a count pointer (asynchronous queries) the
-//                                  count goes there, pairs up to the capacity, nothing is read
-//                                  back and the returned counts are not used.
-//
-// and for the asynchronous calls (backend.h's MeshStore section):
-//   scope_on(stream)               the scope of an asynchronous call: on CUDA the caller's
-//                                  stream, with allocation and host copies refused.
-//   wait(stream)                   waits for the stream's work (CUDA).
-//   reserve_staging(Array<Vec3>&, n), reserve_pending(), reserve_canonical(pairs),
-//   reserve_build(Tree&, boxes, n), reserve_sort(boxes, n)
-//                                  the scratch the asynchronous calls use, kept from then on.
-//   reserve_scratch(Array<T>&, n)  room for n elements kept in the array, so that filling it
-//                                  with up to n allocates nothing (a rebuild's elements by id).
-//   commit_finite(values, staging, dst, rho, call)
-//                                  dst = values (executor memory) unless a coordinate is not
-//                                  finite; then dst is kept and the pending error recorded.
-//                                  Float64 values also set *rho (rho: nullptr for float).
-//   commit_finite_swept(x0, x1, staging0, staging1, dst0, dst1, rho, call)
-//                                  the same for a swept step's two positions, checked
-//                                  together: on a bad coordinate in either, dst0 is kept and
-//                                  dst1 = dst0 (the scene at rest).
-//   take_pending()                 the pending error (after wait()), cleared.
-//
-// cpu/backend.cpp and cuda/backend.cu define the two executors; a query's pairs, counts and
-// work counters are the same on both.
+// queries). What differs between the CPU and CUDA backends is supplied by an executor, X, whose
+// contract executor.h states and checks. cpu/backend.cpp and cuda/backend.cu define the two
+// executors; a query's pairs, counts and work counters are the same on both.
 #pragma once
 
 #include <algorithm>
@@ -64,6 +12,7 @@
 #include <vector>
 
 #include "backend.h"
+#include "executor.h"
 
 namespace minkq {
 
@@ -86,18 +35,6 @@ void with_shape(Mode mode, Fn&& fn) {
   }
   fail(Status::kInternal, "mode not available for these queries");
 }
-
-// The queries of one request for a pass: the request's kind, the tree, the query source and
-// where the pairs go, with the node test as a type.
-template <class Shape_, class Queries>
-struct QueryPass {
-  using Shape = Shape_;
-  QueryKind kind;
-  BvhView bvh;
-  Queries queries;
-  int32_t num_queries;
-  PairOutput out;
-};
 
 // Calls fn with the QueryPass of a request (its shape chosen by with_shape).
 template <bool kPoints, class Queries, class Fn>
@@ -132,6 +69,7 @@ double tree_growth_of(const Tree& tree) {
 
 template <class X>
 class MeshStoreOn final : public MeshStore {
+  static_assert(ExecutorContract<X>::value, "a store runs on an executor (executor.h)");
   template <class T>
   using Array = typename X::template Array<T>;
 
@@ -309,8 +247,8 @@ class MeshStoreOn final : public MeshStore {
       case QueryKind::kVertexTriangle: return with_vt_pass(request, out, fn);
       case QueryKind::kEdgeEdge: return with_ee_pass(request, out, fn);
       case QueryKind::kVertexEdge: {
-        const VertexEdgeQueries queries{vertices_.data(), nullptr, vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1(), leaf_edges_.data()};
+        const VertexEdgeQueries queries{vertices_.data(), leaf_edges_.data(), vertex_order_.data(), request.r,
+                                        request.filters, rho(), vertices1()};
         return with_vertex_pass(request, edge_tree_.view(), queries, out, fn);
       }
       case QueryKind::kVertexVertex: {
@@ -325,8 +263,8 @@ class MeshStoreOn final : public MeshStore {
   // Calls fn with the QueryPass of a VT request, or of an EE request.
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
-    const VertexTriangleQueries queries{vertices_.data(), nullptr, vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1(), leaf_triangles_.data()};
+    const VertexTriangleQueries queries{vertices_.data(), leaf_triangles_.data(), vertex_order_.data(), request.r,
+                                        request.filters, rho(), vertices1()};
     with_vertex_pass(request, triangle_tree_.view(), queries, out, fn);
   }
   // Vertex queries (VT, EV, VV): points, or swept each vertex's path, a segment: the segment
@@ -342,8 +280,8 @@ class MeshStoreOn final : public MeshStore {
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
     const BvhView edge_tree = edge_tree_.view();
-    const EdgeEdgeQueries queries{vertices_.data(), nullptr, edge_tree.sorted_prims, request.r, request.filters,
-                                  rho(), vertices1(), leaf_edges_.data()};
+    const EdgeEdgeQueries queries{vertices_.data(), leaf_edges_.data(), edge_tree.sorted_prims, request.r,
+                                  request.filters, rho(), vertices1()};
     with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
   }
 
@@ -421,6 +359,7 @@ class MeshStoreOn final : public MeshStore {
 
 template <class X>
 class BoxStoreOn final : public Store {
+  static_assert(ExecutorContract<X>::value, "a store runs on an executor (executor.h)");
   template <class T>
   using Array = typename X::template Array<T>;
 

@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "minkq/predicates.h"
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "stability/stability.h"
 
 namespace minkq::test::stability {

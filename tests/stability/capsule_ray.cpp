@@ -11,8 +11,9 @@
 
 #include "cpu/tree.h"
 #include "minkq/predicates.h"
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "minkq/shapes.h"
+#include "minkq/traversal.h"
 #include "capi_util.h"
 #include "stability/stability.h"
 
@@ -50,6 +51,8 @@ struct CapsuleUnitShape {
     const float t_max = minkq::next_up(len * (1.0f + minkq::kSlabWidening));
     return {minkq::padded_segment_box(p0, p1, r), p0, u, t_max, r};
   }
+  // The Shape contract's constructor (shapes.h): the plain unit-direction form.
+  static CapsuleUnitShape from(const minkq::QueryGeometry& q) { return make(q.p0, q.p1, q.r, false); }
   // Its box inside the tree, the slab test at primitives (as the core's shapes).
   bool may_overlap(const minkq::Box& b) const { return minkq::boxes_overlap(box, b); }
   bool overlaps(const minkq::Box& b) const { return may_overlap(b) && finer(b); }
@@ -60,6 +63,7 @@ struct CapsuleUnitShape {
 // The core's shape through the same test traversal (a cross-check of the C API's capsule_ray).
 struct CoreRayShape {
   minkq::CapsuleRayShape s;
+  static CoreRayShape from(const minkq::QueryGeometry& q) { return {minkq::CapsuleRayShape::from(q)}; }
   bool may_overlap(const minkq::Box& b) const { return s.may_overlap(b); }
   unsigned overlaps_group(const minkq::BoxGroup& g, unsigned lanes) const { return s.overlaps_group(g, lanes); }
   bool overlaps(const minkq::Box& b) const { return s.overlaps(b); }
@@ -135,9 +139,9 @@ std::vector<RayRow> ray_study() {
       row.cand[0] = got.size(), row.fn[0] = missing(truth, got);
     }
     const PairSet core = ee_pairs_with(m, [r](minkq::Vec3 a, minkq::Vec3 b) {
-      return CoreRayShape{minkq::CapsuleRayShape::from({a, b, r})};
+      return CoreRayShape::from({a, b, r});
     });
-    const PairSet unit = ee_pairs_with(m, [r](minkq::Vec3 a, minkq::Vec3 b) { return CapsuleUnitShape::make(a, b, r, false); });
+    const PairSet unit = ee_pairs_with(m, [r](minkq::Vec3 a, minkq::Vec3 b) { return CapsuleUnitShape::from({a, b, r}); });
     const PairSet unit_rescaled = ee_pairs_with(m, [r](minkq::Vec3 a, minkq::Vec3 b) { return CapsuleUnitShape::make(a, b, r, true); });
     row.cand[1] = core.size(), row.fn[1] = missing(truth, core);
     row.cand[2] = unit.size(), row.fn[2] = missing(truth, unit);

@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "minkq/queries.h"
+#include "minkq/query_sources.h"
 #include "minkq_reference.h"
 
 namespace minkq::test::stability {

@@ -27,7 +27,11 @@
 // cost less than the candidates they remove (bench/README.md links the study).
 #pragma once
 
+#include <utility>
+
+#include "minkq/detect.h"
 #include "minkq/predicates.h"
+#include "minkq/simd.h"
 
 namespace minkq {
 
@@ -40,60 +44,55 @@ struct QueryGeometry {
   float r;
 };
 
+// The contract above, member by member, checked where a shape is used (traverse_groups in
+// traversal.h; walk, which tests node boxes only, checks may_overlap). What each test decides
+// is the tests' to check (test_bvh.cpp, test_queries.cpp); tests/test_contracts.cpp checks the
+// shapes here fulfil it.
+namespace shape_contract {
+template <class S>
+using From = decltype(S::from(std::declval<const QueryGeometry&>()));
+template <class S>
+using MayOverlap = decltype(std::declval<const S&>().may_overlap(std::declval<const Box&>()));
+template <class S>
+using Overlaps = decltype(std::declval<const S&>().overlaps(std::declval<const Box&>()));
+template <class S>
+using Finer = decltype(std::declval<const S&>().finer(std::declval<const Box&>()));
+template <class S>
+using OverlapsGroup = decltype(std::declval<const S&>().overlaps_group(std::declval<const BoxGroup&>(), 0u));
+template <class S>
+constexpr bool kFrom = detected_as<S, From, S>;
+template <class S>
+constexpr bool kMayOverlap = detected_as<bool, MayOverlap, S>;
+template <class S>
+constexpr bool kOverlaps = detected_as<bool, Overlaps, S>;
+template <class S>
+constexpr bool kFiner = detected_as<bool, Finer, S>;
+template <class S>
+constexpr bool kOverlapsGroup = detected_as<unsigned, OverlapsGroup, S>;
+}  // namespace shape_contract
+
+template <class S>
+constexpr bool is_shape = shape_contract::kFrom<S> && shape_contract::kMayOverlap<S> && shape_contract::kOverlaps<S> &&
+                          shape_contract::kFiner<S> && shape_contract::kOverlapsGroup<S>;
+
+// Instantiated where a shape is used: one message for each member S lacks.
+template <class S>
+struct ShapeContract {
+  static_assert(shape_contract::kFrom<S>, "Shape: needs static Shape from(const QueryGeometry&)");
+  static_assert(shape_contract::kMayOverlap<S>, "Shape: needs bool may_overlap(const Box&) const");
+  static_assert(shape_contract::kOverlaps<S>, "Shape: needs bool overlaps(const Box&) const");
+  static_assert(shape_contract::kFiner<S>, "Shape: needs bool finer(const Box&) const");
+  static_assert(shape_contract::kOverlapsGroup<S>,
+                "Shape: needs unsigned overlaps_group(const BoxGroup&, unsigned lanes) const");
+  static constexpr bool value = is_shape<S>;
+};
+
 // overlaps box by box over the lanes asked for: the shapes' leaf test in CUDA code (a thread
 // reads only the boxes it tests).
 template <class Shape>
 MINKQ_HD unsigned overlaps_each(const Shape& shape, const BoxGroup& g, unsigned lanes) {
   return lanes_where(lanes, [&](int k) { return shape.overlaps(group_box(g, k)); });
 }
-
-#if !defined(__CUDACC__)
-// Four floats in 4-float vector lanes (GCC vector extensions, SSE2 here): the host's leaf tests
-// on a group's four boxes at once. Each lane runs the scalar test's float operations in the
-// scalar test's order, with its selects for min_num / max_num / next_down, so every verdict is
-// the scalar one bit for bit (tests/test_bvh.cpp checks each shape against it).
-namespace simd4 {
-typedef float F4 __attribute__((vector_size(16)));
-typedef int32_t M4 __attribute__((vector_size(16)));  // a comparison: -1 (true) or 0 per lane
-inline F4 load(const float* p) {
-  F4 v;
-  memcpy(&v, p, 16);
-  return v;
-}
-inline F4 splat(float x) { return F4{x, x, x, x}; }
-inline M4 load(const int32_t* p) {
-  M4 v;
-  memcpy(&v, p, 16);
-  return v;
-}
-inline unsigned mask_bits(M4 m) {
-#if defined(__SSE__)
-  return unsigned(__builtin_ia32_movmskps((F4)m));  // one instruction: each lane's sign bit
-#else
-  return unsigned(m[0] & 1) | unsigned(m[1] & 1) << 1 | unsigned(m[2] & 1) << 2 | unsigned(m[3] & 1) << 3;
-#endif
-}
-inline F4 min_num(F4 a, F4 b) { return ((a < b) | (b != b)) ? a : b; }
-inline F4 max_num(F4 a, F4 b) { return ((a > b) | (b != b)) ? a : b; }
-inline F4 abs(F4 x) {
-  M4 bits;
-  memcpy(&bits, &x, 16);
-  bits &= 0x7fffffff;
-  memcpy(&x, &bits, 16);
-  return x;
-}
-inline F4 next_down(F4 x) {  // minkq::next_down per lane
-  M4 bits;
-  memcpy(&bits, &x, 16);
-  bits = (x > 0.0f) ? bits - 1 : bits + 1;
-  F4 stepped;
-  memcpy(&stepped, &bits, 16);
-  stepped = (x == 0.0f) ? splat(-1.40129846e-45f) : stepped;
-  return ((x != x) | (x == -INFINITY)) ? x : stepped;
-}
-inline F4 next_up(F4 x) { return -next_down(-x); }
-}  // namespace simd4
-#endif
 
 // The box mode: the query's own box (segment p0-p1, or the user box lo-hi with r = 0) within r
 // of b in every axis, as box_gap_within decides it: symmetric, so an EE pair needs it one way

@@ -1,12 +1,13 @@
 // The traversal, written once for every query shape and both backends: a query walks the
-// tree (tree.h) top-down with a small stack, tests child boxes with the shape's box test and
+// tree (bvh.h) top-down with a small stack, tests child boxes with the shape's box test and
 // scans leaf ranges four boxes at a time with the shape's leaf test (shapes.h states the
 // contract a shape fulfils), handing each group's hits to the leaf filter at once; a
 // self-query walks only the half after its own leaf. Work is counted when asked for and
 // compiled out when not.
 #pragma once
 
-#include "minkq/tree.h"
+#include "minkq/bvh.h"
+#include "minkq/shapes.h"
 
 namespace minkq {
 
@@ -39,6 +40,40 @@ struct NoWork {
   MINKQ_HD void test_primitives(unsigned) {}
   MINKQ_HD void emit_candidate() {}
   MINKQ_HD void emit_candidates(unsigned) {}
+};
+
+// The members a work type has (WorkCounts' and NoWork's), checked where one is used (walk,
+// traverse_groups).
+namespace work_contract {
+template <class W>
+using VisitNode = decltype(std::declval<W&>().visit_node());
+template <class W>
+using TestNode = decltype(std::declval<W&>().test_node());
+template <class W>
+using TestNodes = decltype(std::declval<W&>().test_nodes(0u));
+template <class W>
+using TestPrimitives = decltype(std::declval<W&>().test_primitives(0u));
+template <class W>
+using EmitCandidate = decltype(std::declval<W&>().emit_candidate());
+template <class W>
+using EmitCandidates = decltype(std::declval<W&>().emit_candidates(0u));
+}  // namespace work_contract
+
+template <class W>
+constexpr bool is_work = is_detected<work_contract::VisitNode, W> && is_detected<work_contract::TestNode, W> &&
+                         is_detected<work_contract::TestNodes, W> && is_detected<work_contract::TestPrimitives, W> &&
+                         is_detected<work_contract::EmitCandidate, W> && is_detected<work_contract::EmitCandidates, W>;
+
+// Instantiated where a work type is used: one message for each member W lacks.
+template <class W>
+struct WorkContract {
+  static_assert(is_detected<work_contract::VisitNode, W>, "Work: needs visit_node()");
+  static_assert(is_detected<work_contract::TestNode, W>, "Work: needs test_node()");
+  static_assert(is_detected<work_contract::TestNodes, W>, "Work: needs test_nodes(unsigned)");
+  static_assert(is_detected<work_contract::TestPrimitives, W>, "Work: needs test_primitives(unsigned)");
+  static_assert(is_detected<work_contract::EmitCandidate, W>, "Work: needs emit_candidate()");
+  static_assert(is_detected<work_contract::EmitCandidates, W>, "Work: needs emit_candidates(unsigned)");
+  static constexpr bool value = is_work<W>;
 };
 
 // Leaf positions max(first, after + 1)..last, a group of four at a time: on_hits(base, hits,
@@ -87,6 +122,9 @@ MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const Shape& shape, 
 // below it could hold a pair: the pairs would still be the same).
 template <class Shape, class OnRange, class Work>
 MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRange& on_range, Work& work) {
+  // The walk alone tests only node boxes; traverse_groups checks the whole contract.
+  static_assert(shape_contract::kMayOverlap<Shape>, "Shape: needs bool may_overlap(const Box&) const");
+  static_assert(WorkContract<Work>::value, "the work type does not fulfil the Work contract");
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
   int32_t stack[kTraversalStack];
   int sp = 0;
@@ -128,9 +166,11 @@ MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRang
 // sorted positions after `after` whose box the shape overlaps (the contract at the top of
 // shapes.h makes that exact: may_overlap accepts every ancestor box of such a box), bit k of
 // hits for position base + k; a self-query thus meets each pair once. The leaf filter
-// (queries.h) takes a group's hits at once.
+// (leaf_filter.h) takes a group's hits at once.
 template <class Shape, class OnHits, class Work>
 MINKQ_HD void traverse_groups(const BvhView& bvh, const Shape& shape, int32_t after, OnHits& on_hits, Work& work) {
+  static_assert(ShapeContract<Shape>::value, "the query shape does not fulfil the Shape contract (shapes.h)");
+  static_assert(WorkContract<Work>::value, "the work type does not fulfil the Work contract");
   auto on_range = [&](int32_t first, int32_t last, const Box& range_box, bool) {
     visit_leaf_range(bvh.leaf_groups, shape, first, last, after, range_box, on_hits, work);
   };

@@ -13,6 +13,7 @@
 
 #include "backend.h"
 #include "cpu/runtime.h"
+#include "minkq/leaf_filter.h"
 
 namespace minkq::cpu {
 
@@ -26,7 +27,7 @@ struct BlockOut {
   uint64_t counted = 0;
 };
 
-// A count-only query's emitter: the leaf filter adds a group's candidates at once (queries.h).
+// A count-only query's emitter: the leaf filter adds a group's candidates at once (leaf_filter.h).
 struct CountPairs {
   static constexpr bool kCountsOnly = true;
   uint64_t& counted;

@@ -1,4 +1,4 @@
-// The CPU tree: tree.h's per-element build and refit steps run in parallel with TBB, the
+// The CPU tree: the per-element build and refit steps run in parallel with TBB, the
 // counterpart of cuda/tree.cuh (the same steps, so the trees are bit-identical). Used by the
 // CPU executor (cpu/backend.cpp) and, through the minkq_internal target, by the tree tests and
 // the benchmarks' studies.
@@ -13,7 +13,10 @@
 
 #include "cpu/radix_sort.h"
 #include "cpu/runtime.h"
-#include "minkq/tree.h"
+#include "minkq/build.h"
+#include "minkq/cost.h"
+#include "minkq/morton.h"
+#include "minkq/refit.h"
 
 namespace minkq {
 
@@ -21,7 +24,7 @@ namespace minkq {
 // max are exact: any order gives them). The build reads the boxes from `out` from then on.
 template <class Boxes>
 Box element_boxes(Boxes boxes, int32_t n, HostVector<Box>& out) {
-  static_assert(!by_leaf_position<Boxes>(0), "a build reads its elements by id");
+  static_assert(!by_leaf_position<Boxes>, "a build reads its elements by id");
   out.resize(size_t(n));
   return tbb::parallel_reduce(
       tbb::blocked_range<int32_t>(0, n, 4096), Box::empty(),
@@ -218,6 +221,7 @@ class CpuTree {
   // the Morton codes of the box centres, then the kept nodes with their boxes (build_nodes).
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
+    static_assert(BoxesContract<Boxes>::value, "a build reads its boxes from a Boxes functor (bvh.h)");
     BuildScratch local;
     BuildScratch& s = reserved_ ? scratch_ : local;
     if (n > 1) sort_by_morton(boxes, n, s.order, s.sort); else element_boxes(boxes, n, s.sort.element);
@@ -249,7 +253,7 @@ class CpuTree {
     refit_slots(boxes, nodes_, sorted_prims_.data(), leaf_groups_.data(), arrivals_);
   }
 
-  // The tree's area cost (tree.h's area_cost).
+  // The tree's area cost (cost.h's area_cost).
   double area_cost() const { return minkq::area_cost(nodes_.data(), int64_t(nodes_.size())); }
   // area_cost() right after the last build.
   double cost_at_build() const { return cost_at_build_; }

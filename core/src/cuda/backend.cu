@@ -19,7 +19,7 @@ namespace {
 
 using namespace cuda;
 
-// Group g of a tree's elements in leaf order, from the elements by id (queries.h), and back.
+// Group g of a tree's elements in leaf order, from the elements by id (leaf_groups.h), and back.
 template <class Prim>
 static __global__ void fill_groups_kernel(const Prim* prims, const int32_t* sorted_prims, int32_t n,
                                           LeafGroup<Prim>* out) {

@@ -14,6 +14,7 @@
 
 #include "cuda/runtime.cuh"
 #include "backend.h"
+#include "minkq/leaf_filter.h"
 
 namespace minkq::cuda {
 

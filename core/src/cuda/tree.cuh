@@ -1,4 +1,4 @@
-// The CUDA tree: tree.h's per-element build and refit steps, one thread per element, with
+// The CUDA tree: the per-element build and refit steps, one thread per element, with
 // CUB's radix sort, scan and reductions; the counterpart of cpu/tree.h, whose trees it matches bit
 // for bit. Included by cuda/backend.cu only.
 #pragma once
@@ -9,7 +9,10 @@
 #include <thrust/iterator/counting_iterator.h>
 
 #include "cuda/runtime.cuh"
-#include "minkq/tree.h"
+#include "minkq/build.h"
+#include "minkq/cost.h"
+#include "minkq/morton.h"
+#include "minkq/refit.h"
 
 namespace minkq::cuda {
 
@@ -26,7 +29,7 @@ struct CentreBox {
 // Every element's box once (cpu/tree.h's element_boxes): the build reads them from `out`.
 template <class Boxes>
 static __global__ void element_boxes_kernel(Boxes boxes, int32_t n, Box* out) {
-  static_assert(!by_leaf_position<Boxes>(0), "a build reads its elements by id");
+  static_assert(!by_leaf_position<Boxes>, "a build reads its elements by id");
   const int64_t i = global_index();
   if (i < n) out[i] = boxes(int32_t(i));
 }
@@ -176,6 +179,7 @@ class CudaTree {
  public:
   template <class Boxes>
   void build(Boxes boxes, int32_t n, const BuildConfig& config = {}) {
+    static_assert(BoxesContract<Boxes>::value, "a build reads its boxes from a Boxes functor (bvh.h)");
     n_ = n;
     sorted_prims_.ensure(size_t(n));
     leaf_groups_.ensure(size_t(box_group_count(n)));
