@@ -36,7 +36,7 @@
  * kernel's name, by the call that launched it.
  *
  * No measured figures here: what the modes, flags and rebuild advice cost and save on the
- * benchmark scenes is in bench/README.md.
+ * benchmark scenes is in bench/README.md in the minkq repository.
  */
 #ifndef MINKQ_H
 #define MINKQ_H
@@ -212,7 +212,7 @@ int minkq_scene_is_swept(const minkq_scene* scene);
  * stretch, not a mesh that folds or flattens into new neighbours (where a rebuild can still
  * help). Rebuild when it passes about 1.5, and every so many steps when the mesh changes shape
  * a lot: that advice, and what rebuilds bought on the benchmark scenes, are measured in
- * bench/README.md (trees.md, policies.md). A tree whose root box has no area (every element on
+ * bench/README.md in the minkq repository. A tree whose root box has no area (every element on
  * one axis-parallel line, or at one point) costs 0: growth 1 while it stays so, infinity once
  * it gains area. Errors: INVALID_ARGUMENT (NULL scene or out_growth). */
 minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
@@ -251,7 +251,7 @@ typedef enum minkq_query_flags {
   MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts.
                                  Meant for MINKQ_MODE_BOX: once the leaves test distances, the
                                  finer node tests cost more than they save (measured in
-                                 bench/README.md) */
+                                 bench/README.md in the minkq repository) */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
   MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
   MINKQ_QUERY_STATS = 8,      /* count the traversal's work into info->stats (a separately compiled
@@ -260,7 +260,7 @@ typedef enum minkq_query_flags {
                                  exact number, no pair is written or kept, out_pairs may be NULL
                                  and capacity is ignored; never CAPACITY. For callers that size
                                  their buffers first; cheaper than a query that stores the
-                                 pairs (bench/README.md). Not with CANONICAL or DIGEST */
+                                 pairs. Not with CANONICAL or DIGEST */
 } minkq_query_flags;
 
 typedef struct minkq_query_desc {
@@ -292,9 +292,11 @@ typedef struct minkq_query_info {
  * *info is zeroed, then gets the exact count, and the digest and stats its flags ask for. If
  * more pairs exist than fit, returns CAPACITY with info->count the exact number needed and
  * writes nothing past the buffer: grow it and call again. Leaf-exact pairs lie within
- * r + 2^-19 * S, S the size of the two elements and the distance between them (see
- * core/include/minkq/predicates.h); on a MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho
- * (minkq_scene_flags). Errors: INVALID_ARGUMENT (NULL scene, query or info;
+ * r + 2^-19 * S, S the operands' size: the largest distance between the query element's first
+ * point and the other element's points (EE: or the edge's length); the leaf test computes
+ * distances in double to within 2^-21 * S and accepts those up to r + 2^-20 * S. On a
+ * MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho (minkq_scene_flags).
+ * Errors: INVALID_ARGUMENT (NULL scene, query or info;
  * unknown kind, mode or flag bits; a kind the scene was created without; sphere mode for EE;
  * a negative radius; a NULL out_pairs with a non-zero capacity; device memory on a CPU
  * device; COUNT with CANONICAL or DIGEST), NON_FINITE (radius), SIZE_OVERFLOW (capacity),
@@ -304,13 +306,13 @@ minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query
 
 /* A VT query and an EE query of one scene (created with both) in one pass: one parallel loop on
  * the CPU, one kernel launch and one count readback on CUDA, where two minkq_scene_query calls
- * take two of each (what that saves is measured in bench/README.md). vt_query->kind must be
- * MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE; modes, flags and radii are each query's
- * own. Each query's pairs, count, digest and stats are exactly those minkq_scene_query gives
- * it alone. Buffers as minkq_scene_query, both in out_memory: a query whose pairs fit is
- * written in full; if either does not fit, returns CAPACITY (the message names VT or EE) with
- * both infos' counts exact. Errors: those of minkq_scene_query for either query, and
- * INVALID_ARGUMENT when a kind is the wrong one or vt_info and ee_info are the same struct. */
+ * take two of each (what that saves is measured in bench/README.md in the minkq repository).
+ * vt_query->kind must be MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE; modes, flags and radii
+ * are each query's own. Each query's pairs, count, digest and stats are exactly those
+ * minkq_scene_query gives it alone. Buffers as minkq_scene_query, both in out_memory: a query
+ * whose pairs fit is written in full; if either does not fit, returns CAPACITY (the message names
+ * VT or EE) with both infos' counts exact. Errors: those of minkq_scene_query for either query,
+ * and INVALID_ARGUMENT when a kind is the wrong one or vt_info and ee_info are the same struct. */
 minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
                                      const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
                                      int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
