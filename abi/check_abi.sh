@@ -15,8 +15,9 @@
 #   abi/check_abi.sh --refresh build-cpu/mpi/libminkq_mpi.so mpi/minkq_mpi.h MINKQ_MPI_ABI_VERSION \
 #                    abi/libminkq_mpi.abi capi/minkq.h
 # and commit the .abi file with the change. The DWARF abidw reads comes from the C API's own
-# sources, compiled with -g (capi/CMakeLists.txt, mpi/CMakeLists.txt); the types recorded are
-# those of the public headers only (--header-file, --drop-private-types, --exported-interfaces-only).
+# sources, compiled with -g and kept in <library file>.debug beside the library (capi/ and
+# mpi/CMakeLists.txt); the types recorded are those of the public headers only (--header-file,
+# --drop-private-types, --exported-interfaces-only).
 set -euo pipefail
 
 refresh=0
@@ -37,10 +38,25 @@ done
 abi_options=(--drop-private-types --exported-interfaces-only --no-corpus-path --no-comp-dir-path --no-elf-needed
              --no-show-locs --type-id-style hash)
 for h in "$header" "${more_headers[@]}"; do abi_options+=(--header-file "$(realpath "$h")"); done
+abi_options+=(--debug-info-dir "$(dirname "$(realpath "$library")")")  # <library file>.debug
 refresh_command="$0 --refresh $*"
 
+# Writes the library's ABI description to $1. Without DWARF abidw records bare symbols, against
+# which abidiff sees no type change at all: every exported function must have its declaration.
+describe() {
+  abidw "${abi_options[@]}" --out-file "$1" "$library"
+  local symbols declarations
+  symbols=$(grep -c "<elf-symbol .*type='func-type'" "$1" || true)
+  declarations=$(grep -c "<function-decl " "$1" || true)
+  if [ "$declarations" -lt "$symbols" ]; then
+    echo "$library: DWARF for $declarations of its $symbols functions: the check needs the C API's debug" \
+         "information (compiled with -g, in $(realpath "$library").debug)" >&2
+    exit 1
+  fi
+}
+
 if [ $refresh = 1 ]; then
-  abidw "${abi_options[@]}" --out-file "$baseline" "$library"
+  describe "$baseline"
   echo "wrote $baseline from $library"
   exit 0
 fi
@@ -54,7 +70,7 @@ baseline_abi=$(sed -n "s/.*soname='[^']*\.so\.\([0-9][0-9]*\)'.*/\1/p" "$baselin
 # options (the same header, private types dropped), written to a scratch file.
 current=$(mktemp --suffix=.abi)
 trap 'rm -f "$current"' EXIT
-abidw "${abi_options[@]}" --out-file "$current" "$library"
+describe "$current"
 # abidiff's status is a bit field: 1 error, 2 usage error, 4 an ABI change, 8 an incompatible one
 # for sure (a removed function). A changed parameter, return or struct type is only "4", so the
 # rule is stricter than abidiff's 8: any change to what the baseline holds is incompatible
