@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Set-up and entry points on a fresh Debian 12 machine:
 #   ./build.sh demo   installs what is missing, builds, runs `minkq demo` on the default scene
-#   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest, then
-#                     cargo test and pytest for the bindings, programs built against the
-#                     installed library and the .deb, then both fuzzers for a minute)
+#   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest, with
+#                     the export and ABI checks of abi/, then cargo test and pytest for the
+#                     bindings, programs built against the installed library and the .deb, then
+#                     both fuzzers for a minute)
 #   ./build.sh build  installs what is missing and builds only
 # PRESET=cpu|cuda|default (default: default = CUDA when nvcc is found).
 set -euo pipefail
@@ -11,7 +12,8 @@ cd "$(dirname "$0")"
 preset=${PRESET:-default}
 binary_dir=build; [ "$preset" != default ] && binary_dir=build-$preset
 packages=(cmake g++ make pkg-config libtbb-dev libxxhash-dev libtinyobjloader-dev libgtest-dev googletest dpkg-dev
-          libopenmpi-dev openmpi-bin)  # Open MPI: minkq_mpi and its tests under mpirun
+          libopenmpi-dev openmpi-bin  # Open MPI: minkq_mpi and its tests under mpirun
+          abigail-tools)  # abidw, abidiff: ctest's abi_* checks against the baselines in abi/
 
 install_packages() {
   local missing=()

@@ -36,13 +36,21 @@
  * kernel's name, by the call that launched it.
  *
  * No measured figures here: what the modes, flags and rebuild advice cost and save on the
- * benchmark scenes is in bench/README.md.
+ * benchmark scenes is in bench/README.md in the minkq repository.
  */
 #ifndef MINKQ_H
 #define MINKQ_H
 
 #include <stddef.h>
 #include <stdint.h>
+
+/* MINKQ_API marks each function the library exports: it is built with every other symbol
+ * hidden, and its linker version script lets out only minkq_* at version MINKQ_<ABI>. */
+#if defined(__GNUC__) || defined(__clang__)
+#define MINKQ_API __attribute__((visibility("default")))
+#else
+#define MINKQ_API
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -57,11 +65,11 @@ extern "C" {
 
 /* Returns the version of the library loaded at run time, MAJOR * 10000 + MINOR * 100 + PATCH.
  * Never fails; any thread. */
-uint32_t minkq_version(void);
+MINKQ_API uint32_t minkq_version(void);
 /* Returns the ABI version of the library loaded at run time. A program compares it with
  * MINKQ_ABI_VERSION, the version it was compiled against, to detect a mismatched library.
  * Never fails; any thread. */
-uint32_t minkq_abi_version(void);
+MINKQ_API uint32_t minkq_abi_version(void);
 
 /* ---- Errors -------------------------------------------------------------------------------- */
 typedef enum minkq_status {
@@ -81,10 +89,10 @@ typedef enum minkq_status {
  * element at fault ("vertex 12 has a non-finite coordinate (nan, 0, 1)"); "" when that
  * thread's last status-returning call succeeded. Owned by the library, valid until the next
  * minkq call on this thread. Thread safety: each thread has its own message. */
-const char* minkq_last_error_message(void);
+MINKQ_API const char* minkq_last_error_message(void);
 /* Returns a static name for a status ("MINKQ_ERROR_CAPACITY"), or "unknown minkq_status" for a
  * value outside the enum. Never fails; any thread. */
-const char* minkq_status_name(minkq_status status);
+MINKQ_API const char* minkq_status_name(minkq_status status);
 
 /* ---- Buffers ------------------------------------------------------------------------------- */
 typedef enum minkq_memory {
@@ -114,18 +122,18 @@ typedef enum minkq_backend {
  * in *out_device (NULL on failure). Errors: INVALID_ARGUMENT (NULL argument, unknown or
  * malformed spec), UNSUPPORTED (CUDA asked for where minkq was built without it, or no such
  * GPU), DEVICE (a CUDA runtime call failed). Release with minkq_device_release. */
-minkq_status minkq_device_create(const char* spec, minkq_device** out_device);
+MINKQ_API minkq_status minkq_device_create(const char* spec, minkq_device** out_device);
 /* Releases a device. Every scene and bvh created on it must be released first. NULL is
  * ignored. */
-void minkq_device_release(minkq_device* device);
+MINKQ_API void minkq_device_release(minkq_device* device);
 /* Returns the device's backend (MINKQ_BACKEND_CPU for NULL). */
-minkq_backend minkq_device_backend(const minkq_device* device);
+MINKQ_API minkq_backend minkq_device_backend(const minkq_device* device);
 /* Returns a description such as "cpu (8 threads)" or "cuda:0 (NVIDIA H100 80GB HBM3)", owned
  * by the device and valid until it is released ("" for NULL). */
-const char* minkq_device_name(const minkq_device* device);
+MINKQ_API const char* minkq_device_name(const minkq_device* device);
 /* Returns the number of usable CUDA devices: 0 where minkq was built without CUDA or no GPU is
  * present. Never fails; any thread. */
-int minkq_cuda_device_count(void);
+MINKQ_API int minkq_cuda_device_count(void);
 
 /* ---- Mesh scenes: VT and EE queries ------------------------------------------------------- */
 typedef struct minkq_scene minkq_scene;
@@ -168,20 +176,20 @@ typedef struct minkq_scene_desc {
  * ("triangle 3 references vertex 9 but the scene has 8 vertices"), SIZE_OVERFLOW (over
  * 2^31 - 2 elements), OUT_OF_MEMORY, DEVICE. The scene holds its device, which must outlive
  * it. Release with minkq_scene_release. */
-minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* desc, minkq_scene** out_scene);
+MINKQ_API minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* desc, minkq_scene** out_scene);
 /* Releases a scene and its trees. NULL is ignored. */
-void minkq_scene_release(minkq_scene* scene);
+MINKQ_API void minkq_scene_release(minkq_scene* scene);
 /* Moves the vertices (the scene's vertex count, any stride, host or device memory) and refits
  * the trees in place: cheaper than a rebuild, with the same pairs. A refit keeps the grouping of
  * the last build, so after large deformations its boxes overlap more and queries visit more
  * nodes (see minkq_scene_tree_growth). Errors: INVALID_ARGUMENT (NULL scene, another vertex
  * count, a bad buffer as at creation), NON_FINITE; the scene then keeps its positions. */
-minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices);
+MINKQ_API minkq_status minkq_scene_refit(minkq_scene* scene, minkq_buffer vertices);
 /* Moves the vertices like minkq_scene_refit and builds the trees afresh for the new positions:
  * the trees minkq_scene_create would build there, at about its cost; topology and edge
  * numbering are kept. Same errors as minkq_scene_refit; the scene then keeps its positions and
  * trees. */
-minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
+MINKQ_API minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
 /* Swept positions, for continuous collision detection (CCD): every vertex moves linearly from
  * x0 to x1 over the step (both buffers as for minkq_scene_refit: the scene's vertex count and
  * precision, host or device memory, finite). The scene keeps both, boxes each element over both
@@ -202,9 +210,9 @@ minkq_status minkq_scene_rebuild(minkq_scene* scene, minkq_buffer vertices);
  * Errors: those of minkq_scene_refit for either buffer (the message names the call); on error
  * the scene keeps its positions and trees. minkq_scene_is_swept returns 1 while the scene's
  * positions are swept ones, else 0 (also for NULL). */
-minkq_status minkq_scene_refit_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1);
-minkq_status minkq_scene_rebuild_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1);
-int minkq_scene_is_swept(const minkq_scene* scene);
+MINKQ_API minkq_status minkq_scene_refit_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1);
+MINKQ_API minkq_status minkq_scene_rebuild_swept(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1);
+MINKQ_API int minkq_scene_is_swept(const minkq_scene* scene);
 /* Writes to *out_growth how far the refits since the last build have stretched the trees: their
  * area cost now over its value right after that build, for the larger of the scene's trees;
  * 1 after a build. The area cost (the surface areas of every node's child boxes, summed, over
@@ -212,20 +220,20 @@ int minkq_scene_is_swept(const minkq_scene* scene);
  * stretch, not a mesh that folds or flattens into new neighbours (where a rebuild can still
  * help). Rebuild when it passes about 1.5, and every so many steps when the mesh changes shape
  * a lot: that advice, and what rebuilds bought on the benchmark scenes, are measured in
- * bench/README.md (trees.md, policies.md). A tree whose root box has no area (every element on
+ * bench/README.md in the minkq repository. A tree whose root box has no area (every element on
  * one axis-parallel line, or at one point) costs 0: growth 1 while it stays so, infinity once
  * it gains area. Errors: INVALID_ARGUMENT (NULL scene or out_growth). */
-minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
+MINKQ_API minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
 /* Return the scene's vertex, triangle and edge counts (edges: the derived ones when the scene
  * derived them); 0 for NULL. */
-size_t minkq_scene_vertex_count(const minkq_scene* scene);
-size_t minkq_scene_triangle_count(const minkq_scene* scene);
-size_t minkq_scene_edge_count(const minkq_scene* scene);
+MINKQ_API size_t minkq_scene_vertex_count(const minkq_scene* scene);
+MINKQ_API size_t minkq_scene_triangle_count(const minkq_scene* scene);
+MINKQ_API size_t minkq_scene_edge_count(const minkq_scene* scene);
 /* Copies the scene's edges, in the numbering EE pairs use (2 int32 each, host memory), into
  * out_edges, which holds 2 * capacity int32. Errors: INVALID_ARGUMENT (NULL scene, NULL
  * out_edges with a non-zero capacity), CAPACITY when the scene has more edges than capacity
  * (nothing is written; minkq_scene_edge_count gives the number). */
-minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, size_t capacity);
+MINKQ_API minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, size_t capacity);
 
 /* ---- Queries ------------------------------------------------------------------------------- */
 typedef enum minkq_query_kind {
@@ -251,7 +259,7 @@ typedef enum minkq_query_flags {
   MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts.
                                  Meant for MINKQ_MODE_BOX: once the leaves test distances, the
                                  finer node tests cost more than they save (measured in
-                                 bench/README.md) */
+                                 bench/README.md in the minkq repository) */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
   MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
   MINKQ_QUERY_STATS = 8,      /* count the traversal's work into info->stats (a separately compiled
@@ -260,7 +268,7 @@ typedef enum minkq_query_flags {
                                  exact number, no pair is written or kept, out_pairs may be NULL
                                  and capacity is ignored; never CAPACITY. For callers that size
                                  their buffers first; cheaper than a query that stores the
-                                 pairs (bench/README.md). Not with CANONICAL or DIGEST */
+                                 pairs. Not with CANONICAL or DIGEST */
 } minkq_query_flags;
 
 typedef struct minkq_query_desc {
@@ -292,29 +300,31 @@ typedef struct minkq_query_info {
  * *info is zeroed, then gets the exact count, and the digest and stats its flags ask for. If
  * more pairs exist than fit, returns CAPACITY with info->count the exact number needed and
  * writes nothing past the buffer: grow it and call again. Leaf-exact pairs lie within
- * r + 2^-19 * S, S the size of the two elements and the distance between them (see
- * core/include/minkq/predicates.h); on a MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho
- * (minkq_scene_flags). Errors: INVALID_ARGUMENT (NULL scene, query or info;
+ * r + 2^-19 * S, S the operands' size: the largest distance between the query element's first
+ * point and the other element's points (EE: or the edge's length); the leaf test computes
+ * distances in double to within 2^-21 * S and accepts those up to r + 2^-20 * S. On a
+ * MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho (minkq_scene_flags).
+ * Errors: INVALID_ARGUMENT (NULL scene, query or info;
  * unknown kind, mode or flag bits; a kind the scene was created without; sphere mode for EE;
  * a negative radius; a NULL out_pairs with a non-zero capacity; device memory on a CPU
  * device; COUNT with CANONICAL or DIGEST), NON_FINITE (radius), SIZE_OVERFLOW (capacity),
  * CAPACITY, OUT_OF_MEMORY, DEVICE. With MINKQ_QUERY_COUNT only info is written. */
-minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
-                               size_t capacity, minkq_memory out_memory, minkq_query_info* info);
+MINKQ_API minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
+                                         size_t capacity, minkq_memory out_memory, minkq_query_info* info);
 
 /* A VT query and an EE query of one scene (created with both) in one pass: one parallel loop on
  * the CPU, one kernel launch and one count readback on CUDA, where two minkq_scene_query calls
- * take two of each (what that saves is measured in bench/README.md). vt_query->kind must be
- * MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE; modes, flags and radii are each query's
- * own. Each query's pairs, count, digest and stats are exactly those minkq_scene_query gives
- * it alone. Buffers as minkq_scene_query, both in out_memory: a query whose pairs fit is
- * written in full; if either does not fit, returns CAPACITY (the message names VT or EE) with
- * both infos' counts exact. Errors: those of minkq_scene_query for either query, and
- * INVALID_ARGUMENT when a kind is the wrong one or vt_info and ee_info are the same struct. */
-minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
-                                     const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
-                                     int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
-                                     minkq_query_info* vt_info, minkq_query_info* ee_info);
+ * take two of each (what that saves is measured in bench/README.md in the minkq repository).
+ * vt_query->kind must be MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE; modes, flags and radii
+ * are each query's own. Each query's pairs, count, digest and stats are exactly those
+ * minkq_scene_query gives it alone. Buffers as minkq_scene_query, both in out_memory: a query
+ * whose pairs fit is written in full; if either does not fit, returns CAPACITY (the message names
+ * VT or EE) with both infos' counts exact. Errors: those of minkq_scene_query for either query,
+ * and INVALID_ARGUMENT when a kind is the wrong one or vt_info and ee_info are the same struct. */
+MINKQ_API minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                               const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
+                                               int32_t* ee_pairs, size_t ee_capacity, minkq_memory out_memory,
+                                               minkq_query_info* vt_info, minkq_query_info* ee_info);
 
 /* ---- Stream-ordered calls: a scene inside a simulator's captured step -------------------
  *
@@ -370,16 +380,16 @@ typedef enum minkq_reserve_flags {
  * builds' scratch, about 64 bytes per element of each tree, and the triangles and edges by id
  * (12 and 8 bytes each: the trees keep them in their leaf order), so that rebuilds allocate
  * nothing), DEVICE. */
-minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity);
+MINKQ_API minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity);
 
 /* minkq_scene_refit, enqueued on `stream` (see above: the vertices in device memory on CUDA;
  * non-finite coordinates reported by minkq_scene_async_status). Needs MINKQ_RESERVE_REFIT.
  * Errors (at once): those of minkq_scene_refit except NON_FINITE; INVALID_ARGUMENT without the
  * reservation or for host vertices on a CUDA device (device ones on the CPU); DEVICE. */
-minkq_status minkq_scene_refit_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_refit_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
 /* minkq_scene_rebuild, enqueued on `stream`, as minkq_scene_refit_async; its trees are those
  * minkq_scene_rebuild builds. Needs MINKQ_RESERVE_REBUILD. */
-minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
 
 /* minkq_scene_refit_swept and minkq_scene_rebuild_swept, enqueued on `stream`, as
  * minkq_scene_refit_async and minkq_scene_rebuild_async are: x0 and x1 in device memory on CUDA,
@@ -387,9 +397,10 @@ minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices
  * positions at rest (x1 = x0: queries then give the static pairs at x0) and
  * minkq_scene_async_status reports it. Need MINKQ_RESERVE_SWEPT with MINKQ_RESERVE_REFIT (refit)
  * or MINKQ_RESERVE_REBUILD (rebuild). */
-minkq_status minkq_scene_refit_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1, minkq_stream stream);
-minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1,
-                                             minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_refit_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1,
+                                                   minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq_buffer x0, minkq_buffer x1,
+                                                       minkq_stream stream);
 
 /* minkq_scene_query, enqueued on `stream`: writes the exact number of pairs to *out_count (a
  * uint64_t in device memory on CUDA, host memory on the CPU), also when it exceeds capacity,
@@ -400,16 +411,16 @@ minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq_buffer x0
  * of minkq_scene_query for the description and buffers; INVALID_ARGUMENT for a NULL out_count,
  * or a canonical capacity over the reservation; UNSUPPORTED for DIGEST or STATS; never
  * CAPACITY. */
-minkq_status minkq_scene_query_async(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
-                                     size_t capacity, uint64_t* out_count, minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_query_async(minkq_scene* scene, const minkq_query_desc* query, int32_t* out_pairs,
+                                               size_t capacity, uint64_t* out_count, minkq_stream stream);
 /* minkq_scene_query_vt_ee, enqueued on `stream`: one kernel launch for both queries, each
  * query's pairs and count as minkq_scene_query_async gives it alone. Errors: those of
  * minkq_scene_query_async for either query; INVALID_ARGUMENT when a kind is the wrong one or
  * vt_count and ee_count are the same pointer. */
-minkq_status minkq_scene_query_vt_ee_async(minkq_scene* scene, const minkq_query_desc* vt_query,
-                                           const minkq_query_desc* ee_query, int32_t* vt_pairs, size_t vt_capacity,
-                                           uint64_t* vt_count, int32_t* ee_pairs, size_t ee_capacity,
-                                           uint64_t* ee_count, minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_query_vt_ee_async(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                                     const minkq_query_desc* ee_query, int32_t* vt_pairs,
+                                                     size_t vt_capacity, uint64_t* vt_count, int32_t* ee_pairs,
+                                                     size_t ee_capacity, uint64_t* ee_count, minkq_stream stream);
 
 /* Waits for the work enqueued on `stream` (CUDA), then returns the scene's pending error and
  * clears it: MINKQ_SUCCESS when every asynchronous refit and rebuild since the last call (or
@@ -417,7 +428,7 @@ minkq_status minkq_scene_query_vt_ee_async(minkq_scene* scene, const minkq_query
  * a message naming the call and the vertex ("minkq_scene_refit_async: vertex 12 has a
  * non-finite coordinate; the scene kept its positions"). A blocking call. Errors:
  * INVALID_ARGUMENT (NULL scene), NON_FINITE (the pending error), DEVICE. */
-minkq_status minkq_scene_async_status(minkq_scene* scene, minkq_stream stream);
+MINKQ_API minkq_status minkq_scene_async_status(minkq_scene* scene, minkq_stream stream);
 
 /* ---- Results: library-owned, growing pair buffers ------------------------------------------ */
 typedef struct minkq_result minkq_result;
@@ -426,30 +437,31 @@ typedef struct minkq_result minkq_result;
  * usable with any scene, and stores it in *out_result. Reusing one result every step keeps its
  * memory. Errors: INVALID_ARGUMENT (NULL out_result), OUT_OF_MEMORY. Release with
  * minkq_result_release. */
-minkq_status minkq_result_create(minkq_result** out_result);
+MINKQ_API minkq_status minkq_result_create(minkq_result** out_result);
 /* Releases a result and its pairs. NULL is ignored. */
-void minkq_result_release(minkq_result* result);
+MINKQ_API void minkq_result_release(minkq_result* result);
 /* Like minkq_scene_query, into a result (host memory): when its buffer is too small it grows to
  * the exact count and an eighth more, and the query runs again, so the call does not return
  * CAPACITY. A count that grows by less than that from one call to the next (a moving mesh's
  * contacts, step to step) fits: the buffer stays where it is and the query runs once. On failure
  * the result holds no pairs. Errors: those of minkq_scene_query, INVALID_ARGUMENT for a NULL
  * result, OUT_OF_MEMORY when it cannot grow. */
-minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query, minkq_result* result);
+MINKQ_API minkq_status minkq_scene_query_result(minkq_scene* scene, const minkq_query_desc* query,
+                                              minkq_result* result);
 /* Like minkq_scene_query_vt_ee, into two distinct results that grow as needed (host memory), as
  * minkq_scene_query_result does. INVALID_ARGUMENT for a NULL or shared result. */
-minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_query_desc* vt_query,
-                                            const minkq_query_desc* ee_query, minkq_result* vt_result,
-                                            minkq_result* ee_result);
+MINKQ_API minkq_status minkq_scene_query_vt_ee_result(minkq_scene* scene, const minkq_query_desc* vt_query,
+                                                      const minkq_query_desc* ee_query, minkq_result* vt_result,
+                                                      minkq_result* ee_result);
 /* Returns the number of pairs of the result's last query (0 after a failed one, or for NULL). */
-uint64_t minkq_result_count(const minkq_result* result);
+MINKQ_API uint64_t minkq_result_count(const minkq_result* result);
 /* Returns the result's pairs, 2 * count int32, valid until the result is reused or released
  * (may be NULL when count is 0; NULL after a MINKQ_QUERY_COUNT query, which keeps no pairs). */
-const int32_t* minkq_result_pairs(const minkq_result* result);
+MINKQ_API const int32_t* minkq_result_pairs(const minkq_result* result);
 /* Returns the last query's digest, with MINKQ_QUERY_DIGEST (else 0). */
-uint64_t minkq_result_digest(const minkq_result* result);
+MINKQ_API uint64_t minkq_result_digest(const minkq_result* result);
 /* Returns the work counts of the last query, with MINKQ_QUERY_STATS (else all 0). */
-minkq_query_stats minkq_result_stats(const minkq_result* result);
+MINKQ_API minkq_query_stats minkq_result_stats(const minkq_result* result);
 
 /* ---- BVH over user boxes ------------------------------------------------------------------- */
 typedef struct minkq_bvh minkq_bvh;
@@ -459,19 +471,19 @@ typedef struct minkq_bvh minkq_bvh;
  * stores the bvh in *out_bvh (NULL on failure). Errors: INVALID_ARGUMENT (NULL pointer, a bad
  * buffer as for scenes, "box 3 has lo > hi"), NON_FINITE, SIZE_OVERFLOW, OUT_OF_MEMORY,
  * DEVICE. The bvh holds its device, which must outlive it. Release with minkq_bvh_release. */
-minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh);
+MINKQ_API minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh);
 /* Releases a bvh and its tree. NULL is ignored. */
-void minkq_bvh_release(minkq_bvh* bvh);
+MINKQ_API void minkq_bvh_release(minkq_bvh* bvh);
 /* Moves the boxes (the bvh's count, checked as at creation) and refits the tree in place, keeping
  * the grouping of its last build. Errors: those of minkq_bvh_create, INVALID_ARGUMENT for NULL
  * or another box count; the bvh then keeps its boxes. */
-minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes);
+MINKQ_API minkq_status minkq_bvh_refit(minkq_bvh* bvh, minkq_buffer boxes);
 /* Moves the boxes like minkq_bvh_refit and builds the tree afresh, as minkq_bvh_create would.
  * Same errors; the bvh then keeps its boxes and tree. */
-minkq_status minkq_bvh_rebuild(minkq_bvh* bvh, minkq_buffer boxes);
+MINKQ_API minkq_status minkq_bvh_rebuild(minkq_bvh* bvh, minkq_buffer boxes);
 /* minkq_scene_tree_growth for a bvh: its tree's area cost over its value at the last build.
  * Errors: INVALID_ARGUMENT (NULL bvh or out_growth). */
-minkq_status minkq_bvh_tree_growth(const minkq_bvh* bvh, double* out_growth);
+MINKQ_API minkq_status minkq_bvh_tree_growth(const minkq_bvh* bvh, double* out_growth);
 
 typedef enum minkq_shape {
   MINKQ_SHAPE_SPHERE = 0,  /* first: centres (3 floats); modes box, sphere */
@@ -496,8 +508,8 @@ typedef struct minkq_bvh_query_desc {
  * other than 0, for boxes; second not empty for spheres, or not first's count otherwise;
  * a bad buffer), NON_FINITE (radius, a query point), SIZE_OVERFLOW, CAPACITY, OUT_OF_MEMORY,
  * DEVICE. */
-minkq_status minkq_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, int32_t* out_pairs,
-                             size_t capacity, minkq_memory out_memory, minkq_query_info* info);
+MINKQ_API minkq_status minkq_bvh_query(minkq_bvh* bvh, const minkq_bvh_query_desc* query, int32_t* out_pairs,
+                                       size_t capacity, minkq_memory out_memory, minkq_query_info* info);
 
 #ifdef __cplusplus
 }

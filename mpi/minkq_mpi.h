@@ -58,6 +58,11 @@
 
 #include "minkq.h"
 
+/* MINKQ_MPI_API marks each function libminkq_mpi exports (as MINKQ_API does for libminkq): the
+ * library hides every other symbol, and its version script lets out only minkq_mpi_* at version
+ * MINKQ_MPI_<ABI>. */
+#define MINKQ_MPI_API MINKQ_API
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -67,7 +72,7 @@ extern "C" {
 
 /* The message of the calling thread's last failed minkq_mpi call ("" after a success): the
  * same text on every rank. Valid until the next minkq_mpi call on this thread. */
-const char* minkq_mpi_last_error_message(void);
+MINKQ_MPI_API const char* minkq_mpi_last_error_message(void);
 
 typedef struct minkq_mpi_scene minkq_mpi_scene;
 
@@ -91,18 +96,18 @@ typedef struct minkq_mpi_scene_desc {
  * by two ranks; a copy nobody owns; a triangle copy whose global vertex ids differ from the
  * owner's), UNSUPPORTED (FLOAT64, VV, EV), NON_FINITE, INDEX_OUT_OF_RANGE, SIZE_OVERFLOW, and
  * those of minkq_scene_create on any rank. Release with minkq_mpi_scene_release. */
-minkq_status minkq_mpi_scene_create(MPI_Comm comm, minkq_device* device, const minkq_mpi_scene_desc* desc,
-                                    minkq_mpi_scene** out_scene);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_create(MPI_Comm comm, minkq_device* device, const minkq_mpi_scene_desc* desc,
+                                                  minkq_mpi_scene** out_scene);
 /* Releases a distributed scene (collective: frees its communicator). NULL is ignored. */
-void minkq_mpi_scene_release(minkq_mpi_scene* scene);
+MINKQ_MPI_API void minkq_mpi_scene_release(minkq_mpi_scene* scene);
 
 /* Moves the rank's local vertices (its vertex count, a buffer as at creation, finite) and fetches its
  * copies' positions from their owners. The next query refits the local trees (rebuild: builds
  * them afresh), or builds them when its ghost layer changed. Errors: INVALID_ARGUMENT (NULL
  * scene, another vertex count, a bad buffer), NON_FINITE; the scene then keeps its positions
  * on every rank. */
-minkq_status minkq_mpi_scene_refit(minkq_mpi_scene* scene, minkq_buffer vertices);
-minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertices);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_refit(minkq_mpi_scene* scene, minkq_buffer vertices);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertices);
 
 /* Sets the skin: a width s >= 0 (finite, the same on every rank) by which the ghost layer is
  * chosen wider, so that later queries with the same radius keep it, sending only the ghosts'
@@ -111,27 +116,27 @@ minkq_status minkq_mpi_scene_rebuild(minkq_mpi_scene* scene, minkq_buffer vertic
  * skin sends more ghosts less often; the pairs are the same for every skin. Collective.
  * Errors: INVALID_ARGUMENT (NULL scene, a negative skin, skins that differ between the ranks),
  * NON_FINITE. */
-minkq_status minkq_mpi_scene_set_skin(minkq_mpi_scene* scene, double skin);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_set_skin(minkq_mpi_scene* scene, double skin);
 
 /* Writes to *out_growth, on every rank, how far the refits since the last builds have stretched
  * the local trees: the largest minkq_scene_tree_growth over the ranks' VT and EE trees (1 when
  * none has been refit, or before the first query builds them). Rebuild (minkq_mpi_scene_rebuild)
  * when it passes about 1.5, as for one scene. Collective. Errors: INVALID_ARGUMENT (NULL scene
  * or out_growth, on any rank). */
-minkq_status minkq_mpi_scene_tree_growth(minkq_mpi_scene* scene, double* out_growth);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_tree_growth(minkq_mpi_scene* scene, double* out_growth);
 
 /* A rank's share of the pairs of the last query, in global ids: a growing host buffer that the
  * library owns. Not collective. */
 typedef struct minkq_mpi_result minkq_mpi_result;
-minkq_status minkq_mpi_result_create(minkq_mpi_result** out_result);
-void minkq_mpi_result_release(minkq_mpi_result* result);
+MINKQ_MPI_API minkq_status minkq_mpi_result_create(minkq_mpi_result** out_result);
+MINKQ_MPI_API void minkq_mpi_result_release(minkq_mpi_result* result);
 /* This rank's number of pairs (0 after a failed query or for NULL). */
-uint64_t minkq_mpi_result_count(const minkq_mpi_result* result);
+MINKQ_MPI_API uint64_t minkq_mpi_result_count(const minkq_mpi_result* result);
 /* This rank's pairs, 2 * count int64 (see the header comment for what they are), valid until
  * the result is reused or released; NULL after a MINKQ_QUERY_COUNT query. */
-const int64_t* minkq_mpi_result_pairs(const minkq_mpi_result* result);
+MINKQ_MPI_API const int64_t* minkq_mpi_result_pairs(const minkq_mpi_result* result);
 /* This rank's local work counts, with MINKQ_QUERY_STATS (ghosts included), else all 0. */
-minkq_query_stats minkq_mpi_result_stats(const minkq_mpi_result* result);
+MINKQ_MPI_API minkq_query_stats minkq_mpi_result_stats(const minkq_mpi_result* result);
 
 /* Runs a VT or EE query of the whole mesh: this rank's share of the pairs into `result`
  * (see the header comment). query as for minkq_scene_query: modes, LEAF_EXACT, CANONICAL (this
@@ -140,7 +145,8 @@ minkq_query_stats minkq_mpi_result_stats(const minkq_mpi_result* result);
  * VV or EV; a bad mode, flag or radius as minkq_scene_query), UNSUPPORTED (DIGEST), NON_FINITE
  * (radius), OUT_OF_MEMORY, and those of the local minkq calls on any rank. On failure every
  * rank's result holds no pairs. */
-minkq_status minkq_mpi_scene_query(minkq_mpi_scene* scene, const minkq_query_desc* query, minkq_mpi_result* result);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_query(minkq_mpi_scene* scene, const minkq_query_desc* query,
+                                                 minkq_mpi_result* result);
 
 /* A rank's figures: what it owns, its copies, the ghost layer of its last query, and where that
  * query's time went. */
@@ -163,7 +169,7 @@ typedef struct minkq_mpi_rank_info {
   double last_reach_ms, last_ghost_ms, last_trees_ms, last_query_ms;
 } minkq_mpi_rank_info;
 /* Not collective. Errors: INVALID_ARGUMENT (NULL scene or out_info). */
-minkq_status minkq_mpi_scene_rank_info(const minkq_mpi_scene* scene, minkq_mpi_rank_info* out_info);
+MINKQ_MPI_API minkq_status minkq_mpi_scene_rank_info(const minkq_mpi_scene* scene, minkq_mpi_rank_info* out_info);
 
 #ifdef __cplusplus
 }

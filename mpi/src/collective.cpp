@@ -1,4 +1,5 @@
 #include "collective.h"
+#include "minkq_mpi.h"  // minkq_mpi_last_error_message, exported (MINKQ_MPI_API)
 
 namespace minkq::mpi {
 
