@@ -41,13 +41,13 @@ plan=(
   # memcheck: the chosen tests (memcheck_tests) with blocking launches, then the capture tests:
   # two sanitizer processes, each instrumenting the module first, on the same small scenes.
   "2 memcheck 60 120"
-  # bench: minkq_bench on top of call 1's build (its own sources: B s of CPU here), the small
-  # scenes suite on cpu and cuda (S s on the CPU here, mostly the oracle and Embree, over 8
-  # times the cores there), then the count suite on cuda with the 1M sheet.
-  "2 bench 70 130"
+  # bench: minkq_bench on top of call 1's build (its own sources: about 20 s of CPU here), the
+  # small scenes suite on cpu and cuda (14 s of CPU here on the cpu backend: the 130k-triangle
+  # sheet, the oracle, Embree), then the count suite on cuda with the 1M sheet (15 repeats).
+  "2 bench 45 90"
   # leaf: a copy with kLeafSize 16 built from nothing for minkq_bench alone (backend.cu's 98 s
   # again, the rest beside it), then the small scenes suite on cuda alone (no Embree) with each.
-  "2 leaf 160 210"
+  "2 leaf 140 190"
   # Later, in another session: no budget here, each with its cap.
   "later racecheck 200 300" "later test 300 540" "later fuzz 300 540" "later warp 120 300"
   "later python 300 480" "later profile 120 300"
@@ -326,19 +326,23 @@ stage_bench() {
 # backend.cu compile: most of this stage), then the scenes suite runs on cuda with each.
 # $results/leaf16 and leaf32 (in results.tar.gz) hold the two tables.
 leaf_header=core/include/minkq/tree.h
-leaf_line='constexpr int32_t kLeafSize = 32;'
+leaf_from='constexpr int32_t kLeafSize = 32;'
+leaf_to='constexpr int32_t kLeafSize = 16;'
 stage_leaf() {
   local dir=/tmp/minkq-leaf16 entry
-  [ "$(grep -cxF "$leaf_line" "$leaf_header")" = 1 ] ||
-    { echo "leaf: $leaf_header does not hold '$leaf_line' once: update stage_leaf"; return 1; }
+  [ "$(grep -cxF "$leaf_from" "$leaf_header")" = 1 ] ||
+    { echo "leaf: $leaf_header does not hold '$leaf_from' once: update stage_leaf"; return 1; }
   rm -rf "$dir" && mkdir -p "$dir/src"
   for entry in "$root"/* "$root"/.[!.]*; do
     case ${entry##*/} in build-* | build | .carry | .git | .gl | .whl | target) continue ;; esac
     cp -r "$entry" "$dir/src/"
   done
-  sed -i "s/^${leaf_line}\$/${leaf_line/32/16}/" "$dir/src/$leaf_header"
-  grep -qxF "${leaf_line/32/16}" "$dir/src/$leaf_header" || { echo "leaf: the copy's kLeafSize is not 16"; return 1; }
-  local cuda=(-DMINKQ_WITH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90)
+  sed -i "s/^${leaf_from}\$/${leaf_to}/" "$dir/src/$leaf_header"
+  # The copy differs from the source in that line alone.
+  [ "$(diff "$leaf_header" "$dir/src/$leaf_header" | grep -c '^[<>]')" = 2 ] && grep -qxF "$leaf_to" "$dir/src/$leaf_header" ||
+    { echo "leaf: the copy's $leaf_header is not the source's with '$leaf_to'"; return 1; }
+  build_targets minkq_bench || return 1  # kLeafSize 32
+  local cuda=(-DMINKQ_WITH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90)  # as the sm90 preset
   [ $smoke = 1 ] && cuda=(-DMINKQ_WITH_CUDA=OFF)
   cmake -S "$dir/src" -B "$dir/build" -DCMAKE_BUILD_TYPE=Release "${cuda[@]}" -DMINKQ_BUILD_BENCH=ON \
     -DMINKQ_BUILD_TESTS=OFF -DMINKQ_BUILD_EXAMPLES=OFF > "$logs/leaf-configure.log" 2>&1 ||
@@ -346,7 +350,6 @@ stage_leaf() {
   have_gpu || { echo "leaf: the copy with kLeafSize 16 configures; its build and the cuda runs skipped: no GPU"; return 0; }
   cmake --build "$dir/build" -j "$jobs" --target minkq_bench > "$logs/leaf-build.log" 2>&1 ||
     { grep -E "error|Error" "$logs/leaf-build.log" | head -40; return 1; }
-  build_targets minkq_bench || return 1
   local status=0 leaf bin
   for leaf in 32 16; do
     bin=$build/bin/minkq_bench
