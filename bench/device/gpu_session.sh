@@ -39,14 +39,16 @@ plan=(
   # (3000-triangle soup, 40x40 sheet): a CUDA context and a module load each (about a second).
   "1 gpu 30 60"
   # memcheck: the chosen tests (memcheck_tests) with blocking launches, then the capture tests:
-  # two sanitizer processes, each instrumenting the module first, on the same small scenes.
+  # two sanitizer processes, each instrumenting the module first, on the same small scenes (a
+  # guess: nothing here runs it; the cap bounds it, and the gpu stage's time will calibrate it).
   "2 memcheck 60 120"
   # bench: minkq_bench on top of call 1's build (its own sources: about 20 s of CPU here), the
   # small scenes suite on cpu and cuda (14 s of CPU here on the cpu backend: the 130k-triangle
   # sheet, the oracle, Embree), then the count suite on cuda with the 1M sheet (15 repeats).
   "2 bench 45 90"
-  # leaf: a copy with kLeafSize 16 built from nothing for minkq_bench alone (backend.cu's 98 s
-  # again, the rest beside it), then the small scenes suite on cuda alone (no Embree) with each.
+  # leaf: a copy with kLeafSize 16 built from nothing for minkq_bench alone (here, with CUDA for
+  # sm_90: 164 s of CPU, as call 1's build, backend.cu's 98 s again the critical path), then the
+  # small scenes suite on cuda alone (no Embree) with each.
   "2 leaf 140 190"
   # Later, in another session: no budget here, each with its cap.
   "later racecheck 200 300" "later test 300 540" "later fuzz 300 540" "later warp 120 300"
@@ -61,6 +63,7 @@ command_limit_s=600
 budget_s=900
 set -uo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
+self=$root/bench/device/gpu_session.sh  # each stage runs in a child of its own: $self --stage
 kit=${MINKQ_KIT:-$root/.carry/kit}
 out=${OUT:-/tmp/minkq-out}
 deps=/tmp/minkq-deps
@@ -175,6 +178,9 @@ stage_setup() {
 # Configures $build from nothing: sm_90 only against the kit's packages (here, under --smoke,
 # the CUDA backend off), benchmarks and fuzz_campaign on so that later stages only add targets.
 configure() {
+  # A call that found a fresh machine (call 1's went back) unpacks the kit first.
+  [ -d "$deps/usr" ] || { echo "no kit unpacked in $deps: setup first"; stage_setup > "$logs/setup.log" 2>&1; } ||
+    { tail -20 "$logs/setup.log"; return 1; }
   rm -rf "$build"  # never a stale cache: configure finds the kit's packages or fails
   local flags=(-DMINKQ_BUILD_BENCH=ON -DMINKQ_BUILD_FUZZ_CAMPAIGN=ON)
   if [ $smoke = 1 ]; then
@@ -468,7 +474,7 @@ for stage in "$@"; do
   echo "== $stage ($(date -u +%H:%M:%S), cap $cap s)"
   started=$SECONDS
   # A child under the cap: timeout ends its whole process group (ctest, compute-sanitizer, nvcc).
-  timeout -k 10 "$cap" "$BASH" "$0" $([ $smoke = 1 ] && echo --smoke) --stage "$stage"
+  timeout -k 10 "$cap" "$BASH" "$self" $([ $smoke = 1 ] && echo --smoke) --stage "$stage"
   status=$?
   [ $status = 124 ] || [ $status = 137 ] && echo "== $stage: stopped at its cap of $cap s"
   echo "== $stage: exit $status, $((SECONDS - started)) s"
