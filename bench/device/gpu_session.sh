@@ -141,6 +141,10 @@ plan_check() {
   printf 'session at the caps: start %s + calls + gaps %s = %s s of %s s' "$start_s" "$gap_s" "$session" "$budget_s"
   if [ $session -gt $budget_s ]; then echo ": OVER"; bad=1; else echo " ($((budget_s - session)) s to spare)"; fi
   echo "later (another session):$(for line in "${plan[@]}"; do read -r n s e cap <<< "$line"; [ "$n" = later ] && printf ' %s %s/%s' "$s" "$e" "$(cap_of "$s")"; done)"
+  for line in "${plan[@]}"; do  # each of those at least fits one command
+    read -r n s e cap <<< "$line"
+    [ "$n" = later ] && [ $(($(cap_of "$s") + margin_s)) -gt $command_limit_s ] && { echo "  OVER: $s alone passes one command"; bad=1; }
+  done
   return $bad
 }
 
