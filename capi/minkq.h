@@ -36,7 +36,7 @@
  * kernel's name, by the call that launched it.
  *
  * No measured figures here: what the modes, flags and rebuild advice cost and save on the
- * benchmark scenes is in bench/README.md in the minkq repository.
+ * benchmark scenes is in docs/design-notes.md and bench/results/ in the minkq repository.
  */
 #ifndef MINKQ_H
 #define MINKQ_H
@@ -220,7 +220,7 @@ MINKQ_API int minkq_scene_is_swept(const minkq_scene* scene);
  * stretch, not a mesh that folds or flattens into new neighbours (where a rebuild can still
  * help). Rebuild when it passes about 1.5, and every so many steps when the mesh changes shape
  * a lot: that advice, and what rebuilds bought on the benchmark scenes, are measured in
- * bench/README.md in the minkq repository. A tree whose root box has no area (every element on
+ * docs/design-notes.md in the minkq repository. A tree whose root box has no area (every element on
  * one axis-parallel line, or at one point) costs 0: growth 1 while it stays so, infinity once
  * it gains area. Errors: INVALID_ARGUMENT (NULL scene or out_growth). */
 MINKQ_API minkq_status minkq_scene_tree_growth(const minkq_scene* scene, double* out_growth);
@@ -259,7 +259,7 @@ typedef enum minkq_query_flags {
   MINKQ_QUERY_LEAF_EXACT = 1, /* primitive distance test at the leaves: candidates == contacts.
                                  Meant for MINKQ_MODE_BOX: once the leaves test distances, the
                                  finer node tests cost more than they save (measured in
-                                 bench/README.md in the minkq repository) */
+                                 docs/design-notes.md in the minkq repository) */
   MINKQ_QUERY_CANONICAL = 2,  /* pairs sorted lexicographically */
   MINKQ_QUERY_DIGEST = 4,     /* compute xxHash64 (seed 0) of the canonical pairs; implies CANONICAL */
   MINKQ_QUERY_STATS = 8,      /* count the traversal's work into info->stats (a separately compiled
@@ -314,7 +314,7 @@ MINKQ_API minkq_status minkq_scene_query(minkq_scene* scene, const minkq_query_d
 
 /* A VT query and an EE query of one scene (created with both) in one pass: one parallel loop on
  * the CPU, one kernel launch and one count readback on CUDA, where two minkq_scene_query calls
- * take two of each (what that saves is measured in bench/README.md in the minkq repository).
+ * take two of each (what that saves is measured in docs/design-notes.md in the minkq repository).
  * vt_query->kind must be MINKQ_QUERY_VT and ee_query->kind MINKQ_QUERY_EE; modes, flags and radii
  * are each query's own. Each query's pairs, count, digest and stats are exactly those
  * minkq_scene_query gives it alone. Buffers as minkq_scene_query, both in out_memory: a query

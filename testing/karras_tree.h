@@ -36,7 +36,7 @@ inline int32_t index_kept_nodes(const std::vector<KarrasNode>& karras, int32_t l
 // element): every Karras node, the kept ones numbered by index_kept_nodes, each written once
 // (collapse_node), then the refit from element[order[p]], the box at sorted position p. The CPU
 // build (cpu/tree.h's build_nodes, top-down through the kept nodes only) must give the same
-// records byte for byte: test_bvh checks it, minkq_build_study times the two side by side.
+// records byte for byte: test_bvh checks it (docs/design-notes.md: what the CPU build bought).
 inline void build_nodes_karras(const uint64_t* keys, int32_t n, const Box* element, const int32_t* order,
                                int32_t leaf_size, HostVector<BvhNode>& nodes, BoxGroup* leaf_groups) {
   std::vector<KarrasNode> karras(size_t(n - 1));

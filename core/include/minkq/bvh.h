@@ -31,7 +31,7 @@ static_assert(sizeof(BvhNode) == 64, "node record must stay one 64-byte line");
 // Primitives per leaf range at most: the bottom levels of the binary tree become a scan of
 // contiguous leaf boxes, four at a time (fewer node records to read, to build and to store, and
 // fewer data-dependent branches per query than node visits cost). 1 gives the plain binary
-// tree; bench/README.md links the study of sizes.
+// tree; docs/design-notes.md links the study of sizes.
 constexpr int32_t kLeafSize = 32;
 
 // How a backend's tree is built: the one option is the leaf size, 1 or more (kLeafSize, the

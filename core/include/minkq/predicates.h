@@ -5,7 +5,7 @@
 // tests/test_predicates.cpp checks each stated bound in both directions against a long-double
 // oracle. The "accepts only within ..." (tightness) bounds hold while the squares stay finite
 // and normal (distances and r between about 1e-19 and 1e19); beyond, a squared distance
-// overflows or underflows and the tests accept more (never less): see bench/results/stability.md.
+// overflows or underflows and the tests accept more (never less): tests/test_stability.cpp.
 #pragma once
 
 #include "minkq/hd.h"
@@ -300,7 +300,7 @@ MINKQ_HD bool point_point_within(Vec3 p, Vec3 q, float r) { return point_segment
 // axis v joining the two segments' centres (any axis serves, so the computed v is as good as
 // the exact one) the gap costs three dot products, a root and a division, far less than the
 // full distance, and on cloth it settles many of the box candidates that are not contacts
-// (bench/README.md links the contacts study, which also tried the same screen for VT and did
+// (docs/design-notes.md links the contacts study, which also tried the same screen for VT and did
 // not keep it). It answers "apart" only when the computed gap exceeds r + 2^-18 * T, T >= S a bound on the
 // operands' size (S as above): the computed gap is off by at most about 2^-49 * T (a few
 // roundings of terms no larger than T), so the true distance then exceeds r + 2^-19 * S,

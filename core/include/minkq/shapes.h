@@ -24,7 +24,7 @@
 // Each finer mode is the box test AND a tighter one (BoxThenFiner), so the candidate sets nest
 // by construction in float: capsule_exact <= capsule_ray <= box, sphere <= box. Inside the
 // tree every shape uses its box test: the finer tests run only on primitive boxes, where they
-// cost less than the candidates they remove (bench/README.md links the study).
+// cost less than the candidates they remove (docs/design-notes.md links the study).
 #pragma once
 
 #include <utility>
