@@ -33,10 +33,9 @@ import maturin
 from maturin import *  # noqa: F401,F403  (the other PEP 517 hooks, unchanged)
 
 # What CMake needs of the repository for the library alone (MINKQ_BUILD_TESTS/EXAMPLES=OFF):
-# the top-level CMakeLists.txt adds capi/, core/, testing/ and packaging/ (whose install rules
-# name LICENSE, CHANGELOG.md and README.md), and reads VERSION.
-_CPP_SOURCES = ("CMakeLists.txt", "capi", "core", "testing", "packaging", "VERSION", "LICENSE", "CHANGELOG.md",
-                "README.md")
+# the top-level CMakeLists.txt adds capi/, core/ and packaging/ (whose install rules name
+# LICENSE, CHANGELOG.md and README.md), and reads VERSION.
+_CPP_SOURCES = ("CMakeLists.txt", "capi", "core", "packaging", "VERSION", "LICENSE", "CHANGELOG.md", "README.md")
 _CPP_DIR = "minkq-src"
 
 
