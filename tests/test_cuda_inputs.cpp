@@ -239,6 +239,31 @@ TEST_F(Cuda, host_memory_marked_device_is_refused_and_named) {
   EXPECT_GT(after.count, 0u);
 }
 
+// Host vertices that are strided or float64 are gathered on the host in parallel (backend.h's
+// gather_host, gather_float64_host) before the upload: over many blocks of records, the same
+// pairs as the CPU, with float64 rho reduced over all of them.
+TEST_F(Cuda, strided_host_vertices_gathered_in_parallel_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  Mesh mesh = reference::twisted_sheet(160, 2.0);  // 25600 vertices: many blocks
+  reference::set_float64(mesh, test::far_doubles(mesh.xyz));
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  for (const uint32_t flags : {kBoth, kBoth | MINKQ_SCENE_FLOAT64}) {
+    const bool float64 = flags & MINKQ_SCENE_FLOAT64;
+    cxx::Scene expected = make_scene(cpu.get(), mesh, flags, test::vertices_of(mesh, flags));
+    for (const size_t stride : float64 ? std::vector<size_t>{24, 28} : std::vector<size_t>{16, 14}) {
+      const size_t scalar = float64 ? sizeof(double) : sizeof(float);
+      std::vector<unsigned char> records(mesh.vertex_count() * stride, 0xAB);
+      const void* xyz = float64 ? static_cast<const void*>(mesh.xyz64.data()) : mesh.xyz.data();
+      for (size_t v = 0; v < mesh.vertex_count(); ++v)
+        std::memcpy(&records[v * stride], static_cast<const char*>(xyz) + 3 * scalar * v, 3 * scalar);
+      const std::string what = std::string(float64 ? "float64" : "float32") + " host stride " + std::to_string(stride);
+      cxx::Scene scene = make_scene(cuda.get(), mesh, flags, host_buffer(records.data(), mesh.vertex_count(), stride));
+      ASSERT_TRUE(scene) << what;
+      compare_all_modes(expected.get(), scene.get(), r, what);
+    }
+  }
+}
+
 TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {
   test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::random_soup(3000, seed, 0.08);
