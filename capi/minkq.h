@@ -31,7 +31,9 @@
  * A buffer marked MINKQ_MEMORY_DEVICE is checked to be memory the device can use (its own
  * device memory, managed memory, mapped pinned memory, or any host memory where the device
  * reads pageable memory); anything else is MINKQ_ERROR_INVALID_ARGUMENT, naming the buffer,
- * before a kernel could fault on it. Debugging: with the environment variable MINKQ_CUDA_SYNC
+ * before a kernel could fault on it. Host memory that passes (mapped pinned, or pageable on such
+ * a device) is accepted and read as it is: the results are those of the same data in device or
+ * host memory. Debugging: with the environment variable MINKQ_CUDA_SYNC
  * set (not "0"), every kernel launch waits for its kernel, so a fault is reported, with the
  * kernel's name, by the call that launched it.
  *

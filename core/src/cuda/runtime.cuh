@@ -355,7 +355,10 @@ void gather_to_device(const Strided& values, DeviceBuffer<T>& dst) {
     gather_host(values, packed.get());
     return upload(dst, packed.get(), count);
   }
-  if (values.stride == sizeof(T)) return copy(dst.data(), values.data, count * sizeof(T), cudaMemcpyDeviceToDevice);
+  // Memory marked device may be host memory the device reads (mapped pinned, or pageable where
+  // the device has pageable access: check_device_pointer): a device-to-device copy is undefined
+  // there, so the runtime finds each side's kind from its address (unified addressing).
+  if (values.stride == sizeof(T)) return copy(dst.data(), values.data, count * sizeof(T), cudaMemcpyDefault);
   launch("gather_kernel launch", gather_kernel, values.count, kThreads, static_cast<const char*>(values.data),
          values.stride, values.count, int(sizeof(T) / sizeof(float)), is_aligned4(values),
          reinterpret_cast<float*>(dst.data()));
