@@ -27,6 +27,7 @@ minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bv
     *out_bvh = nullptr;
     require(device != nullptr, Status::kInvalidArgument, "device is NULL");
     const minkq::Strided values = checked_buffer(device, boxes, 24, "boxes");
+    require_tree_size(size_t(values.count), "boxes.count");
     require_finite(*device->backend, values, 6, "box");
     require_ordered_boxes(*device->backend, values);
     auto bvh = std::make_unique<minkq_bvh>();

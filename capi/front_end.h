@@ -119,6 +119,15 @@ inline minkq::Strided checked_buffer(const minkq_device* device, const minkq_buf
   return {buffer.data, stride, int64_t(buffer.count), static_cast<minkq::Memory>(buffer.memory)};
 }
 
+// The elements a tree may be built over (a scene's vertices, triangles and edges, a bvh's boxes)
+// number at most minkq::kMaxTreePrimitives (bvh.h: the encoding of the tree's links). Checked at
+// creation, before anything is read; refits and rebuilds must keep the count.
+inline void require_tree_size(size_t count, const std::string& what) {
+  require(count <= size_t(minkq::kMaxTreePrimitives), Status::kSizeOverflow,
+          what + " " + std::to_string(count) + " exceeds the limit of " + std::to_string(minkq::kMaxTreePrimitives) +
+              " (2^30 + 1) elements a tree holds");
+}
+
 // Copies the records of a strided buffer (host or device) into a packed host vector.
 template <class T>
 std::vector<T> host_copy(minkq::Backend& backend, const minkq::Strided& values) {

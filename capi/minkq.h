@@ -31,7 +31,9 @@
  * A buffer marked MINKQ_MEMORY_DEVICE is checked to be memory the device can use (its own
  * device memory, managed memory, mapped pinned memory, or any host memory where the device
  * reads pageable memory); anything else is MINKQ_ERROR_INVALID_ARGUMENT, naming the buffer,
- * before a kernel could fault on it. Debugging: with the environment variable MINKQ_CUDA_SYNC
+ * before a kernel could fault on it. Host memory that passes (mapped pinned, or pageable on such
+ * a device) is accepted and read as it is: the results are those of the same data in device or
+ * host memory. Debugging: with the environment variable MINKQ_CUDA_SYNC
  * set (not "0"), every kernel launch waits for its kernel, so a fault is reported, with the
  * kernel's name, by the call that launched it.
  *
@@ -77,7 +79,9 @@ typedef enum minkq_status {
   MINKQ_ERROR_INVALID_ARGUMENT = 1,   /* null pointer, bad enum, stride or flag combination */
   MINKQ_ERROR_NON_FINITE = 2,         /* NaN or infinity in a coordinate or radius */
   MINKQ_ERROR_INDEX_OUT_OF_RANGE = 3, /* negative or too large vertex index */
-  MINKQ_ERROR_SIZE_OVERFLOW = 4,      /* count whose byte size overflows, or over 2^31 - 2 */
+  MINKQ_ERROR_SIZE_OVERFLOW = 4,      /* count whose byte size overflows, or over its limit: 2^31 - 2
+                                         query elements, 2^30 + 1 elements of a tree (vertices,
+                                         triangles, edges, boxes: the tree links' encoding) */
   MINKQ_ERROR_CAPACITY = 5,           /* output buffer too small; the exact count is returned */
   MINKQ_ERROR_UNSUPPORTED = 6,        /* e.g. CUDA asked for where there is none */
   MINKQ_ERROR_OUT_OF_MEMORY = 7,
@@ -173,8 +177,9 @@ typedef struct minkq_scene_desc {
  * (NULL on failure). Errors: INVALID_ARGUMENT (NULL pointer, a NULL buffer with a non-zero count,
  * unknown flag bits, none of VT, EE, VV and EV, a stride under the element's size, device memory on a
  * CPU device), NON_FINITE ("vertex 12 has a non-finite coordinate (...)"), INDEX_OUT_OF_RANGE
- * ("triangle 3 references vertex 9 but the scene has 8 vertices"), SIZE_OVERFLOW (over
- * 2^31 - 2 elements), OUT_OF_MEMORY, DEVICE. The scene holds its device, which must outlive
+ * ("triangle 3 references vertex 9 but the scene has 8 vertices"), SIZE_OVERFLOW (more than
+ * 2^30 + 1 = 1073741825 vertices, triangles or edges, derived ones included: a tree's limit,
+ * refused before the buffers are read), OUT_OF_MEMORY, DEVICE. The scene holds its device, which must outlive
  * it. Release with minkq_scene_release. */
 MINKQ_API minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* desc, minkq_scene** out_scene);
 /* Releases a scene and its trees. NULL is ignored. */
@@ -469,8 +474,8 @@ typedef struct minkq_bvh minkq_bvh;
 /* Creates a BVH on a device over boxes, 6 floats each (lo x, y, z, hi x, y, z) with lo <= hi on
  * every axis, in host or (on a CUDA device) device memory; copies them, builds the tree and
  * stores the bvh in *out_bvh (NULL on failure). Errors: INVALID_ARGUMENT (NULL pointer, a bad
- * buffer as for scenes, "box 3 has lo > hi"), NON_FINITE, SIZE_OVERFLOW, OUT_OF_MEMORY,
- * DEVICE. The bvh holds its device, which must outlive it. Release with minkq_bvh_release. */
+ * buffer as for scenes, "box 3 has lo > hi"), NON_FINITE, SIZE_OVERFLOW (more than 2^30 + 1
+ * boxes, a tree's limit), OUT_OF_MEMORY, DEVICE. The bvh holds its device, which must outlive it. Release with minkq_bvh_release. */
 MINKQ_API minkq_status minkq_bvh_create(minkq_device* device, minkq_buffer boxes, minkq_bvh** out_bvh);
 /* Releases a bvh and its tree. NULL is ignored. */
 MINKQ_API void minkq_bvh_release(minkq_bvh* bvh);

@@ -79,6 +79,9 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
     const minkq::Strided vertices = checked_vertex_buffer(device, desc->vertices, desc->flags);
     const minkq::Strided triangles = checked_buffer(device, desc->triangles, 12, "triangles");
     const minkq::Strided edges = checked_buffer(device, desc->edges, 8, "edges");
+    require_tree_size(size_t(vertices.count), "vertices.count");
+    require_tree_size(size_t(triangles.count), "triangles.count");
+    require_tree_size(size_t(edges.count), "edges.count");
     require_finite(backend, vertices, 3, "vertex");
     auto scene = std::make_unique<minkq_scene>();
     scene->device = device;
@@ -92,8 +95,7 @@ minkq_status minkq_scene_create(minkq_device* device, const minkq_scene_desc* de
       require_indices<2>(edge_list, scene->vertex_count, "edge");
     } else if (desc->flags & (MINKQ_SCENE_EE | MINKQ_SCENE_EV)) {
       edge_list = derive_edges(triangle_list);
-      require(edge_list.size() <= size_t(minkq::kMaxPrimitives), Status::kSizeOverflow,
-              "the triangles have more than 2^31 - 2 edges");
+      require_tree_size(edge_list.size(), "the triangles' edges");
     }
     scene->triangle_count = triangle_list.size();
     scene->edge_count = edge_list.size();

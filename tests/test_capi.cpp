@@ -9,6 +9,7 @@
 #include <string>
 
 #include "capi_util.h"
+#include "minkq/bvh.h"
 #include "minkq/shapes.h"
 #include "test_util.h"
 
@@ -92,6 +93,46 @@ TEST_F(Fixture, null_pointers_strides_flags_and_sizes_are_rejected) {
   EXPECT_EQ(minkq_scene_create(device.get(), nullptr, nullptr), MINKQ_ERROR_INVALID_ARGUMENT);
   minkq_scene* scene = nullptr;
   EXPECT_EQ(minkq_scene_create(nullptr, &d, &scene), MINKQ_ERROR_INVALID_ARGUMENT);
+}
+
+// A tree over n elements links its nodes by (node << 1) | side in an int32 (bvh.h), so
+// vertices, triangles, edges and boxes stop at kMaxTreePrimitives = 2^30 + 1. One more is
+// refused with the count and the limit named, before the (much smaller) buffer is read: a
+// check that ran after the read would read past it.
+TEST_F(Fixture, counts_past_the_tree_limit_are_refused_before_reading) {
+  static_assert(kMaxTreePrimitives == (int64_t(1) << 30) + 1, "the limit minkq.h documents");
+  const size_t over = size_t(kMaxTreePrimitives) + 1;
+  const std::string limit = "exceeds the limit of " + std::to_string(kMaxTreePrimitives);
+  for (const char* field : {"vertices", "triangles", "edges"}) {
+    std::vector<int32_t> edges = {0, 1, 1, 2};
+    minkq_scene_desc d = desc();
+    d.edges = host_buffer(edges.data(), 2);
+    minkq_buffer& buffer = std::string(field) == "vertices" ? d.vertices
+                           : std::string(field) == "triangles" ? d.triangles : d.edges;
+    buffer.count = over;
+    EXPECT_EQ(create(d), MINKQ_ERROR_SIZE_OVERFLOW) << field;
+    EXPECT_NE(message().find(std::string(field) + ".count " + std::to_string(over) + " " + limit), std::string::npos)
+        << message();
+  }
+  std::vector<float> boxes = {0, 0, 0, 1, 1, 1};
+  minkq_bvh* bvh = nullptr;
+  minkq_buffer box_buffer = host_buffer(boxes.data(), 1, 24);
+  box_buffer.count = over;
+  EXPECT_EQ(minkq_bvh_create(device.get(), box_buffer, &bvh), MINKQ_ERROR_SIZE_OVERFLOW);
+  EXPECT_EQ(bvh, nullptr);
+  EXPECT_NE(message().find("boxes.count " + std::to_string(over) + " " + limit), std::string::npos) << message();
+  // Rebuilds keep the count their scene or bvh was created with, so they never reach a tree
+  // past the limit: a larger count is refused before it is read too.
+  box_buffer.count = 1;
+  ASSERT_EQ(minkq_bvh_create(device.get(), box_buffer, &bvh), MINKQ_SUCCESS) << message();
+  box_buffer.count = over;
+  EXPECT_EQ(minkq_bvh_rebuild(bvh, box_buffer), MINKQ_ERROR_INVALID_ARGUMENT);
+  minkq_bvh_release(bvh);
+  test::Scene scene(device.get(), reference::Mesh{xyz, tris, {}}, MINKQ_SCENE_VT);
+  minkq_buffer vertices = desc().vertices;
+  vertices.count = over;
+  EXPECT_EQ(minkq_scene_rebuild(scene.get(), vertices), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("rebuild with " + std::to_string(over) + " vertices"), std::string::npos) << message();
 }
 
 TEST_F(Fixture, bad_radius_mode_kind_and_flags_are_rejected) {

@@ -201,21 +201,48 @@ TEST_F(Cuda, non_finite_device_vertices_name_the_first_bad_vertex) {
 
 // Host memory marked MINKQ_MEMORY_DEVICE is refused, named, before any kernel reads it (a
 // fault there would stick to the context and fail every later call); the device stays usable.
-TEST_F(Cuda, host_memory_marked_device_is_refused_and_named) {
-  test::Device cuda("cuda");
+// Host memory marked MINKQ_MEMORY_DEVICE is read where the device can read it, with the pairs
+// host memory gives: mapped pinned memory on every device, pageable memory where the device
+// has pageable access (HMM / ATS). Packed records are copied, not gathered by a kernel, so the
+// copy must take each side's kind from its address (a device-to-device copy is undefined for
+// host memory): vertices at stride 12, and the triangles, which are read back to the host.
+// Without pageable access, pageable memory is refused, naming the buffer, and the device
+// keeps working.
+TEST_F(Cuda, host_memory_marked_device_is_read_where_the_device_can_else_named) {
+  test::Device cpu("cpu"), cuda("cuda");
   const Mesh mesh = reference::twisted_sheet(20, 1.0);
   const float r = float(0.5 * reference::mean_edge_length(mesh));
-  std::vector<float> pageable = mesh.xyz;  // ordinary host memory
+  cxx::Scene expected = make_scene(cpu.get(), mesh, kBoth);
+  ASSERT_TRUE(expected);
+  const size_t vertex_bytes = mesh.xyz.size() * sizeof(float), triangle_bytes = mesh.tris.size() * sizeof(int32_t);
+  void* mapped = nullptr;
+  ASSERT_EQ(cudaHostAlloc(&mapped, vertex_bytes + triangle_bytes, cudaHostAllocMapped), cudaSuccess);
+  std::memcpy(mapped, mesh.xyz.data(), vertex_bytes);
+  std::memcpy(static_cast<char*>(mapped) + vertex_bytes, mesh.tris.data(), triangle_bytes);
   minkq_scene_desc desc{};
   desc.flags = kBoth;
+  desc.vertices = device_buffer(mapped, mesh.vertex_count(), 12);
+  desc.triangles = device_buffer(static_cast<char*>(mapped) + vertex_bytes, mesh.triangle_count(), 12);
+  {
+    cxx::Scene pinned = test::new_scene(cuda.get(), desc);
+    ASSERT_TRUE(pinned) << minkq_last_error_message();
+    compare_all_modes(expected.get(), pinned.get(), r, "mapped pinned vertices and triangles");
+    ASSERT_EQ(minkq_scene_rebuild(pinned.get(), desc.vertices), MINKQ_SUCCESS) << minkq_last_error_message();
+    compare_all_modes(expected.get(), pinned.get(), r, "mapped pinned rebuild");
+  }
+  ASSERT_EQ(cudaFreeHost(mapped), cudaSuccess);
+
+  std::vector<float> pageable = mesh.xyz;  // ordinary host memory
+  std::vector<int32_t> pageable_tris = mesh.tris;
   desc.vertices = device_buffer(pageable.data(), mesh.vertex_count(), 12);
-  desc.triangles = host_buffer(mesh.tris.data(), mesh.triangle_count());
+  desc.triangles = device_buffer(pageable_tris.data(), mesh.triangle_count(), 12);
   int pageable_access = 0;
   ASSERT_EQ(cudaDeviceGetAttribute(&pageable_access, cudaDevAttrPageableMemoryAccess, 0), cudaSuccess);
   minkq_scene* scene = nullptr;
   const minkq_status created = minkq_scene_create(cuda.get(), &desc, &scene);
   if (pageable_access) {  // HMM / ATS: the device reads pageable memory, so it is accepted
     EXPECT_EQ(created, MINKQ_SUCCESS) << minkq_last_error_message();
+    if (scene) compare_all_modes(expected.get(), scene, r, "pageable vertices and triangles");
   } else {
     EXPECT_EQ(created, MINKQ_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(scene, nullptr);
@@ -223,7 +250,8 @@ TEST_F(Cuda, host_memory_marked_device_is_refused_and_named) {
     EXPECT_NE(message.find("vertices.data is host memory"), std::string::npos) << message;
   }
   minkq_scene_release(scene);
-  // Output pairs in host memory marked device: refused the same way, and the scene still works.
+  // Output pairs in host memory marked device: written in place where the device can, else
+  // refused the same way; the scene works on.
   cxx::Scene good = make_scene(cuda.get(), mesh, kBoth);
   ASSERT_TRUE(good);
   std::vector<int32_t> host_pairs(2 * 1024);
@@ -234,9 +262,36 @@ TEST_F(Cuda, host_memory_marked_device_is_refused_and_named) {
     EXPECT_EQ(queried, MINKQ_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(minkq_last_error_message()).find("out_pairs is host memory"), std::string::npos)
         << minkq_last_error_message();
+  } else {
+    EXPECT_EQ(queried, MINKQ_SUCCESS) << minkq_last_error_message();
   }
   const Outcome after = scene_query(good.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_CANONICAL);
   EXPECT_GT(after.count, 0u);
+}
+
+// Host vertices that are strided or float64 are gathered on the host in parallel (backend.h's
+// gather_host, gather_float64_host) before the upload: over many blocks of records, the same
+// pairs as the CPU, with float64 rho reduced over all of them.
+TEST_F(Cuda, strided_host_vertices_gathered_in_parallel_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  Mesh mesh = reference::twisted_sheet(160, 2.0);  // 25600 vertices: many blocks
+  reference::set_float64(mesh, test::far_doubles(mesh.xyz));
+  const float r = float(0.5 * reference::mean_edge_length(mesh));
+  for (const uint32_t flags : {kBoth, kBoth | MINKQ_SCENE_FLOAT64}) {
+    const bool float64 = flags & MINKQ_SCENE_FLOAT64;
+    cxx::Scene expected = make_scene(cpu.get(), mesh, flags, test::vertices_of(mesh, flags));
+    for (const size_t stride : float64 ? std::vector<size_t>{24, 28} : std::vector<size_t>{16, 14}) {
+      const size_t scalar = float64 ? sizeof(double) : sizeof(float);
+      std::vector<unsigned char> records(mesh.vertex_count() * stride, 0xAB);
+      const void* xyz = float64 ? static_cast<const void*>(mesh.xyz64.data()) : mesh.xyz.data();
+      for (size_t v = 0; v < mesh.vertex_count(); ++v)
+        std::memcpy(&records[v * stride], static_cast<const char*>(xyz) + 3 * scalar * v, 3 * scalar);
+      const std::string what = std::string(float64 ? "float64" : "float32") + " host stride " + std::to_string(stride);
+      cxx::Scene scene = make_scene(cuda.get(), mesh, flags, host_buffer(records.data(), mesh.vertex_count(), stride));
+      ASSERT_TRUE(scene) << what;
+      compare_all_modes(expected.get(), scene.get(), r, what);
+    }
+  }
 }
 
 TEST_F(Cuda, device_output_buffers_match_host_output_and_respect_capacity) {

@@ -195,14 +195,6 @@ void gather_record(const Strided& values, int64_t i, T& out) {
   std::memcpy(&out, static_cast<const char*>(values.data) + size_t(i) * values.stride, sizeof(T));
 }
 
-// `values` (host memory) packed into a vector of records of type T.
-template <class T>
-std::vector<T> gather_host(const Strided& values) {
-  std::vector<T> out(static_cast<size_t>(values.count));
-  for (int64_t i = 0; i < values.count; ++i) gather_record(values, i, out[size_t(i)]);
-  return out;
-}
-
 // The first record of host `values` (of `floats` coordinates each) holding a NaN or infinity,
 // or (float64 records) a coordinate that rounds to one, or -1.
 inline int64_t first_non_finite_host(const Strided& values, int floats) {
@@ -233,13 +225,17 @@ inline float round_float64_record(const Strided& values, int64_t i, Vec3& out) {
   return rounding_distance(p, out);
 }
 
-// Host float64 vertices rounded into `out` (sized to them); returns rho, the farthest the
-// rounding moved one. One thread: the CPU backend runs the same records in parallel.
-inline float gather_float64_host(const Strided& values, std::vector<Vec3>& out) {
-  out.resize(size_t(values.count));
-  float rho = 0.0f;
-  for (int64_t i = 0; i < values.count; ++i) rho = std::max(rho, round_float64_record(values, i, out[size_t(i)]));
-  return rho;
-}
+// The gathers of host memory both backends use (the CPU backend's stores, the CUDA one's
+// uploads), in parallel over blocks of records (TBB; defined in cpu/backend.cpp, so that no
+// CUDA translation unit compiles TBB). Records of host `values` packed into `out`, room for
+// values.count of them (float records: Vec3, Box).
+void gather_host(const Strided& values, Vec3* out);
+void gather_host(const Strided& values, Box* out);
+// Host float64 vertices rounded into `out` (room for values.count), each by
+// round_float64_record; returns rho, the farthest the rounding moved one. The maximum is exact
+// and taken over all records, so it does not depend on how they were split. A NaN input moves
+// by NaN, which the maximum drops (std::max keeps its first argument); callers reject
+// non-finite input first.
+float gather_float64_host(const Strided& values, Vec3* out);
 
 }  // namespace minkq

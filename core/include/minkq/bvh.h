@@ -45,6 +45,14 @@ constexpr int32_t kNoChild = INT32_MIN;
 constexpr int kTraversalStack = 128;
 // Leaf positions must leave ~position distinct from kNoChild.
 constexpr int64_t kMaxPrimitives = INT32_MAX - 1;
+// The most primitives one tree holds: a tree over n keeps up to n - 1 node records
+// (max_node_count, build.h), numbered 0 to n - 2, and a parent link or a refit's child slot,
+// (node << 1) | side, must stay a non-negative int32 (a negative link reads as the root's).
+// The last node's right slot, 2 (n - 2) + 1, reaches INT32_MAX at n = 2^30 + 1.
+constexpr int64_t kMaxTreePrimitives = (int64_t(INT32_MAX) - 1) / 2 + 2;
+static_assert(((kMaxTreePrimitives - 2) << 1 | 1) == INT32_MAX,
+              "the last node's right child slot of the largest tree is the largest int32");
+static_assert(kMaxTreePrimitives <= kMaxPrimitives, "a tree's primitives are elements");
 
 struct BvhView {
   const BvhNode* nodes;

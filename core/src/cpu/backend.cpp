@@ -16,20 +16,6 @@
 namespace minkq {
 namespace {
 
-// gather_float64_host in parallel: the records rounded into `out`, rho reduced (max is exact,
-// so the result does not depend on the split).
-float gather_float64(const Strided& values, HostVector<Vec3>& out) {
-  out.resize(size_t(values.count));
-  return tbb::parallel_reduce(
-      tbb::blocked_range<int64_t>(0, values.count, 1024), 0.0f,
-      [&](const tbb::blocked_range<int64_t>& range, float rho) {
-        for (int64_t i = range.begin(); i != range.end(); ++i)
-          rho = std::max(rho, round_float64_record(values, i, out[size_t(i)]));
-        return rho;
-      },
-      [](float a, float b) { return std::max(a, b); });
-}
-
 // first_non_finite_host in parallel: each block of records scanned in order up to its first bad
 // one, the lowest of those kept (a block past a bad one already found is skipped).
 int64_t first_non_finite(const Strided& values, int floats) {
@@ -46,6 +32,28 @@ int64_t first_non_finite(const Strided& values, int floats) {
       },
       lowest);
 }
+
+template <class T>
+void gather_records(const Strided& values, T* out) {
+  parallel_for_each(values.count, [&](int64_t i) { gather_record(values, i, out[i]); });
+}
+
+}  // namespace
+
+void gather_host(const Strided& values, Vec3* out) { gather_records(values, out); }
+void gather_host(const Strided& values, Box* out) { gather_records(values, out); }
+
+float gather_float64_host(const Strided& values, Vec3* out) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int64_t>(0, values.count, 1024), 0.0f,
+      [&](const tbb::blocked_range<int64_t>& range, float rho) {
+        for (int64_t i = range.begin(); i != range.end(); ++i) rho = std::max(rho, round_float64_record(values, i, out[i]));
+        return rho;
+      },
+      [](float a, float b) { return std::max(a, b); });
+}
+
+namespace {
 
 // store.h's executor on the host: every call completes before it returns.
 class CpuExecutor {
@@ -69,12 +77,17 @@ class CpuExecutor {
   template <class T>
   void gather(const Strided& values, HostVector<T>& dst) {
     dst.resize(size_t(values.count));
-    parallel_for_each(values.count, [&](int64_t i) { gather_record(values, i, dst[size_t(i)]); });
+    gather_host(values, dst.data());
   }
   void gather_float64(const Strided& values, HostVector<Vec3>& dst, HostVector<float>& rho, bool accumulate) {
-    const float moved = minkq::gather_float64(values, dst);
+    const float moved = gather_float64_to(values, dst);
     rho.resize(1, 0.0f);
     rho[0] = accumulate ? std::max(rho[0], moved) : moved;
+  }
+  // Float64 vertices rounded into dst (resized to them); returns their rho.
+  static float gather_float64_to(const Strided& values, HostVector<Vec3>& dst) {
+    dst.resize(size_t(values.count));
+    return gather_float64_host(values, dst.data());
   }
   template <class T>
   void upload(HostVector<T>& dst, std::vector<T>&& host) {
@@ -139,7 +152,7 @@ class CpuExecutor {
       if (pending_.call == PendingError::kNone) pending_ = {call, bad};
       return;
     }
-    if (values.scalar == Scalar::kFloat64) *rho = minkq::gather_float64(values, dst); else gather(values, dst);
+    if (values.scalar == Scalar::kFloat64) *rho = gather_float64_to(values, dst); else gather(values, dst);
   }
   void commit_finite_swept(const Strided& x0, const Strided& x1, HostVector<Vec3>&, HostVector<Vec3>&,
                            HostVector<Vec3>& dst0, HostVector<Vec3>& dst1, float* rho, PendingError::Call call) {
@@ -150,7 +163,7 @@ class CpuExecutor {
       return;
     }
     if (x0.scalar == Scalar::kFloat64) {
-      *rho = std::max(minkq::gather_float64(x0, dst0), minkq::gather_float64(x1, dst1));
+      *rho = std::max(gather_float64_to(x0, dst0), gather_float64_to(x1, dst1));
     } else {
       gather(x0, dst0);
       gather(x1, dst1);

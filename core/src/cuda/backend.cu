@@ -217,7 +217,7 @@ class CudaBackend final : public Backend {
   void copy_to_host(void* dst, const void* src, size_t bytes, Memory memory) override {
     if (memory == Memory::kHost) return host_->copy_to_host(dst, src, bytes, memory);
     const DeviceScope device(ordinal_);
-    copy(dst, src, bytes, cudaMemcpyDeviceToHost);
+    copy(dst, src, bytes, cudaMemcpyDefault);  // `src` may be host memory the device reads (runtime.cuh)
   }
 
   // Device memory of this device, managed memory, mapped pinned host memory, or (where the

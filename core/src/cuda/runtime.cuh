@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -313,6 +314,14 @@ static __global__ void max_into_kernel(unsigned int* bits, float value) {
   atomicMax(bits, value_bits);  // non-negative floats order as their bits
 }
 
+// Room for `count` records of host staging, left unwritten (a std::vector would zero it on one
+// thread before the parallel gather writes it).
+template <class T>
+std::unique_ptr<T[]> packed_host(size_t count) {
+  static_assert(std::is_trivially_default_constructible<T>::value, "records are left unwritten");
+  return std::unique_ptr<T[]>(new T[count]);
+}
+
 // Float64 vertices (host or device memory) rounded into a device array, rho[0] set (or, with
 // accumulate, raised to their rho where that is larger).
 inline void gather_float64_to_device(const Strided& values, DeviceBuffer<Vec3>& dst, DeviceBuffer<float>& rho,
@@ -322,9 +331,9 @@ inline void gather_float64_to_device(const Strided& values, DeviceBuffer<Vec3>& 
   rho.ensure(1);
   if (!accumulate) zero(rho, 1);
   if (values.memory == Memory::kHost) {
-    std::vector<Vec3> packed;
-    const float moved = gather_float64_host(values, packed);
-    upload(dst, packed.data(), count);
+    const std::unique_ptr<Vec3[]> packed = packed_host<Vec3>(count);
+    const float moved = gather_float64_host(values, packed.get());
+    upload(dst, packed.get(), count);
     launch("max_into_kernel launch", max_into_kernel, 1, 1, reinterpret_cast<unsigned int*>(rho.data()), moved);
     return;
   }
@@ -342,10 +351,14 @@ void gather_to_device(const Strided& values, DeviceBuffer<T>& dst) {
   if (count == 0) return;
   if (values.memory == Memory::kHost) {
     if (values.stride == sizeof(T)) return upload(dst, static_cast<const T*>(values.data), count);
-    const std::vector<T> packed = gather_host<T>(values);
-    return upload(dst, packed.data(), count);
+    const std::unique_ptr<T[]> packed = packed_host<T>(count);
+    gather_host(values, packed.get());
+    return upload(dst, packed.get(), count);
   }
-  if (values.stride == sizeof(T)) return copy(dst.data(), values.data, count * sizeof(T), cudaMemcpyDeviceToDevice);
+  // Memory marked device may be host memory the device reads (mapped pinned, or pageable where
+  // the device has pageable access: check_device_pointer): a device-to-device copy is undefined
+  // there, so the runtime finds each side's kind from its address (unified addressing).
+  if (values.stride == sizeof(T)) return copy(dst.data(), values.data, count * sizeof(T), cudaMemcpyDefault);
   launch("gather_kernel launch", gather_kernel, values.count, kThreads, static_cast<const char*>(values.data),
          values.stride, values.count, int(sizeof(T) / sizeof(float)), is_aligned4(values),
          reinterpret_cast<float*>(dst.data()));
