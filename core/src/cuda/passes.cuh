@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cooperative_groups.h>
+#include <cooperative_groups/reduce.h>
 #include <cooperative_groups/scan.h>
 #include <cub/device/device_radix_sort.cuh>
 
@@ -40,20 +41,20 @@ __device__ inline unsigned long long reserve_slots(unsigned long long* count, un
 }
 
 // emit() of one query's thread: buffers up to kFlush pairs and reserves their slots in one
-// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair. With capacity 0
-// (a count-only query, or a count to size the caller's buffer) it only counts them.
+// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair. Outputs with no
+// room (capacity 0) count through PairCounter instead (run_pass_thread).
 class PairBuffer {
  public:
   static constexpr int kFlush = 16;
   __device__ explicit PairBuffer(const PairSlots& slots) : slots_(slots) {}
   __device__ void operator()(int32_t first, int32_t second) {
-    if (slots_.capacity != 0) pairs_[n_] = make_int2(first, second);
+    pairs_[n_] = make_int2(first, second);
     if (++n_ == kFlush) flush();
   }
   __device__ void flush() {
     if (n_ == 0) return;
     const unsigned long long first = reserve_slots(slots_.count, static_cast<unsigned long long>(n_));
-    for (int k = 0; k < n_ && slots_.capacity != 0; ++k) {
+    for (int k = 0; k < n_; ++k) {
       const unsigned long long slot = first + k;
       if (slot >= slots_.capacity) break;
       slots_.pairs[2 * slot] = pairs_[k].x;
@@ -95,17 +96,33 @@ struct DevicePass {
 
 __host__ __device__ inline int64_t round_up_to_block(int64_t n) { return (n + kQueryThreads - 1) / kQueryThreads * kQueryThreads; }
 
-// Thread i's share of a pass, if i lies in the pass's blocks. With WorkCounts, every thread of
-// those blocks stays to the end so that whole warps take part in the reduction of the counts.
+// Adds each calling thread's count to *count: one atomicAdd per group of lanes calling together.
+__device__ inline void add_count(unsigned long long* count, unsigned long long n) {
+  const cg::coalesced_group group = cg::coalesced_threads();
+  const unsigned long long sum = cg::reduce(group, n, cg::plus<unsigned long long>());
+  if (group.thread_rank() == 0 && sum != 0) atomicAdd(count, sum);
+}
+
+// Thread i's share of a pass, if i lies in the pass's blocks. An output with no room for pairs
+// (capacity 0: a count-only query, or a count to size the caller's buffer) is counted by the
+// leaf filter's count-only path (PairCounter, as on the CPU), one atomic per group of lanes at
+// the end. With WorkCounts, every thread of those blocks stays to the end so that whole warps
+// take part in the reduction of the counts.
 template <class Work, class Pass>
 __device__ void run_pass_thread(const DevicePass<Pass>& d, int64_t i) {
   const int64_t q = i - d.first_thread;
   if (q < 0 || q >= round_up_to_block(d.pass.num_queries)) return;  // uniform over the block
   Work work;
   if (q < d.pass.num_queries) {
-    PairBuffer emit(d.slots);
-    run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), emit, work);
-    emit.flush();
+    if (d.slots.capacity == 0) {  // uniform over the pass
+      PairCounter counter;
+      run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), counter, work);
+      add_count(d.slots.count, counter.counted);
+    } else {
+      PairBuffer emit(d.slots);
+      run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), emit, work);
+      emit.flush();
+    }
   }
   if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, d.work);
 }
