@@ -14,6 +14,7 @@
 #include <type_traits>
 
 #include "cuda/runtime.cuh"
+#include "cuda/sort_size.h"
 #include "backend.h"
 #include "minkq/leaf_filter.h"
 
@@ -179,7 +180,8 @@ inline void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWork
 }
 
 // Asynchronous queries sort their pairs without knowing their count on the host: all
-// `capacity` keys, those past the count (min(*count, capacity)) set to `pad`, above every pair's.
+// `capacity` keys (async_sort_keys), those past the count (min(*count, capacity)) set to `pad`,
+// above every pair's.
 static __global__ void pack_padded_kernel(const int32_t* pairs, int64_t capacity, const unsigned long long* count,
                                           uint64_t pad, uint64_t* keys) {
   const int64_t i = global_index();
@@ -208,6 +210,7 @@ inline void reserve_canonical(QueryWorkspace& ws, size_t capacity) {
 // sort_pairs for an asynchronous query: the first min(*count, capacity) pairs, sorted in place.
 inline void sort_pairs_async(int32_t* pairs, int64_t capacity, const unsigned long long* count, int32_t num_queries,
                              QueryWorkspace& ws) {
+  capacity = int64_t(async_sort_keys(uint64_t(capacity)));
   if (capacity < 2) return;
   const int end_bit = pair_key_bits(num_queries);
   const uint64_t pad = end_bit >= 64 ? ~uint64_t(0) : (uint64_t(1) << end_bit) - 1;  // above (num_queries - 1) << 32 | p
@@ -326,7 +329,8 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
     ws.last_count[int(kinds[k])] = std::max(ws.last_count[int(kinds[k])], totals[k]);
     if (totals[k] > outs[k].capacity) continue;  // the caller learns the exact count; nothing copied
     if (totals[k] > capacity[k]) fail(Status::kInternal, "pair count changed between two runs of the same query");
-    if (outs[k].canonical) sort_pairs(pairs[k], int64_t(totals[k]), num_queries[k], ws);
+    if (outs[k].canonical)
+      sort_pairs(pairs[k], int64_t(blocking_sort_keys(totals[k], outs[k].capacity)), num_queries[k], ws);
     if (outs[k].memory == Memory::kHost)
       copy(outs[k].pairs, pairs[k], totals[k] * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
   }
