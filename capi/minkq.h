@@ -412,7 +412,11 @@ MINKQ_API minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq
  * and min(count, capacity) of the pairs to out_pairs (device memory on CUDA, host on the CPU),
  * never past it: which ones, and in what order, when they do not all fit, is unspecified. A
  * simulator grows its buffer between steps when the count says so. CANONICAL sorts the pairs
- * when they fit and needs capacity <= the reserved canonical capacity. Errors (at once): those
+ * when they fit and needs capacity <= the reserved canonical capacity. Cost: on CUDA the count
+ * stays on the device, so CANONICAL sorts all `capacity` slots (those past the count padded),
+ * on every call and replay, however few pairs were found: pass a capacity near the counts
+ * expected, or sort after reading the count. Blocking queries sort only the pairs found; on the
+ * CPU both sort only those. Errors (at once): those
  * of minkq_scene_query for the description and buffers; INVALID_ARGUMENT for a NULL out_count,
  * or a canonical capacity over the reservation; UNSUPPORTED for DIGEST or STATS; never
  * CAPACITY. */

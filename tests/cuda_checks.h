@@ -127,6 +127,17 @@ inline const ModeCase kModes[] = {
     {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_RAY, "EE capsule_ray"},
     {MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, "EE capsule_exact"},
 };
+// Every mode of the codimensional kinds (MINKQ_SCENE_VV, MINKQ_SCENE_EV).
+inline const ModeCase kCodimModes[] = {
+    {MINKQ_QUERY_VV, MINKQ_MODE_BOX, "VV box"},
+    {MINKQ_QUERY_VV, MINKQ_MODE_SPHERE, "VV sphere"},
+    {MINKQ_QUERY_VV, MINKQ_MODE_CAPSULE_RAY, "VV capsule_ray"},
+    {MINKQ_QUERY_VV, MINKQ_MODE_CAPSULE_EXACT, "VV capsule_exact"},
+    {MINKQ_QUERY_EV, MINKQ_MODE_BOX, "EV box"},
+    {MINKQ_QUERY_EV, MINKQ_MODE_SPHERE, "EV sphere"},
+    {MINKQ_QUERY_EV, MINKQ_MODE_CAPSULE_RAY, "EV capsule_ray"},
+    {MINKQ_QUERY_EV, MINKQ_MODE_CAPSULE_EXACT, "EV capsule_exact"},
+};
 
 // Every mode, with and without the leaf test: identical canonical pairs, digests and work
 // counts; the non-canonical CUDA output is the same set in some order.

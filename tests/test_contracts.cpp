@@ -34,9 +34,9 @@ constexpr bool every_source_with() {
 }
 static_assert(every_source_with<BoxShape>() && every_source_with<SphereShape>());
 static_assert(every_source_with<CapsuleRayShape>() && every_source_with<CapsuleExactShape>());
-static_assert(EmitContract<cpu::CountPairs>::value);
+static_assert(EmitContract<PairCounter>::value);
 // The optional flags (detect.h's flag_set): set where a type declares them, false elsewhere.
-static_assert(counts_only<cpu::CountPairs> && !counts_only<WorkCounts>);
+static_assert(counts_only<PairCounter> && !counts_only<WorkCounts>);
 static_assert(by_leaf_position<LeafBoxes<Edge>> && !by_leaf_position<GivenBoxes> && !by_leaf_position<EdgeBoxes>);
 
 // Types that lack a member fail the traits (used where ShapeContract and the others would stop

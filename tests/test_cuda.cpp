@@ -143,8 +143,9 @@ TEST_F(Cuda, capacity_returns_the_exact_count_and_writes_nothing_past_the_buffer
   EXPECT_EQ(info.count, expected.count);
   for (size_t i = 2 * capacity; i < buffer.size(); ++i) ASSERT_EQ(buffer[i], sentinel) << "written past capacity at " << i;
 
-  // Exactly enough room, and more than enough: all pairs, nothing past the count.
-  for (size_t room : {size_t(expected.count), size_t(expected.count) + guard}) {
+  // Exactly enough room, more than enough, and far more (the canonical sort covers the count,
+  // not the capacity: sort_size.h): all pairs, nothing past the count.
+  for (size_t room : {size_t(expected.count), size_t(expected.count) + guard, 100 * size_t(expected.count)}) {
     std::vector<int32_t> out(2 * (room + guard), sentinel);
     ASSERT_EQ(minkq_scene_query(b.get(), &desc, out.data(), room, MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS)
         << minkq_last_error_message();
@@ -207,6 +208,49 @@ TEST_F(Cuda, single_box_and_tiny_scenes_match_cpu) {
     expect_same(bvh_query(a.get(), MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0.3f, centres, {}),
                 bvh_query(b.get(), MINKQ_SHAPE_SPHERE, MINKQ_MODE_SPHERE, 0.3f, centres, {}),
                 std::to_string(n) + " boxes");
+  }
+}
+
+
+// Count-only queries (MINKQ_QUERY_COUNT, and the capacity-0 call that sizes a buffer) count
+// through the leaf filter's count-only path (PairCounter) on the device: for every kind, mode
+// and filter (incident pairs dropped or kept, leaf test or not) the CPU's count and work, and
+// the number of pairs the CUDA backend emits for the same query.
+TEST_F(Cuda, count_only_queries_equal_cpu_counts_and_emitted_pairs_for_every_filter) {
+  test::Device cpu("cpu"), cuda("cuda");
+  Mesh codim = reference::twisted_sheet(40, 3.0);
+  codim.tris.clear();  // explicit edges, no triangles
+  const Mesh soup = reference::random_soup(3000, seed, 0.08);
+  for (bool drop : {false, true}) {
+    const uint32_t dropped = drop ? uint32_t(MINKQ_SCENE_DROP_INCIDENT) : 0u;
+    struct Case {
+      const Mesh& mesh;
+      uint32_t flags;
+      std::vector<ModeCase> modes;
+    };
+    const Case cases[] = {{soup, kBoth | dropped, std::vector<ModeCase>(std::begin(kModes), std::end(kModes))},
+                          {codim, MINKQ_SCENE_VV | MINKQ_SCENE_EV | dropped,
+                           std::vector<ModeCase>(std::begin(kCodimModes), std::end(kCodimModes))}};
+    for (const Case& c : cases) {
+      cxx::Scene a = make_scene(cpu.get(), c.mesh, c.flags), b = make_scene(cuda.get(), c.mesh, c.flags);
+      ASSERT_TRUE(a && b);
+      const float r = float(reference::mean_edge_length(c.mesh));
+      for (const ModeCase& m : c.modes)
+        for (uint32_t leaf : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)}) {
+          const std::string what = std::string(m.name) + (leaf ? " leaf_exact" : "") + (drop ? " drop_incident" : "");
+          const minkq_query_desc desc{m.kind, m.mode, leaf | MINKQ_QUERY_COUNT | MINKQ_QUERY_STATS, r};
+          minkq_query_info on_cpu{}, on_cuda{};
+          ASSERT_EQ(minkq_scene_query(a.get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &on_cpu), MINKQ_SUCCESS) << what;
+          ASSERT_EQ(minkq_scene_query(b.get(), &desc, nullptr, 0, MINKQ_MEMORY_HOST, &on_cuda), MINKQ_SUCCESS)
+              << what << ": " << minkq_last_error_message();
+          EXPECT_EQ(on_cuda.count, on_cpu.count) << what;
+          EXPECT_EQ(on_cuda.stats.primitive_tests, on_cpu.stats.primitive_tests) << what;
+          EXPECT_EQ(on_cuda.stats.candidates, on_cpu.stats.candidates) << what;
+          const Outcome emitted = scene_query(b.get(), m.kind, m.mode, r, leaf);  // sized by a capacity-0 call
+          EXPECT_EQ(emitted.count, on_cpu.count) << what << " (emitted)";
+          EXPECT_EQ(emitted.pairs.size(), 2 * on_cpu.count) << what << " (emitted)";
+        }
+    }
   }
 }
 

@@ -110,12 +110,12 @@ template <class Shape, class Queries>
 Run run_all(const BvhView& bvh, const Queries& queries, int32_t n, bool count_only) {
   Run run;
   auto emit = [&run](int32_t a, int32_t b) { run.pairs.push_back({a, b}); };
-  cpu::CountPairs count{run.counted};  // the CPU backend's count-only emitter
+  PairCounter count;  // the count-only emitter of both backends
   for (int32_t i = 0; i < n; ++i) {
     if (count_only) run_query<Shape>(bvh, queries, i, count, run.work);
     else run_query<Shape>(bvh, queries, i, emit, run.work);
   }
-  if (!count_only) run.counted = run.pairs.size();
+  run.counted = count_only ? count.counted : run.pairs.size();
   return run;
 }
 // The same count and work; the same pairs in the same order where b emitted them (not only

@@ -36,6 +36,16 @@ struct EmitContract {
   static constexpr bool value = is_emitter<E>;
 };
 
+// The count-only emitter both backends use: the number of pairs a query (or a run of queries)
+// finds, each leaf group's accepted lanes added as one popcount where the source has no tests
+// past the incidence filter. A backend adds `counted` to its total once per thread.
+struct PairCounter {
+  static constexpr bool kCountsOnly = true;
+  uint64_t counted = 0;
+  MINKQ_HD void operator()(int32_t, int32_t) { ++counted; }
+  MINKQ_HD void add(unsigned n) { counted += n; }
+};
+
 // The leaf filter of a query target (element q; a self-query's at leaf position `after`), a leaf
 // group's hits at a time (positions base + k for the bits k of hits, each a primitive whose box
 // the shape overlaps): each is counted, the incidence filter drops lanes (dropped_lanes, four at

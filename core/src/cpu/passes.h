@@ -27,20 +27,13 @@ struct BlockOut {
   uint64_t counted = 0;
 };
 
-// A count-only query's emitter: the leaf filter adds a group's candidates at once (leaf_filter.h).
-struct CountPairs {
-  static constexpr bool kCountsOnly = true;
-  uint64_t& counted;
-  void operator()(int32_t, int32_t) { ++counted; }
-  void add(unsigned n) { counted += n; }
-};
-
 template <class Work, class Pass>
 void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
   const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
   if (pass.out.capacity == 0) {
-    CountPairs count{part.counted};
+    PairCounter count;  // leaf_filter.h: the count-only emitter the CUDA backend uses too
     for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, count, work);
+    part.counted += count.counted;
     return;
   }
   auto emit = [&part](int32_t first, int32_t second) {

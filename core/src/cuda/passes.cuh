@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cooperative_groups.h>
+#include <cooperative_groups/reduce.h>
 #include <cooperative_groups/scan.h>
 #include <cub/device/device_radix_sort.cuh>
 
@@ -13,6 +14,7 @@
 #include <type_traits>
 
 #include "cuda/runtime.cuh"
+#include "cuda/sort_size.h"
 #include "backend.h"
 #include "minkq/leaf_filter.h"
 
@@ -40,20 +42,20 @@ __device__ inline unsigned long long reserve_slots(unsigned long long* count, un
 }
 
 // emit() of one query's thread: buffers up to kFlush pairs and reserves their slots in one
-// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair. With capacity 0
-// (a count-only query, or a count to size the caller's buffer) it only counts them.
+// warp-aggregated atomic (reserve_slots), far fewer atomics than one per pair. Outputs with no
+// room (capacity 0) count through PairCounter instead (run_pass_thread).
 class PairBuffer {
  public:
   static constexpr int kFlush = 16;
   __device__ explicit PairBuffer(const PairSlots& slots) : slots_(slots) {}
   __device__ void operator()(int32_t first, int32_t second) {
-    if (slots_.capacity != 0) pairs_[n_] = make_int2(first, second);
+    pairs_[n_] = make_int2(first, second);
     if (++n_ == kFlush) flush();
   }
   __device__ void flush() {
     if (n_ == 0) return;
     const unsigned long long first = reserve_slots(slots_.count, static_cast<unsigned long long>(n_));
-    for (int k = 0; k < n_ && slots_.capacity != 0; ++k) {
+    for (int k = 0; k < n_; ++k) {
       const unsigned long long slot = first + k;
       if (slot >= slots_.capacity) break;
       slots_.pairs[2 * slot] = pairs_[k].x;
@@ -95,17 +97,33 @@ struct DevicePass {
 
 __host__ __device__ inline int64_t round_up_to_block(int64_t n) { return (n + kQueryThreads - 1) / kQueryThreads * kQueryThreads; }
 
-// Thread i's share of a pass, if i lies in the pass's blocks. With WorkCounts, every thread of
-// those blocks stays to the end so that whole warps take part in the reduction of the counts.
+// Adds each calling thread's count to *count: one atomicAdd per group of lanes calling together.
+__device__ inline void add_count(unsigned long long* count, unsigned long long n) {
+  const cg::coalesced_group group = cg::coalesced_threads();
+  const unsigned long long sum = cg::reduce(group, n, cg::plus<unsigned long long>());
+  if (group.thread_rank() == 0 && sum != 0) atomicAdd(count, sum);
+}
+
+// Thread i's share of a pass, if i lies in the pass's blocks. An output with no room for pairs
+// (capacity 0: a count-only query, or a count to size the caller's buffer) is counted by the
+// leaf filter's count-only path (PairCounter, as on the CPU), one atomic per group of lanes at
+// the end. With WorkCounts, every thread of those blocks stays to the end so that whole warps
+// take part in the reduction of the counts.
 template <class Work, class Pass>
 __device__ void run_pass_thread(const DevicePass<Pass>& d, int64_t i) {
   const int64_t q = i - d.first_thread;
   if (q < 0 || q >= round_up_to_block(d.pass.num_queries)) return;  // uniform over the block
   Work work;
   if (q < d.pass.num_queries) {
-    PairBuffer emit(d.slots);
-    run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), emit, work);
-    emit.flush();
+    if (d.slots.capacity == 0) {  // uniform over the pass
+      PairCounter counter;
+      run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), counter, work);
+      add_count(d.slots.count, counter.counted);
+    } else {
+      PairBuffer emit(d.slots);
+      run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), emit, work);
+      emit.flush();
+    }
   }
   if constexpr (std::is_same<Work, WorkCounts>::value) add_work(work, d.work);
 }
@@ -162,7 +180,8 @@ inline void sort_pairs(int32_t* pairs, int64_t n, int32_t num_queries, QueryWork
 }
 
 // Asynchronous queries sort their pairs without knowing their count on the host: all
-// `capacity` keys, those past the count (min(*count, capacity)) set to `pad`, above every pair's.
+// `capacity` keys (async_sort_keys), those past the count (min(*count, capacity)) set to `pad`,
+// above every pair's.
 static __global__ void pack_padded_kernel(const int32_t* pairs, int64_t capacity, const unsigned long long* count,
                                           uint64_t pad, uint64_t* keys) {
   const int64_t i = global_index();
@@ -191,6 +210,7 @@ inline void reserve_canonical(QueryWorkspace& ws, size_t capacity) {
 // sort_pairs for an asynchronous query: the first min(*count, capacity) pairs, sorted in place.
 inline void sort_pairs_async(int32_t* pairs, int64_t capacity, const unsigned long long* count, int32_t num_queries,
                              QueryWorkspace& ws) {
+  capacity = int64_t(async_sort_keys(uint64_t(capacity)));
   if (capacity < 2) return;
   const int end_bit = pair_key_bits(num_queries);
   const uint64_t pad = end_bit >= 64 ? ~uint64_t(0) : (uint64_t(1) << end_bit) - 1;  // above (num_queries - 1) << 32 | p
@@ -309,7 +329,8 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
     ws.last_count[int(kinds[k])] = std::max(ws.last_count[int(kinds[k])], totals[k]);
     if (totals[k] > outs[k].capacity) continue;  // the caller learns the exact count; nothing copied
     if (totals[k] > capacity[k]) fail(Status::kInternal, "pair count changed between two runs of the same query");
-    if (outs[k].canonical) sort_pairs(pairs[k], int64_t(totals[k]), num_queries[k], ws);
+    if (outs[k].canonical)
+      sort_pairs(pairs[k], int64_t(blocking_sort_keys(totals[k], outs[k].capacity)), num_queries[k], ws);
     if (outs[k].memory == Memory::kHost)
       copy(outs[k].pairs, pairs[k], totals[k] * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
   }
