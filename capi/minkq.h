@@ -380,8 +380,9 @@ typedef enum minkq_reserve_flags {
  * (n - 1 nodes, 68 bytes each with the refit's flags) and fixes them there, so that no later
  * rebuild, blocking or stream-ordered, moves them or runs out of room (a stream-ordered rebuild
  * cannot grow them: it neither allocates nor reads the node count back). Unreserved, a CUDA
- * scene holds room for half again the nodes its last build kept, which a blocking build grows
- * when it keeps more (moving them). A blocking call (it may allocate and synchronise). Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
+ * tree holds room for half again the nodes a build kept, which a later blocking build grows
+ * (moving them) when it keeps more. A blocking call (it may allocate and synchronise).
+ * Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
  * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (where
  * the device cannot hold the scratch; on the CPU only MINKQ_RESERVE_REBUILD keeps any: the
  * builds' scratch, about 64 bytes per element of each tree, and the triangles and edges by id

@@ -58,7 +58,8 @@ inline reference::Mesh caterpillar_mesh(bool caterpillar, int chain = 62, int cl
   for (int k = 0; k < n; ++k) {
     const float corner = float((1 << 21) - 1), far = float(1 << 21);
     Vec3 p{4.0f * float(k), 0.0f, 0.0f};
-    if (caterpillar) p = k < chain ? code_prefix_point(k) : k < n - 1 ? Vec3{corner, corner, corner} : Vec3{far, far, far};
+    if (caterpillar && k < chain) p = code_prefix_point(k);
+    else if (caterpillar) p = k < n - 1 ? Vec3{corner, corner, corner} : Vec3{far, far, far};
     for (const Vec3& v : {p, p + Vec3{1.0f, 0.0f, 0.0f}, p + Vec3{0.0f, 1.0f, 0.0f}}) {
       mesh.tris.push_back(int32_t(mesh.xyz.size() / 3));
       mesh.xyz.insert(mesh.xyz.end(), {v.x, v.y, v.z});
