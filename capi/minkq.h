@@ -346,9 +346,11 @@ MINKQ_API minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_q
  *     enqueue them on one stream, or order their streams; a blocking call runs on the calling
  *     thread's per-thread default stream and does not wait for work enqueued elsewhere;
  *   - a captured graph keeps what the calls were given and the scene's device memory: the
- *     radius, the capacities and every buffer's address. Blocking calls between replays
- *     (refits, rebuilds, queries of any size) neither move nor outgrow the memory a graph
- *     uses; but a larger pair buffer, another radius or other flags mean capturing again.
+ *     radius, the capacities and every buffer's address. Once the scene is reserved
+ *     (minkq_scene_reserve, any flags, none too) blocking calls between replays (refits,
+ *     rebuilds, queries of any size) neither move nor outgrow the memory a graph uses; before
+ *     that a blocking rebuild may move the trees' nodes (see minkq_scene_reserve), so reserve
+ *     before capturing. A larger pair buffer, another radius or other flags mean capturing again.
  * On the CPU the same calls run to completion before returning, on host memory
  * (vertices.memory MINKQ_MEMORY_HOST), and the stream is ignored. Both backends apply the same
  * rules, so a program tested on the CPU keeps them on CUDA.
@@ -377,9 +379,15 @@ typedef enum minkq_reserve_flags {
  * refits and rebuilds (about the trees' size again), MINKQ_RESERVE_SWEPT with either for the swept
  * calls (two more copies of the vertices), and canonical_capacity pairs for the sort
  * of canonical asynchronous queries (queries with a larger capacity return INVALID_ARGUMENT).
- * Queries without MINKQ_QUERY_CANONICAL need no reservation. Reservations only grow and last
- * as long as the scene; call this before capturing. A blocking call (it may allocate and
- * synchronise). Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
+ * Queries without MINKQ_QUERY_CANONICAL need no reservation to run. Reservations only grow and
+ * last as long as the scene; call this before capturing. On CUDA every call, whatever its flags
+ * (0 too), also sizes each tree's nodes for the most any build over its n elements keeps
+ * (n - 1 nodes, 68 bytes each with the refit's flags) and fixes them there, so that no later
+ * rebuild, blocking or stream-ordered, moves them or runs out of room (a stream-ordered rebuild
+ * cannot grow them: it neither allocates nor reads the node count back). Unreserved, a CUDA
+ * tree holds room for half again the nodes a build kept, which a later blocking build grows
+ * (moving them) when it keeps more. A blocking call (it may allocate and synchronise).
+ * Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
  * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (where
  * the device cannot hold the scratch; on the CPU only MINKQ_RESERVE_REBUILD keeps any: the
  * builds' scratch, about 64 bytes per element of each tree, and the triangles and edges by id
@@ -393,7 +401,8 @@ MINKQ_API minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, s
  * reservation or for host vertices on a CUDA device (device ones on the CPU); DEVICE. */
 MINKQ_API minkq_status minkq_scene_refit_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
 /* minkq_scene_rebuild, enqueued on `stream`, as minkq_scene_refit_async; its trees are those
- * minkq_scene_rebuild builds. Needs MINKQ_RESERVE_REBUILD. */
+ * minkq_scene_rebuild builds, whatever number of nodes they keep (the reservation sized the
+ * nodes for every build, so none is refused for room). Needs MINKQ_RESERVE_REBUILD. */
 MINKQ_API minkq_status minkq_scene_rebuild_async(minkq_scene* scene, minkq_buffer vertices, minkq_stream stream);
 
 /* minkq_scene_refit_swept and minkq_scene_rebuild_swept, enqueued on `stream`, as

@@ -89,9 +89,9 @@ TEST(Bvh, invariants_hold_after_build_and_refit) {
 }
 
 // max_node_count(n) bounds the nodes of every build over n primitives, whatever their
-// positions: the CUDA tree sizes its nodes, arrival flags and refit by it once, at its first
-// build, so that a refit captured into a CUDA graph still covers every node, at the same
-// address, after a later rebuild keeps more of them (issue 30). The scenario is real: the same
+// positions: a reserved CUDA tree sizes its nodes, arrival flags and refit by it, so that a
+// refit captured into a CUDA graph still covers every node, at the same address, after a
+// later rebuild keeps more of them (issue 30). The scenario is real: the same
 // triangles keep a different number of nodes flat and twisted, and the bound is reached.
 TEST(Bvh, max_node_count_bounds_every_build_over_the_same_primitives) {
   using test::node_count;
@@ -115,6 +115,48 @@ TEST(Bvh, max_node_count_bounds_every_build_over_the_same_primitives) {
   }
   EXPECT_EQ(max_node_count(0), 0);
   EXPECT_EQ(max_node_count(1), 1);
+}
+
+// An unreserved CUDA tree holds node_room(kept, n) nodes and grows to grown_node_room when a
+// blocking build keeps more (issue 56): kept plus half again, never past max_node_count, never
+// shrinking, never fewer than kept.
+TEST(Bvh, node_room_is_kept_plus_headroom_within_the_bound) {
+  EXPECT_EQ(node_room(0, 0), 0);
+  EXPECT_EQ(node_room(1, 1), 1);
+  EXPECT_EQ(node_room(1, 2), 1);
+  EXPECT_EQ(node_room(20, 1000), 30);
+  EXPECT_EQ(node_room(21, 1000), 31);
+  EXPECT_EQ(node_room(900, 1000), 999);
+  EXPECT_EQ(node_room(1 << 30, (1 << 30) + 1), 1 << 30);  // no 32-bit overflow near the limit
+  EXPECT_EQ(node_room(int32_t(1) << 28, INT32_MAX - 1), 3 << 27);
+  for (int32_t n : {2, 3, 33, 100})
+    for (int32_t kept = 1; kept <= max_node_count(n); ++kept) {
+      EXPECT_GE(node_room(kept, n), kept) << n << " " << kept;
+      EXPECT_LE(node_room(kept, n), max_node_count(n)) << n << " " << kept;
+    }
+  EXPECT_EQ(grown_node_room(30, 25, 1000), 30);  // fits: unchanged, also when fewer are kept
+  EXPECT_EQ(grown_node_room(30, 30, 1000), 30);
+  EXPECT_EQ(grown_node_room(30, 31, 1000), 46);
+  EXPECT_EQ(grown_node_room(30, 800, 1000), 999);
+}
+
+// The caterpillar of tree_counts.h keeps nearly n - leaf size nodes where the same triangles on
+// a line keep a few: a build at the caterpillar after one on the line must grow the node room
+// the first build left (test_cuda.cpp checks the CUDA tree does, and gives the CPU's pairs).
+TEST(Bvh, caterpillar_keeps_nearly_n_minus_leaf_size_nodes_and_the_room_grows_for_it) {
+  const reference::Mesh line = test::caterpillar_mesh(false), caterpillar = test::caterpillar_mesh(true);
+  ASSERT_EQ(line.tris, caterpillar.tris);
+  const int32_t n = int32_t(line.triangle_count());
+  const int32_t few = test::tree_counts(line).triangles, many = test::tree_counts(caterpillar).triangles;
+  EXPECT_LE(few, 8);
+  EXPECT_GE(many, n - kLeafSize - 10);  // 64 of n = 103: n - leaf size is 71
+  EXPECT_LE(many, max_node_count(n));
+  const int32_t room = node_room(few, n);
+  ASSERT_GT(many, room) << "the caterpillar must outgrow the line's room";
+  const int32_t grown = grown_node_room(room, many, n);
+  EXPECT_GE(grown, many);
+  EXPECT_LE(grown, max_node_count(n));
+  EXPECT_EQ(grown_node_room(grown, few, n), grown);  // back on the line: kept, not shrunk
 }
 
 // The area cost is the sum of node_area over the nodes, over the root's half area: 1 as a

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cuda_checks.h"
+#include "tree_counts.h"
 
 namespace minkq {
 namespace {
@@ -92,6 +93,48 @@ TEST_F(Cuda, rebuild_and_tree_growth_match_cpu) {
   EXPECT_EQ(growth_of(a.get()), 1.0);
   EXPECT_EQ(growth_of(b.get()), 1.0);
   compare_all_modes(a.get(), b.get(), r, "wrung sheet after rebuild");
+}
+
+// Issue 56: an unreserved CUDA tree holds node_room (build.h) of the nodes its build keeps, and
+// a blocking rebuild that keeps more grows it. tree_counts.h's caterpillar keeps nearly
+// n - leaf size nodes where the same triangles on a line keep a few: rebuilds line ->
+// caterpillar -> line -> caterpillar give the CPU's pairs in every mode, and a tree growth of
+// exactly 1 (the area reduction covers every node the grown room holds), as do user-box BVHs
+// built and rebuilt over the same triangles' boxes.
+TEST_F(Cuda, rebuilds_that_keep_more_nodes_grow_the_room_and_match_cpu) {
+  test::Device cpu("cpu"), cuda("cuda");
+  const Mesh line = test::caterpillar_mesh(false), caterpillar = test::caterpillar_mesh(true);
+  const int32_t n = int32_t(line.triangle_count());
+  ASSERT_GT(test::tree_counts(caterpillar).triangles, node_room(test::tree_counts(line).triangles, n));
+  cxx::Scene a = make_scene(cpu.get(), line, kBoth), b = make_scene(cuda.get(), line, kBoth);
+  ASSERT_TRUE(a && b);
+  const float r = 0.5f;
+  auto growth_of = [](minkq_scene* scene) {
+    double g = -1.0;
+    EXPECT_EQ(minkq_scene_tree_growth(scene, &g), MINKQ_SUCCESS) << minkq_last_error_message();
+    return g;
+  };
+  int step = 0;
+  for (const Mesh* next : {&caterpillar, &line, &caterpillar}) {
+    const std::string what = "rebuild " + std::to_string(step++);
+    const minkq_buffer moved = host_buffer(next->xyz.data(), next->vertex_count());
+    ASSERT_EQ(minkq_scene_rebuild(a.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+    ASSERT_EQ(minkq_scene_rebuild(b.get(), moved), MINKQ_SUCCESS) << minkq_last_error_message();
+    EXPECT_EQ(growth_of(b.get()), 1.0) << what;
+    compare_all_modes(a.get(), b.get(), r, what);
+  }
+  const std::vector<Box> spread = test::primitive_boxes(line, line.tris, 3);
+  const std::vector<Box> chained = test::primitive_boxes(caterpillar, caterpillar.tris, 3);
+  cxx::Bvh cpu_bvh = make_bvh(cpu.get(), spread), cuda_bvh = make_bvh(cuda.get(), spread);
+  ASSERT_TRUE(cpu_bvh && cuda_bvh);
+  std::vector<Vec3> points;
+  for (const Box& box : chained) points.push_back(box.lo);
+  const minkq_buffer boxes = host_buffer(chained.data(), chained.size());
+  ASSERT_EQ(minkq_bvh_rebuild(cpu_bvh.get(), boxes), MINKQ_SUCCESS) << minkq_last_error_message();
+  ASSERT_EQ(minkq_bvh_rebuild(cuda_bvh.get(), boxes), MINKQ_SUCCESS) << minkq_last_error_message();
+  for (minkq_mode mode : {MINKQ_MODE_BOX, MINKQ_MODE_SPHERE})
+    expect_same(bvh_query(cpu_bvh.get(), MINKQ_SHAPE_SPHERE, mode, r, points, {}),
+                bvh_query(cuda_bvh.get(), MINKQ_SHAPE_SPHERE, mode, r, points, {}), "bvh after rebuild");
 }
 
 // A scene with an edge tree keeps its edges only in the tree's leaf order; minkq_scene_edges

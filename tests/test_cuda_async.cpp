@@ -177,7 +177,8 @@ TEST_F(CudaAsync, captured_refit_and_queries_replay_over_moving_vertices) {
 // rebuild goes to positions whose trees keep more, and blocking canonical queries find more
 // pairs than the reserved canonical capacity (they grow the blocking queries' scratch). Every
 // replay must still give the CPU's pairs at its positions: with MINKQ_RESERVE_REBUILD, with
-// MINKQ_RESERVE_REFIT only, and with no reservation (a captured query alone, not canonical).
+// MINKQ_RESERVE_REFIT only, and with a reservation of no flags (a captured query alone, not
+// canonical): any reservation fixes the trees' node storage (issue 56).
 TEST_F(CudaAsync, blocking_rebuilds_and_queries_between_replays_keep_a_captured_graph_valid) {
   if (const char* blocking = std::getenv("CUDA_LAUNCH_BLOCKING"); blocking && std::string(blocking) == "1")
     GTEST_SKIP() << "CUDA_LAUNCH_BLOCKING=1: stream capture is not tested with blocking launches";
@@ -195,8 +196,8 @@ TEST_F(CudaAsync, blocking_rebuilds_and_queries_between_replays_keep_a_captured_
     SCOPED_TRACE("reserve flags " + std::to_string(flags));
     test::AsyncScene s(memory, cuda->get(), cpu->get(), few);
     const bool refits = flags != 0, canonical = flags != 0;
-    if (flags != 0)
-      ASSERT_EQ(minkq_scene_reserve(s.scene.get(), flags, capacity), MINKQ_SUCCESS) << minkq_last_error_message();
+    ASSERT_EQ(minkq_scene_reserve(s.scene.get(), flags, canonical ? capacity : 0), MINKQ_SUCCESS)
+        << minkq_last_error_message();
     float* positions = memory.copy_of(few.xyz);
     int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
     int32_t* ee_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
@@ -235,6 +236,64 @@ TEST_F(CudaAsync, blocking_rebuilds_and_queries_between_replays_keep_a_captured_
       const test::Pairs ee_got = test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1]);
       EXPECT_EQ(canonical ? vt_got : test::sorted(vt_got), vt_expected);  // canonical: sorted on the device
       EXPECT_EQ(canonical ? ee_got : test::sorted(ee_got), ee_expected);
+    }
+    EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
+  }
+}
+
+// Issue 56: an unreserved tree holds only node_room of the nodes its build keeps, so a
+// reservation (any flags) sizes the trees' nodes for the most any build keeps: a rebuild
+// enqueued on a stream never allocates, and a captured graph keeps its node addresses. A graph
+// captured at tree_counts.h's line of triangles (a few nodes) is replayed over the caterpillar
+// (nearly n - leaf size nodes) and back, rebuilding inside the graph (MINKQ_RESERVE_REBUILD) or
+// by blocking rebuilds between replays (MINKQ_RESERVE_REFIT, no flags): every replay gives the
+// CPU's pairs.
+TEST_F(CudaAsync, reserved_trees_hold_every_build_so_rebuilds_to_more_nodes_keep_a_graph_valid) {
+  if (const char* blocking = std::getenv("CUDA_LAUNCH_BLOCKING"); blocking && std::string(blocking) == "1")
+    GTEST_SKIP() << "CUDA_LAUNCH_BLOCKING=1: stream capture is not tested with blocking launches";
+  const Mesh line = test::caterpillar_mesh(false), caterpillar = test::caterpillar_mesh(true);
+  ASSERT_GT(test::tree_counts(caterpillar).triangles,
+            node_room(test::tree_counts(line).triangles, int32_t(line.triangle_count())));
+  const float r = 0.5f;
+  const size_t capacity = 1 << 15;
+  DeviceAsyncMemory& memory = this->memory();
+  for (uint32_t flags : {uint32_t(MINKQ_RESERVE_REBUILD), uint32_t(MINKQ_RESERVE_REFIT), 0u}) {
+    SCOPED_TRACE("reserve flags " + std::to_string(flags));
+    test::AsyncScene s(memory, cuda->get(), cpu->get(), line);
+    ASSERT_EQ(minkq_scene_reserve(s.scene.get(), flags, 0), MINKQ_SUCCESS) << minkq_last_error_message();
+    const bool rebuilds = flags == MINKQ_RESERVE_REBUILD;
+    float* positions = memory.copy_of(line.xyz);
+    int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    int32_t* ee_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
+    uint64_t* counts = static_cast<uint64_t*>(memory.allocate(2 * sizeof(uint64_t)));
+    const minkq_buffer vertices{positions, 0, line.vertex_count(), MINKQ_MEMORY_DEVICE};
+    const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT, r};
+    const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT, r};
+    cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
+    const CapturedGraph graph(stream, [&](auto check) {
+      if (rebuilds) check(minkq_scene_rebuild_async(s.scene.get(), vertices, stream));
+      else if (flags != 0) check(minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
+                                          counts + 1, stream));
+    });
+    ASSERT_TRUE(graph.ok());
+    int step = 0;
+    for (const Mesh* next : {&caterpillar, &line, &caterpillar}) {
+      SCOPED_TRACE("replay " + std::to_string(step++));
+      const minkq_buffer host = host_buffer(next->xyz.data(), next->vertex_count());
+      if (!rebuilds) ASSERT_EQ(minkq_scene_rebuild(s.scene.get(), host), MINKQ_SUCCESS) << minkq_last_error_message();
+      memory.write(positions, next->xyz.data(), next->xyz.size() * sizeof(float));
+      ASSERT_EQ(graph.launch(), cudaSuccess);
+      const std::vector<uint64_t> count = memory.read_back(counts, 2);
+      ASSERT_EQ(minkq_scene_rebuild(s.blocking.get(), host), MINKQ_SUCCESS) << minkq_last_error_message();
+      const test::Pairs vt_expected = s.blocking.query(MINKQ_QUERY_VT, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      const test::Pairs ee_expected = s.blocking.query(MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, MINKQ_QUERY_LEAF_EXACT);
+      ASSERT_EQ(count[0], vt_expected.size());
+      ASSERT_EQ(count[1], ee_expected.size());
+      ASSERT_LE(count[0], capacity);
+      ASSERT_LE(count[1], capacity);
+      EXPECT_EQ(test::sorted(test::pairs_of(memory.read_back(vt_pairs, 2 * count[0]), count[0])), vt_expected);
+      EXPECT_EQ(test::sorted(test::pairs_of(memory.read_back(ee_pairs, 2 * count[1]), count[1])), ee_expected);
     }
     EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
   }

@@ -40,6 +40,8 @@
 //   reserve_staging(Array<Vec3>&, n), reserve_pending(), reserve_canonical(pairs),
 //   reserve_build(Tree&, boxes, n), reserve_sort(boxes, n)
 //                                  the scratch the asynchronous calls use, kept from then on.
+//   reserve_nodes(Tree&, n)        the tree's node storage for every build over n elements,
+//                                  never moved after (CUDA: captured graphs keep its address).
 //   reserve_scratch(Array<T>&, n)  room for n elements kept in the array, so that filling it
 //                                  with up to n allocates nothing (a rebuild's elements by id).
 //   commit_finite(values, staging, dst, rho, call)
@@ -131,6 +133,7 @@ template <class X>
 using Reserve = decltype(std::declval<X&>().reserve_staging(std::declval<Array<X, Vec3>&>(), int32_t()),
                          std::declval<X&>().reserve_pending(), std::declval<X&>().reserve_canonical(size_t()),
                          std::declval<X&>().reserve_build(std::declval<Tree<X>&>(), std::declval<GivenBoxes>(), int32_t()),
+                         std::declval<X&>().reserve_nodes(std::declval<Tree<X>&>(), int32_t()),
                          std::declval<X&>().reserve_sort(std::declval<PointBoxes>(), int32_t()),
                          std::declval<X&>().reserve_scratch(std::declval<Array<X, Edge>&>(), int32_t()));
 template <class X>
@@ -176,8 +179,8 @@ struct ExecutorContract {
                 "run_passes(works, passes...)");
   static_assert(has<executor_contract::ScopeOn>, "executor: needs scope_on(Stream) and wait(Stream)");
   static_assert(has<executor_contract::Reserve>,
-                "executor: needs reserve_staging, reserve_pending, reserve_canonical, reserve_build, reserve_sort "
-                "and reserve_scratch");
+                "executor: needs reserve_staging, reserve_pending, reserve_canonical, reserve_build, "
+                "reserve_nodes, reserve_sort and reserve_scratch");
   static_assert(has<executor_contract::CommitFinite> && has<executor_contract::CommitFiniteSwept>,
                 "executor: needs commit_finite(values, staging, dst, rho, call) and "
                 "commit_finite_swept(x0, x1, staging0, staging1, dst0, dst1, rho, call)");

@@ -161,6 +161,11 @@ class MeshStoreOn final : public MeshStore {
 
   void reserve(const Reservation& wanted) override {
     [[maybe_unused]] const auto scope = x_.scope();
+    // Any reservation fixes the trees' node storage (whatever the flags): a graph captured from
+    // the asynchronous calls after it keeps their addresses across rebuilds that keep more nodes.
+    if (has_triangle_tree_) x_.reserve_nodes(triangle_tree_, num_triangles_);
+    if (has_edge_tree_) x_.reserve_nodes(edge_tree_, num_edges_);
+    if (has_vertex_tree_) x_.reserve_nodes(vertex_tree_, num_vertices_);
     if ((wanted.refit || wanted.rebuild) && !reserved_.refit) {
       x_.reserve_staging(staging_, num_vertices_);
       x_.reserve_pending();

@@ -83,10 +83,27 @@ MINKQ_HD bool keeps_node(int32_t i, const KarrasNode& k, int32_t leaf_size) {
 
 // The most node records a build over n primitives can keep, at any leaf size: n - 1 for
 // n >= 2 (leaf size 1 keeps every Karras node, and larger ones may keep nearly as many: a
-// chain of nodes each one primitive larger than the one below), 1 for one primitive, none for
-// none. The CUDA tree sizes its nodes for this at its first build, so that no later build over
-// the same primitives moves them or outgrows a refit captured into a CUDA graph.
+// chain of nodes each one primitive larger than the one below keeps n - leaf_size), 1 for one
+// primitive, none for none. The CUDA tree allocates this many once its scene is reserved for
+// stream-ordered calls (node_room otherwise), so that no later build moves the nodes a CUDA
+// graph was captured with or outgrows a captured refit.
 MINKQ_HD constexpr int32_t max_node_count(int32_t n) { return n <= 1 ? n : n - 1; }
+
+// The node records the CUDA tree allocates for a build over n primitives that keeps `kept`
+// nodes: kept plus half again (kNodeHeadroomHalves / 2), so that rebuilds whose counts drift
+// up a little do not allocate again, at most max_node_count(n). A build that keeps about one
+// node in twenty primitives then holds about three in forty, not n - 1.
+constexpr int32_t kNodeHeadroomHalves = 3;
+MINKQ_HD constexpr int32_t node_room(int32_t kept, int32_t n) {
+  const int64_t room = int64_t(kept) * kNodeHeadroomHalves / 2;
+  return room < max_node_count(n) ? int32_t(room) : max_node_count(n);
+}
+// The room after a build that keeps `kept` nodes where `room` are allocated: unchanged while
+// they fit (the room never shrinks: a blocking call grows it, none moves it back), else
+// node_room(kept, n).
+MINKQ_HD constexpr int32_t grown_node_room(int32_t room, int32_t kept, int32_t n) {
+  return kept <= room ? room : node_room(kept, n);
+}
 
 // Writes kept Karras node i as node new_index[i]: children that are kept nodes by their new
 // index, every other child (a small subtree or one leaf) as a leaf range; links each kept

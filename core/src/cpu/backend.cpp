@@ -137,6 +137,7 @@ class CpuExecutor {
   void reserve_scratch(HostVector<T>& scratch, int32_t n) {
     scratch.reserve(size_t(std::max(n, 0)));
   }
+  void reserve_nodes(CpuTree&, int32_t) {}  // host vectors: no captured graph reads them
   template <class Boxes>
   void reserve_build(CpuTree& tree, Boxes, int32_t n) {
     tree.reserve_build(n);

@@ -122,6 +122,7 @@ class CudaExecutor {
   void reserve_scratch(DeviceBuffer<T>& scratch, int32_t n) {
     scratch.ensure(size_t(n));
   }
+  void reserve_nodes(CudaTree& tree, int32_t n) { tree.reserve_nodes(n); }
   template <class Boxes>
   void reserve_build(CudaTree& tree, Boxes, int32_t n) {
     tree.reserve_build(n);

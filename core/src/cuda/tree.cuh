@@ -169,12 +169,16 @@ static __global__ void area_cost_kernel(const BvhNode* nodes, const int32_t* num
   *cost = value;
 }
 
-// CpuTree::build step by step. The node count stays on the device and is never read back: the
-// first build sizes the nodes and their arrival flags for the most any build over n primitives
-// keeps (max_node_count), so no later build moves them, and the refit and area kernels cover
-// the nodes that exist whatever their count. A refit or query recorded into a CUDA graph thus
-// stays valid across blocking rebuilds. A build's scratch is kept once reserve_build() has
-// sized it (the build then enqueues its work without allocating), else made and freed.
+// CpuTree::build step by step. Node records and arrival flags: until reserve_nodes(), a build
+// reads its node count back once the kept flags are scanned (the collapse has not run yet) and
+// grows them to grown_node_room (build.h) when they would not fit; a blocking call may move
+// them. reserve_nodes() sizes them for the most any build over n primitives keeps
+// (max_node_count) and no build moves them after, so a build enqueued by a stream-ordered call
+// never reads back or allocates, and a refit or query recorded into a CUDA graph stays valid
+// across rebuilds that keep more nodes. The refit and area kernels cover the nodes that exist
+// (counted on the device) over the room allocated. A build's scratch is kept once
+// reserve_build() has sized it (the build then enqueues its work without allocating), else
+// made and freed.
 class CudaTree {
  public:
   template <class Boxes>
@@ -185,7 +189,7 @@ class CudaTree {
     leaf_groups_.ensure(size_t(box_group_count(n)));
     counts_.ensure(1);
     costs_.ensure(3);
-    size_for(n);
+    size_once();
     zero(sorted_prims_, size_t(n));
     zero(counts_, 1);
     if (n == 0) {
@@ -193,6 +197,7 @@ class CudaTree {
       return;
     }
     if (n == 1) {
+      grow_nodes(1);
       launch("one_leaf_kernel launch", one_leaf_kernel, 1, 1, nodes_.data(), counts_.data());
       refit(boxes);
       store_cost(costs_.data() + kCostAtBuild);
@@ -210,6 +215,7 @@ class CudaTree {
       return scan_kept(storage, bytes, s.kept.data(), s.new_index.data(), n - 1);
     });
     launch("count_nodes_kernel launch", count_nodes_kernel, 1, 1, s.new_index.data(), s.kept.data(), n, counts_.data());
+    fit_nodes(n);
     launch("collapse_kernel launch", collapse_kernel, n - 1, kThreads, s.karras.data(), s.new_index.data(), n,
            config.leaf_size, nodes_.data());
     refit(GivenBoxes{s.sort.boxes.data()});  // the boxes evaluated once by the sort
@@ -220,7 +226,7 @@ class CudaTree {
   // work without allocating.
   void reserve_build(int32_t n) {
     const int32_t inner = std::max(n - 1, 1);
-    size_for(n);
+    reserve_nodes(n);
     reserve_sort(scratch_.sort, n);
     scratch_.karras.ensure(size_t(inner));
     scratch_.kept.ensure(size_t(inner));
@@ -229,6 +235,14 @@ class CudaTree {
     check(scan_kept(nullptr, scan_bytes, nullptr, nullptr, inner), "cub::DeviceScan::ExclusiveSum");
     scratch_.sort.temp.ensure(std::max(scan_bytes, scratch_.sort.temp.size()));
     reserved_ = true;
+  }
+
+  // Node records and arrival flags for every build over n primitives (max_node_count), kept
+  // from now on: no later build reads its count back or moves them.
+  void reserve_nodes(int32_t n) {
+    size_once();
+    grow_nodes(max_node_count(n));
+    nodes_reserved_ = true;
   }
 
   // Enqueued; covers the nodes counted on the device (nodes past the count are never read).
@@ -273,26 +287,36 @@ class CudaTree {
     return value;
   }
 
-  // Sizes, once for all builds over n primitives (the first build, or reserve_build if that
-  // comes first): node records and arrival flags for max_node_count(n), the area reduction's
-  // scratch, and the refit's grid (at most the threads the device holds at once).
-  void size_for(int32_t n) {
-    if (node_capacity_ == max_node_count(n) && sized_) return;
-    node_capacity_ = max_node_count(n);
-    nodes_.ensure(size_t(node_capacity_));
-    arrivals_.ensure(size_t(node_capacity_));
+  // Room for the nodes a build over n >= 2 primitives keeps, before its collapse writes them:
+  // unless reserved, the count the scan left in counts_[0], read back (a blocking build).
+  void fit_nodes(int32_t n) {
+    if (nodes_reserved_) return grow_nodes(max_node_count(n));  // no-op but for a larger n
+    int32_t kept = 0;
+    copy(&kept, counts_.data(), sizeof(kept), cudaMemcpyDeviceToHost);
+    grow_nodes(grown_node_room(node_capacity_, kept, n));
+  }
+  // Node records, arrival flags and the area reduction's scratch for `room` nodes (never fewer
+  // than already held).
+  void grow_nodes(int32_t room) {
+    if (room <= node_capacity_) return;
+    nodes_.ensure(size_t(room));
+    arrivals_.ensure(size_t(room));
     size_t area_bytes = 0;
-    check(sum_node_areas(nullptr, area_bytes, nullptr, nullptr, std::max(node_capacity_, 1), nullptr),
-          "cub::DeviceReduce::TransformReduce");
+    check(sum_node_areas(nullptr, area_bytes, nullptr, nullptr, room, nullptr), "cub::DeviceReduce::TransformReduce");
     area_temp_.ensure(std::max<size_t>(area_bytes, 1));
+    node_capacity_ = room;
+  }
+  // The refit's grid at most: the threads the device holds at once.
+  void size_once() {
+    if (sized_) return;
     max_threads_ = resident_threads();
     sized_ = true;
   }
 
   int32_t n_ = 0;
-  int32_t node_capacity_ = 0;  // max_node_count(n_): node records kept, those that exist counted in counts_[0]
+  int32_t node_capacity_ = 0;  // node records and arrival flags held, those that exist counted in counts_[0]
   int64_t max_threads_ = 1;    // the refit's grid at most: the threads the device holds at once
-  bool sized_ = false, reserved_ = false;
+  bool sized_ = false, reserved_ = false, nodes_reserved_ = false;
   DeviceBuffer<BvhNode> nodes_;
   DeviceBuffer<int32_t> arrivals_;
   DeviceBuffer<int32_t> counts_;  // [0]: the number of nodes
