@@ -346,11 +346,11 @@ MINKQ_API minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_q
  *     enqueue them on one stream, or order their streams; a blocking call runs on the calling
  *     thread's per-thread default stream and does not wait for work enqueued elsewhere;
  *   - a captured graph keeps what the calls were given and the scene's device memory: the
- *     radius, the capacities and every buffer's address. Once the scene is reserved
- *     (minkq_scene_reserve, any flags, none too) blocking calls between replays (refits,
- *     rebuilds, queries of any size) neither move nor outgrow the memory a graph uses; before
- *     that a blocking rebuild may move the trees' nodes (see minkq_scene_reserve), so reserve
- *     before capturing. A larger pair buffer, another radius or other flags mean capturing again.
+ *     radius, the capacities and every buffer's address. Blocking calls between replays
+ *     (refits, rebuilds, queries of any size) neither move nor outgrow the memory a graph uses:
+ *     a scene's first stream-ordered call, like minkq_scene_reserve (any flags, none too), fixes
+ *     its trees' nodes at their bound (see minkq_scene_reserve). A larger pair buffer, another
+ *     radius or other flags mean capturing again.
  * On the CPU the same calls run to completion before returning, on host memory
  * (vertices.memory MINKQ_MEMORY_HOST), and the stream is ignored. Both backends apply the same
  * rules, so a program tested on the CPU keeps them on CUDA.
@@ -386,7 +386,8 @@ typedef enum minkq_reserve_flags {
  * rebuild, blocking or stream-ordered, moves them or runs out of room (a stream-ordered rebuild
  * cannot grow them: it neither allocates nor reads the node count back). Unreserved, a CUDA
  * tree holds room for half again the nodes a build kept, which a later blocking build grows
- * (moving them) when it keeps more. A blocking call (it may allocate and synchronise).
+ * (moving them) when it keeps more; a scene's first stream-ordered call fixes them as this call
+ * does. A blocking call (it may allocate and synchronise).
  * Errors: INVALID_ARGUMENT (NULL scene, unknown flag bits), SIZE_OVERFLOW
  * (canonical_capacity over SIZE_MAX / 16: the sort keeps 16 bytes a pair), OUT_OF_MEMORY (where
  * the device cannot hold the scratch; on the CPU only MINKQ_RESERVE_REBUILD keeps any: the

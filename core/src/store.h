@@ -161,11 +161,7 @@ class MeshStoreOn final : public MeshStore {
 
   void reserve(const Reservation& wanted) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    // Any reservation fixes the trees' node storage (whatever the flags): a graph captured from
-    // the asynchronous calls after it keeps their addresses across rebuilds that keep more nodes.
-    if (has_triangle_tree_) x_.reserve_nodes(triangle_tree_, num_triangles_);
-    if (has_edge_tree_) x_.reserve_nodes(edge_tree_, num_edges_);
-    if (has_vertex_tree_) x_.reserve_nodes(vertex_tree_, num_vertices_);
+    fix_nodes();
     if ((wanted.refit || wanted.rebuild) && !reserved_.refit) {
       x_.reserve_staging(staging_, num_vertices_);
       x_.reserve_pending();
@@ -199,6 +195,7 @@ class MeshStoreOn final : public MeshStore {
 
   void refit_async(const Strided& vertices, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    fix_nodes();
     swept_ = false;
     x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRefit);
     refit_trees();
@@ -206,6 +203,7 @@ class MeshStoreOn final : public MeshStore {
 
   void rebuild_async(const Strided& vertices, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    fix_nodes();
     swept_ = false;
     x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRebuild);
     rebuild_trees();
@@ -213,6 +211,7 @@ class MeshStoreOn final : public MeshStore {
 
   void refit_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    fix_nodes();
     swept_ = true;
     x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRefitSwept);
     refit_trees();
@@ -220,6 +219,7 @@ class MeshStoreOn final : public MeshStore {
 
   void rebuild_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    fix_nodes();
     swept_ = true;
     x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRebuildSwept);
     rebuild_trees();
@@ -227,12 +227,14 @@ class MeshStoreOn final : public MeshStore {
 
   void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    fix_nodes();
     with_mesh_pass(request, out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
   }
 
   void query_vt_ee_async(const QueryRequest& vt, const PairOutput& vt_out, const QueryRequest& ee,
                          const PairOutput& ee_out, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    fix_nodes();
     with_vt_pass(vt, vt_out, [&](const auto& vt_pass) {
       with_ee_pass(ee, ee_out, [&](const auto& ee_pass) { run_counted(x_, {nullptr, nullptr}, vt_pass, ee_pass); });
     });
@@ -359,6 +361,20 @@ class MeshStoreOn final : public MeshStore {
   bool float64_;  // vertices come as float64 (every call: the scene's scalar type)
   bool swept_ = false;  // the last positions were swept ones (vertices_ to vertices1_)
   Reservation reserved_;
+  bool nodes_fixed_ = false;  // fix_nodes() has run
+
+  // The trees' node storage fixed at its bound (max_node_count), once: by any reservation and by
+  // the first stream-ordered call. A build such a call enqueues then never reads its node count
+  // back (a host copy, refused in an asynchronous call), and a graph captured from such calls keeps
+  // the nodes' addresses across later rebuilds that keep more nodes. Blocking-only scenes keep
+  // the smaller room that their builds size (cuda/tree.cuh).
+  void fix_nodes() {
+    if (nodes_fixed_) return;
+    if (has_triangle_tree_) x_.reserve_nodes(triangle_tree_, num_triangles_);
+    if (has_edge_tree_) x_.reserve_nodes(edge_tree_, num_edges_);
+    if (has_vertex_tree_) x_.reserve_nodes(vertex_tree_, num_vertices_);
+    nodes_fixed_ = true;
+  }
   typename X::Tree triangle_tree_, edge_tree_, vertex_tree_;
 };
 
