@@ -349,8 +349,8 @@ MINKQ_API minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_q
  *     radius, the capacities and every buffer's address. Blocking calls between replays
  *     (refits, rebuilds, queries of any size) neither move nor outgrow the memory a graph uses:
  *     a scene's first stream-ordered call, like minkq_scene_reserve (any flags, none too), fixes
- *     its trees' nodes at their bound (see minkq_scene_reserve). A larger pair buffer, another
- *     radius or other flags mean capturing again.
+ *     its trees' nodes at their bound, allocating (see minkq_scene_reserve): make one of them
+ *     before capturing. A larger pair buffer, another radius or other flags mean capturing again.
  * On the CPU the same calls run to completion before returning, on host memory
  * (vertices.memory MINKQ_MEMORY_HOST), and the stream is ignored. Both backends apply the same
  * rules, so a program tested on the CPU keeps them on CUDA.

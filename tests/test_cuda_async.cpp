@@ -257,10 +257,12 @@ TEST_F(CudaAsync, reserved_trees_hold_every_build_so_rebuilds_to_more_nodes_keep
   const float r = 0.5f;
   const size_t capacity = 1 << 15;
   DeviceAsyncMemory& memory = this->memory();
-  for (uint32_t flags : {uint32_t(MINKQ_RESERVE_REBUILD), uint32_t(MINKQ_RESERVE_REFIT), 0u}) {
+  // flags -1: no reservation; a stream-ordered query before capturing fixes the nodes instead.
+  for (int64_t flags : {int64_t(MINKQ_RESERVE_REBUILD), int64_t(MINKQ_RESERVE_REFIT), int64_t(0), int64_t(-1)}) {
     SCOPED_TRACE("reserve flags " + std::to_string(flags));
     test::AsyncScene s(memory, cuda->get(), cpu->get(), line);
-    ASSERT_EQ(minkq_scene_reserve(s.scene.get(), flags, 0), MINKQ_SUCCESS) << minkq_last_error_message();
+    if (flags >= 0)
+      ASSERT_EQ(minkq_scene_reserve(s.scene.get(), uint32_t(flags), 0), MINKQ_SUCCESS) << minkq_last_error_message();
     const bool rebuilds = flags == MINKQ_RESERVE_REBUILD;
     float* positions = memory.copy_of(line.xyz);
     int32_t* vt_pairs = static_cast<int32_t*>(memory.allocate(2 * capacity * sizeof(int32_t)));
@@ -270,9 +272,16 @@ TEST_F(CudaAsync, reserved_trees_hold_every_build_so_rebuilds_to_more_nodes_keep
     const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT, r};
     const minkq_query_desc ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT, r};
     cudaStream_t stream = static_cast<cudaStream_t>(memory.stream());
+    if (flags < 0) {
+      ASSERT_EQ(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
+                                              counts + 1, stream),
+                MINKQ_SUCCESS)
+          << minkq_last_error_message();
+      ASSERT_EQ(cudaStreamSynchronize(stream), cudaSuccess);
+    }
     const CapturedGraph graph(stream, [&](auto check) {
       if (rebuilds) check(minkq_scene_rebuild_async(s.scene.get(), vertices, stream));
-      else if (flags != 0) check(minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      else if (flags > 0) check(minkq_scene_refit_async(s.scene.get(), vertices, stream));
       check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, vt_pairs, capacity, counts, ee_pairs, capacity,
                                           counts + 1, stream));
     });
