@@ -22,7 +22,8 @@ pub enum Error {
     NonFinite(String),
     /// `MINKQ_ERROR_INDEX_OUT_OF_RANGE`: a negative or too large vertex index.
     IndexOutOfRange(String),
-    /// `MINKQ_ERROR_SIZE_OVERFLOW`: a count over 2^31 - 2 or one whose byte size overflows.
+    /// `MINKQ_ERROR_SIZE_OVERFLOW`: a count whose byte size overflows, or over its limit: 2^31 - 2
+    /// query elements, 2^30 + 1 elements of a tree (vertices, triangles, edges, boxes).
     SizeOverflow(String),
     /// `MINKQ_ERROR_CAPACITY`: the output buffer holds fewer pairs than the query found;
     /// `needed` is the exact count.
