@@ -240,6 +240,107 @@ MINKQ_API size_t minkq_scene_edge_count(const minkq_scene* scene);
  * (nothing is written; minkq_scene_edge_count gives the number). */
 MINKQ_API minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_edges, size_t capacity);
 
+/* ---- Scenes of many geometries --------------------------------------------------------------
+ *
+ * A scene may hold any number of geometries: triangle meshes, edge sets (rods) and vertex sets
+ * (particles), each with its own vertices, topology, pair kinds, thickness, world, collision
+ * group and mask, and each moving or static. Each geometry has its own trees: a static one is
+ * built once and never touched again, and a step refits or rebuilds only what moves. A query
+ * (minkq_scene_query and every call that takes a scene) then reports, for its kind:
+ *   - self pairs within geometry g, when g has MINKQ_GEOMETRY_SELF (its incident pairs dropped
+ *     with MINKQ_GEOMETRY_DROP_INCIDENT), as a scene of g alone would;
+ *   - cross pairs between geometries a != b when both take part in the kind, they share a world
+ *     (equal world ids, or either is -1: part of every world) and each one's group has a bit in
+ *     the other's mask ((a.group & b.mask) && (b.group & a.mask), as PhysX and Embree filter).
+ *     VT and EV pairs run both ways (a's vertices against b's triangles or edges, and b's
+ *     against a's); EE and VV pairs are unordered. No pair ever joins two worlds, and geometries
+ *     of different worlds are never tested against each other.
+ * Numbering: pairs use one global numbering, that of the geometries concatenated in the order
+ * given: geometry g's vertices, triangles and edges come after those of geometries 0..g-1
+ * (minkq_scene_geometry_range gives each geometry's first id and count), and a geometry's edges
+ * are numbered as a one-mesh scene numbers them. EE and VV pairs are (lower, higher) global id.
+ * minkq_scene_vertex_count, _triangle_count, _edge_count and minkq_scene_edges give the whole
+ * scene in that numbering (edges by global vertex ids).
+ * Thickness: a geometry may give a thickness t >= 0 per vertex; an element's is the largest of
+ * its vertices' (0 without). A pair of elements a, b is then within reach when its distance is
+ * <= r + t(a) + t(b): every mode reports every such pair, LEAF_EXACT keeps exactly those (with
+ * the slack stated at minkq_scene_query, relative to r + t(a) + t(b)), a float64 geometry keeps
+ * the guarantee in double and swept queries use the same reach.
+ * A one-mesh scene (minkq_scene_create) is the scene of one moving geometry with MINKQ_GEOMETRY_SELF
+ * and its flags' kinds, DROP_INCIDENT and FLOAT64. */
+typedef enum minkq_geometry_flags {
+  MINKQ_GEOMETRY_SELF = 1,          /* report pairs of elements within this geometry */
+  MINKQ_GEOMETRY_DROP_INCIDENT = 2, /* self pairs drop incident ones (MINKQ_SCENE_DROP_INCIDENT) */
+  MINKQ_GEOMETRY_FLOAT64 = 4,       /* vertices are 3 doubles each (MINKQ_SCENE_FLOAT64), here and in its refits */
+  MINKQ_GEOMETRY_STATIC = 8         /* never moves: built once; refits and rebuilds skip it or refuse it */
+} minkq_geometry_flags;
+
+/* One geometry of a scene. Later versions add fields at the end only: struct_size says which
+ * ones the caller knows (fields past it take the defaults of minkq_geometry_desc_init), so a
+ * program compiled against this header keeps working with later libraries. */
+typedef struct minkq_geometry_desc {
+  uint32_t struct_size; /* sizeof(minkq_geometry_desc) as the caller compiled it */
+  uint32_t kinds;       /* the pairs it takes part in: MINKQ_SCENE_VT | _EE | _VV | _EV, at least one */
+  uint32_t flags;       /* minkq_geometry_flags */
+  int32_t world;        /* its world, >= 0, or -1: part of every world */
+  uint32_t group;       /* collision group bits: a cross pair needs (a.group & b.mask) && (b.group & a.mask) */
+  uint32_t mask;
+  minkq_buffer vertices;  /* 3 floats each (3 doubles with MINKQ_GEOMETRY_FLOAT64); at least one */
+  minkq_buffer triangles; /* 3 int32 indices into this geometry's vertices; count 0 for none */
+  minkq_buffer edges;     /* 2 int32 indices, or count 0 to derive them from the triangles (EE, EV) */
+  minkq_buffer thickness; /* count 0 for none, or one float per vertex, finite and >= 0 */
+} minkq_geometry_desc;
+
+/* Fills *desc with the defaults: struct_size = sizeof(minkq_geometry_desc), kinds VT | EE,
+ * flags SELF | DROP_INCIDENT, world 0, group 1, mask all bits, empty buffers in host memory.
+ * NULL is ignored. */
+MINKQ_API void minkq_geometry_desc_init(minkq_geometry_desc* desc);
+
+/* Creates a scene of `count` geometries (count >= 1), descriptions geometries[0..count-1] each
+ * geometries[0].struct_size bytes apart (all with that struct_size), and stores it in *out_scene
+ * (NULL on failure). Each geometry is checked and built as minkq_scene_create checks and builds a
+ * mesh (edges derived when it gives none and takes part in EE or EV); messages name the geometry
+ * ("geometry 2: triangle 3 references vertex 9 but the geometry has 8 vertices"). The scene's
+ * kinds (the query kinds it answers) are the union of its geometries'. Errors: those of
+ * minkq_scene_create; INVALID_ARGUMENT also for count 0, a struct_size under that of this
+ * header's first version or differing between descriptions, unknown flag or kind bits, a
+ * negative world other than -1, a thickness count other than the vertex count; NON_FINITE or
+ * INVALID_ARGUMENT for a non-finite or negative thickness; SIZE_OVERFLOW for more than 2^31 - 2
+ * vertices, triangles or edges in all (the global ids are int32). */
+MINKQ_API minkq_status minkq_scene_create_geometries(minkq_device* device, const minkq_geometry_desc* geometries,
+                                                     size_t count, minkq_scene** out_scene);
+/* Returns the number of geometries of a scene (1 for a one-mesh scene, 0 for NULL). */
+MINKQ_API uint32_t minkq_scene_geometry_count(const minkq_scene* scene);
+
+typedef enum minkq_element {
+  MINKQ_ELEMENT_VERTEX = 0,
+  MINKQ_ELEMENT_TRIANGLE = 1,
+  MINKQ_ELEMENT_EDGE = 2
+} minkq_element;
+/* Writes geometry g's first global id and its count of `element`s (edges: the derived ones when
+ * it derived them). Errors: INVALID_ARGUMENT (NULL scene or output, g out of range, not a
+ * minkq_element value). */
+MINKQ_API minkq_status minkq_scene_geometry_range(const minkq_scene* scene, uint32_t geometry, minkq_element element,
+                                                  size_t* out_first, size_t* out_count);
+
+/* Moves one geometry's vertices (its vertex count and precision) and refits its trees
+ * (minkq_scene_geometry_refit) or builds them afresh (minkq_scene_geometry_rebuild); the swept
+ * forms take its positions at both ends of the step, as minkq_scene_refit_swept does for a
+ * scene. The other geometries are not touched. minkq_scene_refit, _rebuild and their swept forms
+ * move every geometry that is not static at once: their buffers hold those geometries'
+ * vertices one after another, in geometry order, all of one precision. A geometry's swept
+ * positions last until its next plain refit or rebuild; while any geometry is swept the scene's
+ * queries are swept (minkq_scene_is_swept returns 1) under the rules of minkq_scene_refit_swept.
+ * Errors: those of minkq_scene_refit, messages naming the geometry; INVALID_ARGUMENT for a static
+ * geometry, g out of range, or (whole-scene calls) moving geometries of mixed precision; the
+ * scene then keeps its positions and trees. */
+MINKQ_API minkq_status minkq_scene_geometry_refit(minkq_scene* scene, uint32_t geometry, minkq_buffer vertices);
+MINKQ_API minkq_status minkq_scene_geometry_rebuild(minkq_scene* scene, uint32_t geometry, minkq_buffer vertices);
+MINKQ_API minkq_status minkq_scene_geometry_refit_swept(minkq_scene* scene, uint32_t geometry, minkq_buffer x0,
+                                                        minkq_buffer x1);
+MINKQ_API minkq_status minkq_scene_geometry_rebuild_swept(minkq_scene* scene, uint32_t geometry, minkq_buffer x0,
+                                                          minkq_buffer x1);
+
 /* ---- Queries ------------------------------------------------------------------------------- */
 typedef enum minkq_query_kind {
   MINKQ_QUERY_VT = 0, /* pairs (vertex, triangle): vertex within r of triangle */
