@@ -29,8 +29,19 @@ struct minkq_device {
 
 struct minkq_scene {
   minkq_device* device;
+  // The query kinds it answers (MINKQ_SCENE_VT ... EV), and MINKQ_SCENE_FLOAT64 when the vertices
+  // of its moving geometries are doubles (those of whole-scene refits and rebuilds).
   uint32_t flags;
-  size_t vertex_count, triangle_count, edge_count;
+  size_t vertex_count, triangle_count, edge_count;  // all geometries'
+  // One geometry's flags (minkq_geometry_flags) and its first global id and count of vertices,
+  // triangles and edges (minkq_element order).
+  struct Geometry {
+    uint32_t flags;
+    size_t first[3], count[3];
+  };
+  std::vector<Geometry> geometries;
+  size_t moving_vertex_count;  // the vertices of whole-scene refits and rebuilds
+  bool mixed_precision;        // moving geometries of both precisions: whole-scene moves refused
   std::unique_ptr<minkq::MeshStore> store;  // holds the scene's only copy of its topology
 };
 
@@ -175,14 +186,16 @@ inline minkq::Strided checked_vertex_buffer(const minkq_device* device, const mi
   return values;
 }
 
+// `owner`: what holds the vertices, in messages ("scene", or "geometry" for one of several).
 template <int N, class T>
-void require_indices(const std::vector<T>& elements, size_t vertex_count, const char* element) {
+void require_indices(const std::vector<T>& elements, size_t vertex_count, const char* element,
+                     const char* owner = "scene") {
   for (size_t i = 0; i < elements.size(); ++i)
     for (int k = 0; k < N; ++k) {
       const int32_t v = elements[i].v[k];
       if (v < 0 || size_t(v) >= vertex_count)
         fail(Status::kIndexOutOfRange, std::string(element) + " " + std::to_string(i) + " references vertex " +
-                                           std::to_string(v) + " but the scene has " +
+                                           std::to_string(v) + " but the " + owner + " has " +
                                            std::to_string(vertex_count) + " vertices");
     }
 }
@@ -281,6 +294,14 @@ inline void run_and_report(minkq_device* device, minkq::Store& store, const mink
   minkq::WorkCounts work;
   const uint64_t count = store.query(request, out, (flags & MINKQ_QUERY_STATS) ? &work : nullptr);
   if (!report(device, out, flags, count, work, info)) fail(Status::kCapacity, capacity_message(count, capacity));
+}
+
+// Stream-ordered calls serve a scene of one geometry that reports its own pairs (the mesh
+// store's asynchronous calls: backend.h).
+inline void require_one_mesh(const minkq_scene* scene, const std::string& call) {
+  require(scene->geometries.size() == 1 && (scene->geometries[0].flags & MINKQ_GEOMETRY_SELF), Status::kUnsupported,
+          call + ": stream-ordered calls serve scenes of one geometry with MINKQ_GEOMETRY_SELF; this scene has " +
+              std::to_string(scene->geometries.size()) + " geometries: use the blocking calls");
 }
 
 // The memory asynchronous calls read and write: device memory on a CUDA device, host memory on

@@ -65,6 +65,30 @@ struct MeshTrees {
   bool vertex_order = false;
 };
 
+// The bit of a query kind in a geometry's kinds.
+constexpr uint32_t kind_bit(QueryKind kind) { return 1u << int(kind); }
+
+// How a geometry of a mesh store takes part in queries (the C API's minkq_geometry_desc).
+struct GeometryRole {
+  uint32_t kinds = 0;  // kind_bit of each kind it takes part in
+  bool self = true;    // pairs within it are reported
+  bool drop_incident = false;
+  bool is_static = false;  // never moved: built once
+  int32_t world = 0;       // -1: every world
+  uint32_t group = 1, mask = ~0u;
+};
+
+// One geometry of a mesh store, checked by the caller: its vertices, topology (edges derived
+// already), thickness per vertex (or none), the trees its kinds need, and its role.
+struct GeometryInput {
+  Strided vertices;
+  std::vector<Triangle> triangles;
+  std::vector<Edge> edges;
+  std::vector<float> thickness;  // one per vertex, finite and >= 0, or empty
+  MeshTrees trees;
+  GeometryRole role;
+};
+
 struct QueryRequest {
   QueryKind kind;
   Mode mode;
@@ -125,12 +149,21 @@ class Store {
   virtual uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) = 0;
 };
 
-// A mesh scene's store. It holds the scene's only copy of the topology (the C API keeps
-// none): triangles where it has a triangle tree, edges always (minkq_scene_edges).
+// A mesh scene's store: one or more geometries (GeometryInput), each with its own trees, and the
+// pairs within and between them (the C API's minkq_geometry_desc rules) in one global numbering:
+// the geometries' vertices, triangles and edges one after another, in order. It holds the scene's
+// only copy of the topology (the C API keeps none): triangles where a geometry has a triangle
+// tree, edges always (minkq_scene_edges). refit, rebuild and their swept forms move every
+// geometry that is not static, their buffers holding those geometries' vertices one after
+// another; move_geometry moves one. The asynchronous calls serve a scene of one geometry (the
+// caller refuses the others).
 class MeshStore : public Store {
  public:
-  // The scene's edges, copied to host memory (edge_count entries).
+  // The scene's edges in the global numbering (global vertex ids), copied to host memory.
   virtual void copy_edges(Edge* host_out) = 0;
+  // Geometry g (not static) to new positions, x1 for swept ones, refitting or rebuilding its
+  // trees.
+  virtual void move_geometry(int32_t g, const Strided& x0, const Strided* x1, bool rebuild) = 0;
   // Swept positions: the vertices move linearly from x0 to x1 over the step, and the trees box
   // each element over both (refit or build afresh); queries are then swept (query_sources.h) until a
   // plain refit or rebuild. The caller checks the buffers and the queries a swept scene runs.
@@ -177,9 +210,8 @@ class Backend {
   // Throws Failure(kInvalidArgument), naming `what`, unless `data` (not null) is memory this
   // backend's kernels may read and write as device memory (a buffer marked kDevice).
   virtual void check_device_pointer(const void* data, const std::string& what) = 0;
-  // Takes the topology over (host vectors, validated by the caller).
-  virtual std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
-                                                       std::vector<Edge> edges, const MeshTrees& trees) = 0;
+  // Takes the geometries over (host vectors, validated by the caller; at least one).
+  virtual std::unique_ptr<MeshStore> create_mesh_store(std::vector<GeometryInput> geometries) = 0;
   virtual std::unique_ptr<Store> create_box_store(const Strided& boxes) = 0;
 };
 

@@ -13,6 +13,8 @@
 
 #include "backend.h"
 #include "executor.h"
+#include "geometry.h"
+#include "jobs.h"
 
 namespace minkq {
 
@@ -55,39 +57,33 @@ std::array<uint64_t, sizeof...(Pass)> run_counted(X& x, const std::array<WorkCou
   return x.template run_passes<NoWork>(works, passes...);
 }
 
-// A tree's area cost (sum of node_area over the root's half area) now over its value at its
-// last build. A tree without area (its boxes on one axis-parallel line or at one point, or no
-// nodes) costs 0: the ratio is then 1 while it stays so, and infinite once it has area.
-inline double growth(double cost_now, double cost_at_build) {
-  if (cost_at_build > 0.0) return cost_now / cost_at_build;
-  return cost_now > 0.0 ? HUGE_VAL : 1.0;
-}
-template <class Tree>
-double tree_growth_of(const Tree& tree) {
-  return growth(tree.area_cost(), tree.cost_at_build());
-}
-
 template <class X>
 class MeshStoreOn final : public MeshStore {
   static_assert(ExecutorContract<X>::value, "a store runs on an executor (executor.h)");
   template <class T>
   using Array = typename X::template Array<T>;
+  using Geometry = GeometryOn<X>;
+  using VtJob = GeometryJob<VertexTriangleQueries, CrossVertexTriangleQueries>;
+  using EvJob = GeometryJob<VertexEdgeQueries, CrossVertexEdgeQueries>;
+  using EeJob = GeometryJob<EdgeEdgeQueries, CrossEdgeEdgeQueries>;
+  using VvJob = GeometryJob<VertexVertexQueries, CrossVertexVertexQueries>;
 
  public:
-  MeshStoreOn(typename X::Device device, const Strided& vertices, std::vector<Triangle> triangles,
-              std::vector<Edge> edges, const MeshTrees& trees)
-      : x_(device), num_vertices_(int32_t(vertices.count)), num_triangles_(int32_t(triangles.size())),
-        num_edges_(int32_t(edges.size())), has_triangle_tree_(trees.triangles), has_edge_tree_(trees.edges),
-        has_vertex_tree_(trees.vertices), keeps_vertex_order_(trees.vertex_order),
-        float64_(vertices.scalar == Scalar::kFloat64) {
+  MeshStoreOn(typename X::Device device, std::vector<GeometryInput> inputs) : x_(device) {
     x_.hold();
-    gather_vertices(vertices);
-    // The elements by id, only until their trees hold them (edges without an edge tree: kept).
-    Array<Triangle> triangles_by_id;
-    Array<Edge> edges_by_id;
-    if (has_triangle_tree_) x_.upload(triangles_by_id, std::move(triangles));
-    x_.upload(has_edge_tree_ ? edges_by_id : edges_, std::move(edges));
-    build_trees(triangles_by_id, edges_by_id);
+    FirstIds next;
+    for (const GeometryInput& in : inputs) {
+      const GeometryShape shape{in.role, int32_t(in.vertices.count), int32_t(in.triangles.size()),
+                                int32_t(in.edges.size())};
+      shapes_.push_back(shape);
+      first_.push_back(next);
+      next = {next.vertices + shape.vertices, next.triangles + shape.triangles, next.edges + shape.edges};
+    }
+    totals_ = next;
+    for (GeometryInput& in : inputs) geometries_.push_back(std::make_unique<Geometry>(x_, std::move(in)));
+    for (const QueryKind kind : {QueryKind::kVertexTriangle, QueryKind::kEdgeEdge, QueryKind::kVertexVertex,
+                                 QueryKind::kVertexEdge})
+      plans_[size_t(kind)] = plan_jobs(shapes_, kind);
     x_.finish();
     x_.release();
   }
@@ -95,146 +91,92 @@ class MeshStoreOn final : public MeshStore {
 
   void copy_edges(Edge* host_out) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    if (!has_edge_tree_) return x_.download(host_out, edges_, size_t(num_edges_));
-    Array<Edge> by_id;
-    x_.scatter_groups(leaf_edges_, edge_tree_.view().sorted_prims, num_edges_, by_id);
-    x_.download(host_out, by_id, size_t(num_edges_));
+    for (size_t g = 0; g < geometries_.size(); ++g) {
+      Edge* out = host_out + first_[g].edges;
+      geometries_[g]->copy_edges(x_, out);
+      for (int32_t e = 0; e < geometries_[g]->num_edges(); ++e)
+        for (int32_t& v : out[e].v) v += first_[g].vertices;
+    }
   }
 
-  void refit(const Strided& vertices) override {
+  void refit(const Strided& vertices) override { move_all(vertices, nullptr, false); }
+  void rebuild(const Strided& vertices) override { move_all(vertices, nullptr, true); }
+  void refit_swept(const Strided& x0, const Strided& x1) override { move_all(x0, &x1, false); }
+  void rebuild_swept(const Strided& x0, const Strided& x1) override { move_all(x0, &x1, true); }
+  void move_geometry(int32_t g, const Strided& x0, const Strided* x1, bool rebuild) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    swept_ = false;
-    gather_vertices(vertices);
-    refit_trees();
+    geometries_[size_t(g)]->move(x_, x0, x1, rebuild);
     x_.finish();
   }
-
-  void rebuild(const Strided& vertices) override {
-    [[maybe_unused]] const auto scope = x_.scope();
-    swept_ = false;
-    gather_vertices(vertices);
-    rebuild_trees();
-    x_.finish();
+  bool swept() const override {
+    for (const auto& g : geometries_)
+      if (g->swept()) return true;
+    return false;
   }
-
-  void refit_swept(const Strided& x0, const Strided& x1) override {
-    [[maybe_unused]] const auto scope = x_.scope();
-    gather_swept(x0, x1);
-    refit_trees();
-    x_.finish();
-  }
-
-  void rebuild_swept(const Strided& x0, const Strided& x1) override {
-    [[maybe_unused]] const auto scope = x_.scope();
-    gather_swept(x0, x1);
-    rebuild_trees();
-    x_.finish();
-  }
-  bool swept() const override { return swept_; }
 
   double tree_growth() override {
     [[maybe_unused]] const auto scope = x_.scope();
-    double g = has_triangle_tree_ ? tree_growth_of(triangle_tree_) : 0.0;
-    if (has_edge_tree_) g = std::max(g, tree_growth_of(edge_tree_));
-    if (has_vertex_tree_) g = std::max(g, tree_growth_of(vertex_tree_));
-    return g;
+    double growth = 0.0;
+    for (const auto& g : geometries_) growth = std::max(growth, g->tree_growth());
+    return growth;
   }
 
   uint64_t query(const QueryRequest& request, const PairOutput& out, WorkCounts* work) override {
     [[maybe_unused]] const auto scope = x_.scope();
     uint64_t total = 0;
-    with_mesh_pass(request, out, [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; });
+    if (one_mesh()) {
+      with_mesh_pass(request, out, [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; });
+    } else {
+      with_job_pass(request, out, [&](const auto& pass) { total = run_counted(x_, {work}, pass)[0]; });
+    }
     return total;
   }
 
   std::array<uint64_t, 2> query_vt_ee(const QueryJob& vt, const QueryJob& ee) override {
     [[maybe_unused]] const auto scope = x_.scope();
     std::array<uint64_t, 2> totals{};
-    with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
-      with_ee_pass(ee.request, ee.out,
-                   [&](const auto& ee_pass) { totals = run_counted(x_, {vt.work, ee.work}, vt_pass, ee_pass); });
-    });
+    if (one_mesh()) {
+      with_vt_pass(vt.request, vt.out, [&](const auto& vt_pass) {
+        with_ee_pass(ee.request, ee.out,
+                     [&](const auto& ee_pass) { totals = run_counted(x_, {vt.work, ee.work}, vt_pass, ee_pass); });
+      });
+    } else {
+      with_job_pass(vt.request, vt.out, [&](const auto& vt_pass) {
+        with_job_pass(ee.request, ee.out,
+                      [&](const auto& ee_pass) { totals = run_counted(x_, {vt.work, ee.work}, vt_pass, ee_pass); });
+      });
+    }
     return totals;
   }
 
-  // ---- Asynchronous calls ------------------------------------------------------------------
+  // ---- Asynchronous calls: a scene of one geometry (the caller refuses the others) -----------
 
   void reserve(const Reservation& wanted) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    fix_nodes();
-    if ((wanted.refit || wanted.rebuild) && !reserved_.refit) {
-      x_.reserve_staging(staging_, num_vertices_);
-      x_.reserve_pending();
-      reserved_.refit = true;
-    }
-    if (wanted.swept && !reserved_.swept) {
-      x_.reserve_staging(staging1_, num_vertices_);
-      x_.reserve_staging(vertices1_, num_vertices_);
-      reserved_.swept = true;
-    }
-    if (wanted.rebuild && !reserved_.rebuild) {
-      if (has_triangle_tree_) {
-        x_.reserve_build(triangle_tree_, triangle_boxes(), num_triangles_);
-        x_.reserve_scratch(triangle_scratch_, num_triangles_);
-      }
-      if (keeps_vertex_order_) x_.reserve_sort(PointBoxes{vertices_.data()}, num_vertices_);
-      if (has_edge_tree_) {
-        x_.reserve_build(edge_tree_, edge_boxes(), num_edges_);
-        x_.reserve_scratch(edge_scratch_, num_edges_);
-      }
-      if (has_vertex_tree_) x_.reserve_build(vertex_tree_, vertex_boxes(), num_vertices_);
-      reserved_.rebuild = true;
-    }
-    if (wanted.canonical_capacity > reserved_.canonical_capacity) {
-      x_.reserve_canonical(wanted.canonical_capacity);
-      reserved_.canonical_capacity = wanted.canonical_capacity;
-    }
+    mesh().reserve(x_, wanted);
     x_.finish();
   }
-  const Reservation& reservation() const override { return reserved_; }
+  const Reservation& reservation() const override { return geometries_[0]->reservation(); }
 
-  void refit_async(const Strided& vertices, Stream stream) override {
-    [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    fix_nodes();
-    swept_ = false;
-    x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRefit);
-    refit_trees();
-  }
-
-  void rebuild_async(const Strided& vertices, Stream stream) override {
-    [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    fix_nodes();
-    swept_ = false;
-    x_.commit_finite(vertices, staging_, vertices_, rho(), PendingError::kRebuild);
-    rebuild_trees();
-  }
-
+  void refit_async(const Strided& vertices, Stream stream) override { move_async(vertices, nullptr, false, stream); }
+  void rebuild_async(const Strided& vertices, Stream stream) override { move_async(vertices, nullptr, true, stream); }
   void refit_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
-    [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    fix_nodes();
-    swept_ = true;
-    x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRefitSwept);
-    refit_trees();
+    move_async(x0, &x1, false, stream);
   }
-
   void rebuild_swept_async(const Strided& x0, const Strided& x1, Stream stream) override {
-    [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    fix_nodes();
-    swept_ = true;
-    x_.commit_finite_swept(x0, x1, staging_, staging1_, vertices_, vertices1_, rho(), PendingError::kRebuildSwept);
-    rebuild_trees();
+    move_async(x0, &x1, true, stream);
   }
 
   void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    fix_nodes();
+    mesh().fix_nodes(x_);
     with_mesh_pass(request, out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
   }
 
   void query_vt_ee_async(const QueryRequest& vt, const PairOutput& vt_out, const QueryRequest& ee,
                          const PairOutput& ee_out, Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    fix_nodes();
+    mesh().fix_nodes(x_);
     with_vt_pass(vt, vt_out, [&](const auto& vt_pass) {
       with_ee_pass(ee, ee_out, [&](const auto& ee_pass) { run_counted(x_, {nullptr, nullptr}, vt_pass, ee_pass); });
     });
@@ -243,139 +185,186 @@ class MeshStoreOn final : public MeshStore {
   PendingError take_pending_error(Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope();
     x_.wait(stream);
-    return reserved_.refit ? x_.take_pending() : PendingError{};
+    return mesh().reservation().refit ? x_.take_pending() : PendingError{};
   }
 
  private:
+  // A geometry's first global ids.
+  struct FirstIds {
+    int32_t vertices = 0, triangles = 0, edges = 0;
+  };
+  // A scene of one geometry that reports its own pairs: today's one-mesh passes, no jobs.
+  bool one_mesh() const { return geometries_.size() == 1 && shapes_[0].role.self; }
+  Geometry& mesh() { return *geometries_[0]; }
+
+  // Every geometry that moves to new positions: x0 (and x1) hold their vertices one after
+  // another, in geometry order.
+  void move_all(const Strided& x0, const Strided* x1, bool rebuild) {
+    [[maybe_unused]] const auto scope = x_.scope();
+    int64_t offset = 0;
+    for (size_t g = 0; g < geometries_.size(); ++g) {
+      if (shapes_[g].role.is_static) continue;
+      const int64_t n = shapes_[g].vertices;
+      const Strided part0 = slice(x0, offset, n);
+      if (x1) {
+        const Strided part1 = slice(*x1, offset, n);
+        geometries_[g]->move(x_, part0, &part1, rebuild);
+      } else {
+        geometries_[g]->move(x_, part0, nullptr, rebuild);
+      }
+      offset += n;
+    }
+    x_.finish();
+  }
+  static Strided slice(const Strided& values, int64_t first, int64_t count) {
+    Strided part = values;
+    part.data = static_cast<const char*>(values.data) + size_t(first) * values.stride;
+    part.count = count;
+    return part;
+  }
+  void move_async(const Strided& x0, const Strided* x1, bool rebuild, Stream stream) {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    mesh().move_async(x_, x0, x1, rebuild);
+  }
+  // The filters of geometry g's self pairs: its own incidence rule and the query's leaf test.
+  uint32_t self_filters(size_t g, const QueryRequest& request) const {
+    return (request.filters & kLeafExact) | (shapes_[g].role.drop_incident ? kDropIncident : 0u);
+  }
+
+  // ---- One geometry: the one-mesh passes ----------------------------------------------------
   // Calls fn with the QueryPass of a request of any mesh kind.
   template <class Fn>
   void with_mesh_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    Geometry& g = mesh();
+    const uint32_t filters = self_filters(0, request);
     switch (request.kind) {
       case QueryKind::kVertexTriangle: return with_vt_pass(request, out, fn);
       case QueryKind::kEdgeEdge: return with_ee_pass(request, out, fn);
-      case QueryKind::kVertexEdge: {
-        const VertexEdgeQueries queries{vertices_.data(), leaf_edges_.data(), vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1()};
-        return with_vertex_pass(request, edge_tree_.view(), queries, out, fn);
-      }
-      case QueryKind::kVertexVertex: {
-        const BvhView tree = vertex_tree_.view();
-        const VertexVertexQueries queries{vertices_.data(), tree.sorted_prims, request.r, request.filters, rho(),
-                                          vertices1()};
-        return with_vertex_pass(request, tree, queries, out, fn);
-      }
+      case QueryKind::kVertexEdge:
+        return with_vertex_pass(request, g.edge_tree(), g.ev_queries(request.r, filters), out, fn);
+      case QueryKind::kVertexVertex:
+        return with_vertex_pass(request, g.vertex_tree(), g.vv_queries(request.r, filters), out, fn);
       default: fail(Status::kInternal, "not a mesh query kind");
     }
   }
-  // Calls fn with the QueryPass of a VT request, or of an EE request.
   template <class Fn>
   void with_vt_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
-    const VertexTriangleQueries queries{vertices_.data(), leaf_triangles_.data(), vertex_order_.data(), request.r,
-                                        request.filters, rho(), vertices1()};
-    with_vertex_pass(request, triangle_tree_.view(), queries, out, fn);
+    Geometry& g = mesh();
+    with_vertex_pass(request, g.triangle_tree(), g.vt_queries(request.r, self_filters(0, request)), out, fn);
   }
   // Vertex queries (VT, EV, VV): points, or swept each vertex's path, a segment: the segment
   // shapes, sphere mode as capsule_exact.
   template <class Queries, class Fn>
   void with_vertex_pass(const QueryRequest& request, const BvhView& tree, const Queries& queries,
                         const PairOutput& out, Fn&& fn) {
-    if (!swept_) return with_pass<true>(request, tree, queries, num_vertices_, out, fn);
-    QueryRequest path = request;
-    if (path.mode == Mode::kSphere) path.mode = Mode::kCapsuleExact;
-    with_pass<false>(path, tree, queries, num_vertices_, out, fn);
+    const int32_t n = mesh().num_vertices();
+    if (!swept()) return with_pass<true>(request, tree, queries, n, out, fn);
+    with_pass<false>(swept_path(request), tree, queries, n, out, fn);
+  }
+  static QueryRequest swept_path(QueryRequest request) {
+    if (request.mode == Mode::kSphere) request.mode = Mode::kCapsuleExact;
+    return request;
   }
   template <class Fn>
   void with_ee_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
-    const BvhView edge_tree = edge_tree_.view();
-    const EdgeEdgeQueries queries{vertices_.data(), leaf_edges_.data(), edge_tree.sorted_prims, request.r,
-                                  request.filters, rho(), vertices1()};
-    with_pass<false>(request, edge_tree, queries, num_edges_, out, fn);
+    Geometry& g = mesh();
+    with_pass<false>(request, g.edge_tree(), g.ee_queries(request.r, self_filters(0, request)), g.num_edges(), out, fn);
   }
 
-  // The scene's vertices from the caller's (float64 ones rounded, with rho, the larger of both
-  // positions' for a swept scene).
-  void gather_vertices(const Strided& vertices) { gather_into(vertices, vertices_, false); }
-  void gather_swept(const Strided& x0, const Strided& x1) {
-    gather_into(x0, vertices_, false);
-    gather_into(x1, vertices1_, true);
-    swept_ = true;
-  }
-  void gather_into(const Strided& values, Array<Vec3>& dst, bool accumulate) {
-    if (float64_) x_.gather_float64(values, dst, rho_, accumulate); else x_.gather(values, dst);
-  }
-  const Vec3* vertices1() const { return swept_ ? vertices1_.data() : nullptr; }
-  void refit_trees() {
-    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
-    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
-    if (has_vertex_tree_) vertex_tree_.refit(vertex_boxes());
-  }
-  // Where the queries read rho (executor memory): nullptr for float input, whose radius stays r.
-  float* rho() { return float64_ ? rho_.data() : nullptr; }
-
-  // The trees the flags ask for, and the VT / EV query order, from the current vertices;
-  // triangles and edges: the elements by id (with their trees), which they then hold in leaf
-  // order.
-  void build_trees(const Array<Triangle>& triangles, const Array<Edge>& edges) {
-    if (has_triangle_tree_) {
-      triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles.data(), vertices1()}, num_triangles_);
-      x_.fill_groups(triangles.data(), triangle_tree_.view().sorted_prims, num_triangles_, leaf_triangles_);
+  // ---- Many geometries: jobs (jobs.h) -------------------------------------------------------
+  // Calls fn with the JobPass of a request: its kind's jobs, written to executor memory.
+  template <class Fn>
+  void with_job_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
+    const auto& plans = plans_[int(request.kind)];
+    switch (request.kind) {
+      case QueryKind::kVertexTriangle:
+        return run_jobs<true>(request, out, make_jobs<VtJob>(plans, [&](VtJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+          job.bvh = t.triangle_tree();
+          job.first_offset = first_[qi].vertices;
+          job.second_offset = first_[ti].triangles;
+          if (job.self) job.self_queries = q.vt_queries(request.r, self_filters(qi, request));
+          else job.cross_queries = {q.side(), t.side(), t.leaf_triangles(), q.vertex_order(), request.r, request.filters & kLeafExact};
+          return q.num_vertices();
+        }), vt_jobs_, totals_.vertices, fn);
+      case QueryKind::kVertexEdge:
+        return run_jobs<true>(request, out, make_jobs<EvJob>(plans, [&](EvJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+          job.bvh = t.edge_tree();
+          job.first_offset = first_[qi].vertices;
+          job.second_offset = first_[ti].edges;
+          if (job.self) job.self_queries = q.ev_queries(request.r, self_filters(qi, request));
+          else job.cross_queries = {q.side(), t.side(), t.leaf_edges(), q.vertex_order(), request.r, request.filters & kLeafExact};
+          return q.num_vertices();
+        }), ev_jobs_, totals_.vertices, fn);
+      case QueryKind::kVertexVertex:
+        return run_jobs<true>(request, out, make_jobs<VvJob>(plans, [&](VvJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+          job.bvh = t.vertex_tree();
+          job.first_offset = first_[qi].vertices;
+          job.second_offset = first_[ti].vertices;
+          job.swap = first_[qi].vertices > first_[ti].vertices;
+          if (job.self) job.self_queries = q.vv_queries(request.r, self_filters(qi, request));
+          else job.cross_queries = {q.side(), t.side(), request.r, request.filters & kLeafExact, !job.swap};
+          return q.num_vertices();
+        }), vv_jobs_, totals_.vertices, fn);
+      case QueryKind::kEdgeEdge:
+        return run_jobs<false>(request, out, make_jobs<EeJob>(plans, [&](EeJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+          job.bvh = t.edge_tree();
+          job.first_offset = first_[qi].edges;
+          job.second_offset = first_[ti].edges;
+          job.swap = first_[qi].edges > first_[ti].edges;
+          if (job.self) job.self_queries = q.ee_queries(request.r, self_filters(qi, request));
+          else job.cross_queries = {q.side(), t.side(), q.leaf_edges(), q.edge_tree().sorted_prims, t.leaf_edges(),
+                                    request.r, request.filters & kLeafExact, !job.swap};
+          return q.num_edges();
+        }), ee_jobs_, totals_.edges, fn);
+      default: fail(Status::kInternal, "not a mesh query kind");
     }
-    if (keeps_vertex_order_) x_.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
-    if (has_edge_tree_) {
-      edge_tree_.build(EdgeBoxes{vertices_.data(), edges.data(), vertices1()}, num_edges_);
-      x_.fill_groups(edges.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
+  }
+  // A kind's jobs on the host, in plan order: fill(job, query geometry, tree geometry, their
+  // indices) sets the tree, offsets and source and returns the job's query count.
+  template <class Job, class Fill>
+  std::vector<Job> make_jobs(const std::vector<JobPlan>& plans, Fill&& fill) {
+    std::vector<Job> jobs;
+    jobs.reserve(plans.size());
+    int32_t first_query = 0;
+    for (const JobPlan& plan : plans) {
+      Job job{};
+      job.self = plan.query == plan.tree;
+      job.first_query = first_query;
+      job.num_queries = fill(job, *geometries_[size_t(plan.query)], *geometries_[size_t(plan.tree)],
+                             size_t(plan.query), size_t(plan.tree));
+      first_query += job.num_queries;
+      jobs.push_back(job);
     }
-    if (has_vertex_tree_) vertex_tree_.build(vertex_boxes(), num_vertices_);
+    return jobs;
   }
-  // The same for a rebuild: the elements back in id order first, into the scratch members once
-  // a rebuild is reserved (an asynchronous one allocates nothing), else into this call's own.
-  void rebuild_trees() {
-    Array<Triangle> local_triangles;
-    Array<Edge> local_edges;
-    Array<Triangle>& triangles = reserved_.rebuild ? triangle_scratch_ : local_triangles;
-    Array<Edge>& edges = reserved_.rebuild ? edge_scratch_ : local_edges;
-    if (has_triangle_tree_)
-      x_.scatter_groups(leaf_triangles_, triangle_tree_.view().sorted_prims, num_triangles_, triangles);
-    if (has_edge_tree_) x_.scatter_groups(leaf_edges_, edge_tree_.view().sorted_prims, num_edges_, edges);
-    build_trees(triangles, edges);
+  // Writes the jobs to `where` (executor memory) and calls fn with their pass: point shapes for
+  // vertex queries unless a geometry is swept (then each vertex's path: segment shapes).
+  template <bool kVertexQueries, class Job, class Fn>
+  void run_jobs(const QueryRequest& request, const PairOutput& out, std::vector<Job> jobs, Array<Job>& where,
+                int32_t first_bound, Fn&& fn) {
+    int32_t num_queries = 0;
+    for (const Job& job : jobs) num_queries += job.num_queries;
+    const int32_t num_jobs = int32_t(jobs.size());
+    x_.upload(where, std::move(jobs));
+    auto with = [&](auto points, const QueryRequest& r) {
+      with_shape<decltype(points)::value>(r.mode, [&](auto shape) {
+        fn(JobPass<decltype(shape), Job>{r.kind, where.data(), num_jobs, num_queries, first_bound, out});
+      });
+    };
+    if (kVertexQueries && !swept()) return with(std::true_type{}, request);
+    with(std::false_type{}, kVertexQueries ? swept_path(request) : request);
   }
-  // The elements' boxes by leaf position, for refits (a build reads them by id: build_trees).
-  LeafBoxes<Triangle> triangle_boxes() const { return {vertices_.data(), leaf_triangles_.data(), vertices1()}; }
-  LeafBoxes<Edge> edge_boxes() const { return {vertices_.data(), leaf_edges_.data(), vertices1()}; }
-  PointBoxes vertex_boxes() const { return {vertices_.data(), vertices1()}; }
 
   X x_;  // first: holds its device while the members below are created and destroyed
-  Array<Vec3> vertices_;
-  Array<TriangleGroup> leaf_triangles_;  // with a triangle tree: the triangles, in its leaf order only
-  Array<EdgeGroup> leaf_edges_;          // with an edge tree: the edges, in its leaf order only
-  Array<Edge> edges_;                    // without an edge tree: the edges by id (copy_edges)
-  Array<Triangle> triangle_scratch_;     // a reserved rebuild's: the elements by id (rebuild_trees)
-  Array<Edge> edge_scratch_;
-  Array<int32_t> vertex_order_;  // the vertices' Morton order at build: VT and EV query order
-  Array<Vec3> staging_;  // asynchronous refits: new positions, checked before they are taken
-  Array<Vec3> staging1_;  // asynchronous swept steps: the end positions, checked likewise
-  Array<Vec3> vertices1_;  // swept: the positions at the end of the step (vertices_: at its start)
-  Array<float> rho_;     // float64 input: rho[0], how far rounding moved the vertices at most
-  int32_t num_vertices_, num_triangles_, num_edges_;
-  bool has_triangle_tree_, has_edge_tree_, has_vertex_tree_, keeps_vertex_order_;
-  bool float64_;  // vertices come as float64 (every call: the scene's scalar type)
-  bool swept_ = false;  // the last positions were swept ones (vertices_ to vertices1_)
-  Reservation reserved_;
-  bool nodes_fixed_ = false;  // fix_nodes() has run
-
-  // The trees' node storage fixed at its bound (max_node_count), once: by any reservation and by
-  // the first stream-ordered call. A build such a call enqueues then never reads its node count
-  // back (a host copy, refused in an asynchronous call), and a graph captured from such calls keeps
-  // the nodes' addresses across later rebuilds that keep more nodes. Blocking-only scenes keep
-  // the smaller room that their builds size (cuda/tree.cuh).
-  void fix_nodes() {
-    if (nodes_fixed_) return;
-    if (has_triangle_tree_) x_.reserve_nodes(triangle_tree_, num_triangles_);
-    if (has_edge_tree_) x_.reserve_nodes(edge_tree_, num_edges_);
-    if (has_vertex_tree_) x_.reserve_nodes(vertex_tree_, num_vertices_);
-    nodes_fixed_ = true;
-  }
-  typename X::Tree triangle_tree_, edge_tree_, vertex_tree_;
+  std::vector<std::unique_ptr<Geometry>> geometries_;
+  std::vector<GeometryShape> shapes_;
+  std::vector<FirstIds> first_;  // each geometry's first global ids
+  FirstIds totals_;              // the scene's counts
+  std::array<std::vector<JobPlan>, kQueryKinds> plans_;  // each mesh kind's jobs
+  Array<VtJob> vt_jobs_;  // the last query's jobs of each kind, in executor memory
+  Array<EvJob> ev_jobs_;
+  Array<EeJob> ee_jobs_;
+  Array<VvJob> vv_jobs_;
 };
 
 template <class X>

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "minkq/predicates.h"
+#include "minkq/thickness.h"
 
 namespace minkq {
 
@@ -37,23 +38,31 @@ MINKQ_HD Box element_box(const Vec3* vertices, const Vec3* vertices1, const Edge
   if (vertices1) b = box_expand(box_expand(b, vertices1[edge.v[0]]), vertices1[edge.v[1]]);
   return b;
 }
+// The box a tree holds for an element: its box grown by its thickness (thickness.h; the box
+// itself without a thickness array).
+template <class Prim>
+MINKQ_HD Box reach_box(const Vec3* vertices, const Vec3* vertices1, const float* thickness, const Prim& e) {
+  return grow_box(element_box(vertices, vertices1, e), element_thickness(thickness, e));
+}
 // The box of element i, by id.
 template <class Prim>
 struct ElementBoxes {
   const Vec3* vertices;
   const Prim* prims;
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  MINKQ_HD Box operator()(int32_t i) const { return element_box(vertices, vertices1, prims[i]); }
+  const float* thickness = nullptr;  // per vertex, or none
+  MINKQ_HD Box operator()(int32_t i) const { return reach_box(vertices, vertices1, thickness, prims[i]); }
 };
 using TriangleBoxes = ElementBoxes<Triangle>;
 using EdgeBoxes = ElementBoxes<Edge>;
-// The box of the element at leaf position p, from the elements in leaf order (a refit's
+// The box of point i (a vertex tree's element): the point, or swept the box of its path.
 struct PointBoxes {
   const Vec3* points;
   const Vec3* points1 = nullptr;  // swept: the positions at t = 1 (the box of the path)
+  const float* thickness = nullptr;  // per point, or none: the box grown by it
   MINKQ_HD Box operator()(int32_t i) const {
     const Box b = Box::of_point(points[i]);
-    return points1 ? box_expand(b, points1[i]) : b;
+    return grow_box(points1 ? box_expand(b, points1[i]) : b, vertex_thickness(thickness, i));
   }
 };
 

@@ -75,6 +75,7 @@ MINKQ_HD unsigned incident_lanes(const LeafGroup<Prim>& g, int32_t a, int32_t b,
 #endif
 }
 
+// The box of the element at leaf position p, from the elements in leaf order (a refit's
 // source: kByLeafPosition, refit.h).
 template <class Prim>
 struct LeafBoxes {
@@ -82,7 +83,8 @@ struct LeafBoxes {
   const Vec3* vertices;
   const LeafGroup<Prim>* groups;
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  MINKQ_HD Box operator()(int32_t p) const { return element_box(vertices, vertices1, leaf_element(groups, p)); }
+  const float* thickness = nullptr;  // per vertex, or none
+  MINKQ_HD Box operator()(int32_t p) const { return reach_box(vertices, vertices1, thickness, leaf_element(groups, p)); }
 };
 
 }  // namespace minkq

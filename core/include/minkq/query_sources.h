@@ -102,6 +102,16 @@ MINKQ_HD QueryGeometry vertex_geometry(const Vec3* vertices, const Vec3* vertice
   return {vertices[v], vertices1 ? vertices1[v] : vertices[v], r};
 }
 
+// Edge e as a query: the segment, or swept (vertices1 set) its swept box, as the box from its
+// low to its high corner (box mode only: the front end refuses the segment modes); radius r.
+MINKQ_HD QueryGeometry edge_geometry(const Vec3* vertices, const Vec3* vertices1, const Edge& e, float r) {
+  if (vertices1) {
+    const Box b = element_box(vertices, vertices1, e);
+    return {b.lo, b.hi, r};
+  }
+  return {vertices[e.v[0]], vertices[e.v[1]], r};
+}
+
 // Vertex v against the tree of `Prim`s, triangles (VT) or edges (EV); pairs (v, p). Queries run
 // in `order` when given (the vertices' Morton order: neighbouring queries then walk the same
 // nodes). Swept (vertices1 set), vertex v is its path, the segment from vertices[v] to
@@ -116,9 +126,12 @@ struct VertexPrimQueries {
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
+  const float* thickness = nullptr;  // per vertex (thickness.h), or none
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {order ? order[i] : i, -1}; }
-  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return vertex_geometry(vertices, vertices1, t.q, radius()); }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const {
+    return vertex_geometry(vertices, vertices1, t.q, reach(radius(), vertex_thickness(thickness, t.q)));
+  }
   // The lanes of `hits` (group `base` of the tree's leaf order) that the incidence filter drops.
   MINKQ_HD unsigned dropped_lanes(QueryTarget target, int64_t base, unsigned hits) const {
     if (!(filters & kDropIncident)) return 0;
@@ -138,7 +151,9 @@ struct VertexPrimQueries {
   // Whether the tests after incidence keep vertex v against element e: the leaf-exact test
   // where asked.
   MINKQ_HD bool keeps(int32_t v, const Prim& e) const {
-    return !(filters & kLeafExact) || point_within(vertices, vertices[v], e, radius());
+    if (!(filters & kLeafExact)) return true;
+    return point_within(vertices, vertices[v], e,
+                        reach(radius(), vertex_thickness(thickness, v), element_thickness(thickness, e)));
   }
   MINKQ_HD Pair pair(int32_t v, int32_t t) const { return {v, t}; }
 };
@@ -158,6 +173,7 @@ struct EdgeEdgeQueries {
   uint32_t filters;
   const float* rho = nullptr;  // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
+  const float* thickness = nullptr;  // per vertex (thickness.h), or none
   MINKQ_HD float radius() const { return query_radius(r, rho); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_edges[i], i}; }
   // The edge at leaf position p.
@@ -165,11 +181,7 @@ struct EdgeEdgeQueries {
   // Static: the edge as a segment. Swept: the edge's swept box, as the box from its low to its
   // high corner (box mode only: the front end refuses the segment modes).
   MINKQ_HD QueryGeometry geometry_of(const Edge& e) const {
-    if (vertices1) {
-      const Box b = element_box(vertices, vertices1, e);
-      return {b.lo, b.hi, radius()};
-    }
-    return {vertices[e.v[0]], vertices[e.v[1]], radius()};
+    return edge_geometry(vertices, vertices1, e, reach(radius(), element_thickness(thickness, e)));
   }
   MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return geometry_of(edge_at(t.after)); }
   // The lanes of `hits` (group `base` of the edge tree's leaf order) that the incidence filter
@@ -193,11 +205,12 @@ struct EdgeEdgeQueries {
   // Whether the tests after incidence keep edges e (a) and f (b), Shape(e) overlapping f's box.
   template <class Shape>
   MINKQ_HD bool keeps(int32_t e, const Edge& a, int32_t f, const Edge& b) const {
-    if (!Shape::from(geometry_of(b)).finer(element_box(vertices, vertices1, a))) return false;
+    if (!Shape::from(geometry_of(b)).finer(reach_box(vertices, vertices1, thickness, a))) return false;
     if (!(filters & kLeafExact)) return true;
     // In the pair's own order (lower id first): rounding makes the test's arguments unequal.
     const Edge lo = e < f ? a : b, hi = e < f ? b : a;
-    return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]], radius());
+    return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]],
+                                  reach(radius(), element_thickness(thickness, lo), element_thickness(thickness, hi)));
   }
   MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
 };
@@ -215,9 +228,11 @@ struct VertexVertexQueries {
   uint32_t filters;
   const float* rho = nullptr;       // float64 input: how far rounding moved the vertices (float64.h)
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
+  const float* thickness = nullptr;  // per vertex (thickness.h), or none
   MINKQ_HD float radius() const { return query_radius(r, rho); }
+  MINKQ_HD float radius_of(int32_t v) const { return reach(radius(), vertex_thickness(thickness, v)); }
   MINKQ_HD QueryTarget target(int32_t i) const { return {sorted_vertices[i], i}; }
-  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return vertex_geometry(vertices, vertices1, t.q, radius()); }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const { return vertex_geometry(vertices, vertices1, t.q, radius_of(t.q)); }
   MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned) const { return 0; }
   template <class Shape>
   MINKQ_HD bool tests_rest() const {
@@ -226,11 +241,12 @@ struct VertexVertexQueries {
   template <class Shape>
   MINKQ_HD bool accept_rest(QueryTarget target, int32_t w, int64_t) const {
     const int32_t v = target.q;
-    if (!Shape::from(vertex_geometry(vertices, vertices1, w, radius())).finer(PointBoxes{vertices, vertices1}(v)))
+    if (!Shape::from(vertex_geometry(vertices, vertices1, w, radius_of(w))).finer(PointBoxes{vertices, vertices1, thickness}(v)))
       return false;
     if (!(filters & kLeafExact)) return true;
     const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
-    return point_point_within(vertices[lo], vertices[hi], radius());
+    return point_point_within(vertices[lo], vertices[hi],
+                              reach(radius(), vertex_thickness(thickness, lo), vertex_thickness(thickness, hi)));
   }
   MINKQ_HD Pair pair(int32_t v, int32_t w) const { return v < w ? Pair{v, w} : Pair{w, v}; }
 };

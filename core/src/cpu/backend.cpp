@@ -193,10 +193,8 @@ class CpuBackend final : public Backend {
   void check_device_pointer(const void*, const std::string& what) override {
     fail(Status::kInvalidArgument, what + " is in device memory but the device is " + name());
   }
-  std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
-                                               std::vector<Edge> edges, const MeshTrees& trees) override {
-    return std::make_unique<MeshStoreOn<CpuExecutor>>(CpuExecutor::Device{}, vertices, std::move(triangles),
-                                                      std::move(edges), trees);
+  std::unique_ptr<MeshStore> create_mesh_store(std::vector<GeometryInput> geometries) override {
+    return std::make_unique<MeshStoreOn<CpuExecutor>>(CpuExecutor::Device{}, std::move(geometries));
   }
   std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
     return std::make_unique<BoxStoreOn<CpuExecutor>>(CpuExecutor::Device{}, boxes);

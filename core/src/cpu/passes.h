@@ -32,7 +32,7 @@ void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
   const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
   if (pass.out.capacity == 0) {
     PairCounter count;  // leaf_filter.h: the count-only emitter the CUDA backend uses too
-    for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, count, work);
+    for (int32_t i = block * kBlock; i < end; ++i) pass.run(i, count, work);
     part.counted += count.counted;
     return;
   }
@@ -40,7 +40,7 @@ void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
     part.pairs.push_back(first);
     part.pairs.push_back(second);
   };
-  for (int32_t i = block * kBlock; i < end; ++i) run_query<typename Pass::Shape>(pass.bvh, pass.queries, i, emit, work);
+  for (int32_t i = block * kBlock; i < end; ++i) pass.run(i, emit, work);
 }
 
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the

@@ -249,10 +249,8 @@ class CudaBackend final : public Backend {
     }
   }
 
-  std::unique_ptr<MeshStore> create_mesh_store(const Strided& vertices, std::vector<Triangle> triangles,
-                                               std::vector<Edge> edges, const MeshTrees& trees) override {
-    return std::make_unique<MeshStoreOn<CudaExecutor>>(ordinal_, vertices, std::move(triangles), std::move(edges),
-                                                       trees);
+  std::unique_ptr<MeshStore> create_mesh_store(std::vector<GeometryInput> geometries) override {
+    return std::make_unique<MeshStoreOn<CudaExecutor>>(ordinal_, std::move(geometries));
   }
   std::unique_ptr<Store> create_box_store(const Strided& boxes) override {
     return std::make_unique<BoxStoreOn<CudaExecutor>>(ordinal_, boxes);

@@ -117,11 +117,11 @@ __device__ void run_pass_thread(const DevicePass<Pass>& d, int64_t i) {
   if (q < d.pass.num_queries) {
     if (d.slots.capacity == 0) {  // uniform over the pass
       PairCounter counter;
-      run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), counter, work);
+      d.pass.run(int32_t(q), counter, work);
       add_count(d.slots.count, counter.counted);
     } else {
       PairBuffer emit(d.slots);
-      run_query<typename Pass::Shape>(d.pass.bvh, d.pass.queries, int32_t(q), emit, work);
+      d.pass.run(int32_t(q), emit, work);
       emit.flush();
     }
   }
@@ -257,7 +257,7 @@ void run_passes_async(QueryWorkspace& ws, const Pass&... passes) {
   auto sort = [&](const auto& pass) {
     if (pass.out.canonical)
       sort_pairs_async(pass.out.pairs, int64_t(pass.out.capacity),
-                       reinterpret_cast<const unsigned long long*>(pass.out.count), pass.num_queries, ws);
+                       reinterpret_cast<const unsigned long long*>(pass.out.count), pass.first_ids(), ws);
   };
   (sort(passes), ...);
 }
@@ -271,6 +271,7 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
   const std::array<QueryKind, kPasses> kinds{passes.kind...};
   const std::array<PairOutput, kPasses> outs{passes.out...};
   const std::array<int32_t, kPasses> num_queries{passes.num_queries...};
+  const std::array<int32_t, kPasses> first_ids{passes.first_ids()...};
   std::array<uint64_t, kPasses> capacity{};
   for (size_t k = 0; k < kPasses; ++k) {
     capacity[k] = outs[k].capacity;
@@ -330,7 +331,7 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(QueryWorkspace& ws, const std::
     if (totals[k] > outs[k].capacity) continue;  // the caller learns the exact count; nothing copied
     if (totals[k] > capacity[k]) fail(Status::kInternal, "pair count changed between two runs of the same query");
     if (outs[k].canonical)
-      sort_pairs(pairs[k], int64_t(blocking_sort_keys(totals[k], outs[k].capacity)), num_queries[k], ws);
+      sort_pairs(pairs[k], int64_t(blocking_sort_keys(totals[k], outs[k].capacity)), first_ids[k], ws);
     if (outs[k].memory == Memory::kHost)
       copy(outs[k].pairs, pairs[k], totals[k] * 2 * sizeof(int32_t), cudaMemcpyDeviceToHost);
   }
