@@ -151,8 +151,8 @@ impl Scene {
                 &mut raw,
             )
         })?;
-        let raw = NonNull::new(raw)
-            .ok_or_else(|| Error::Internal("minkq_scene_create_geometries returned NULL".into()))?;
+        let raw =
+            NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_scene_create_geometries returned NULL".into()))?;
         Scene::from_raw(raw, device, flags)
     }
 
