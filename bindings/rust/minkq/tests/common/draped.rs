@@ -46,8 +46,11 @@ pub fn body(n: i32) -> Vec<[f32; 3]> {
     sheet(n, 0.0, 1.0, 99, 0.0, |u, v| 0.02 * (9.0 * u + 1.0).sin() * (8.0 * v).sin())
 }
 
+/// A mesh's vertices and triangles.
+pub type MeshSlices<'a> = (&'a [[f32; 3]], &'a [[i32; 3]]);
+
 /// The meshes concatenated, as the global numbering orders them.
-pub fn concatenated(parts: &[(&[[f32; 3]], &[[i32; 3]])]) -> (Vec<[f32; 3]>, Vec<[i32; 3]>) {
+pub fn concatenated(parts: &[MeshSlices<'_>]) -> (Vec<[f32; 3]>, Vec<[i32; 3]>) {
     let (mut vertices, mut triangles) = (Vec::new(), Vec::new());
     for (v, t) in parts {
         let offset = vertices.len() as i32;
