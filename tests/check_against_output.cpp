@@ -47,10 +47,10 @@ void write_mesh(const std::string& path, const Mesh& m, bool ply) {
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
-// A: a wavy 24 x 24 sheet on [0,1]^2; B: a 20 x 20 sheet twisted one turn about the x axis,
+// A: a wavy 24 x 24 sheet on [0,1]^2; B: a 20 x 20 sheet twisted two turns about the x axis,
 // through A along x, with a little deterministic jitter so that nothing lines up exactly.
 std::pair<Mesh, Mesh> generated_pair() {
-  Mesh a = ref::grid_sheet(24), b = ref::twisted_sheet(20, 1.0);
+  Mesh a = ref::grid_sheet(24), b = ref::twisted_sheet(20, 2.0);
   for (size_t i = 0; i < a.xyz.size(); i += 3) a.xyz[i + 2] = float(0.05 * std::sin(7.0 * a.xyz[i] + 3.0 * a.xyz[i + 1]));
   for (size_t i = 0; i < b.xyz.size(); ++i) {
     b.xyz[i] = float(double(b.xyz[i]) * 0.97 + 0.002 * std::sin(0.37 * double(i)));
@@ -187,7 +187,7 @@ int check_pair(const std::string& binary, bool ply, const std::string& work) {
   write_mesh(path_a, generated_a, ply);
   write_mesh(path_b, generated_b, ply);
   const Mesh a = ref::load_mesh(path_a), b = ref::load_mesh(path_b);
-  const double r = double(float(0.5 * ref::mean_edge_length(a)));
+  const double r = double(float(0.75 * ref::mean_edge_length(a)));
   char radius[32];
   std::snprintf(radius, sizeof radius, "%.9g", r);
 
@@ -224,7 +224,7 @@ int check_pair(const std::string& binary, bool ply, const std::string& work) {
       merge_shifted(ee, own_a[m].second, 0, 0);
       merge_shifted(ee, own_b[m].second, both.b_edge, both.b_edge);
       const bool same = vt == self[m].first && ee == self[m].second;
-      std::printf("%s %s: --self %s the cross pairs and each mesh's own\n", tag.c_str(), kModes[m],
+      std::printf("%s%s: --self %s the cross pairs and each mesh's own\n", thick ? "thickness " : "", kModes[m],
                   same ? "reports exactly" : "DIFFERS from");
       failures += same ? 0 : 1;
     }
