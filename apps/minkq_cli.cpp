@@ -260,7 +260,7 @@ std::vector<float> read_thickness(const std::string& path, const std::vector<mes
     if (!std::isfinite(float(v))) fail("too large for a float: '" + text + "'");
     if (t.size() == needed)
       fail("one value too many: " + std::to_string(needed) + " expected, one per vertex (" + counts + ")");
-    t.push_back(float(v));
+    t.push_back(v == 0 ? 0.0f : float(v));  // -0 as +0
   }
   if (f.bad()) throw std::runtime_error("--thickness: cannot read " + path);
   if (t.size() != needed)
@@ -306,6 +306,7 @@ Scene scene_for_query(minkq_device* device, const Args& args) {
   return geometry_scene(device, meshes, t, args.has("--self"));
 }
 
+// The usage errors of `query`'s options, before any file is read.
 void check_query_options(const Args& args) {
   if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
   if (args.has("--self") && !args.get("--against"))
