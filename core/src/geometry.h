@@ -40,6 +40,7 @@ class GeometryOn {
         has_edge_tree_(input.trees.edges), has_vertex_tree_(input.trees.vertices),
         keeps_vertex_order_(input.trees.vertex_order), float64_(input.vertices.scalar == Scalar::kFloat64),
         has_thickness_(!input.thickness.empty()) {
+    for (float t : input.thickness) max_thickness_ = std::max(max_thickness_, t);
     gather_into(x, input.vertices, vertices_, false);
     if (has_thickness_) x.upload(thickness_, std::move(input.thickness));
     // The elements by id, only until their trees hold them (edges without an edge tree: kept).
@@ -57,6 +58,7 @@ class GeometryOn {
   bool has_edge_tree() const { return has_edge_tree_; }
   bool has_vertex_tree() const { return has_vertex_tree_; }
   bool swept() const { return swept_; }
+  float max_thickness() const { return max_thickness_; }  // the largest vertex thickness, 0 without
 
   // The geometry's edges, by id, to host memory (num_edges entries).
   void copy_edges(X& x, Edge* host_out) {
@@ -225,6 +227,7 @@ class GeometryOn {
   bool has_triangle_tree_, has_edge_tree_, has_vertex_tree_, keeps_vertex_order_;
   bool float64_;  // vertices come as float64 (every call: the geometry's scalar type)
   bool has_thickness_;
+  float max_thickness_ = 0.0f;
   bool swept_ = false;  // the last positions were swept ones (vertices_ to vertices1_)
   Reservation reserved_;
   bool nodes_fixed_ = false;  // fix_nodes() has run

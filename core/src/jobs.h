@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <type_traits>
 #include <vector>
 
 #include "executor.h"
@@ -30,18 +31,31 @@ struct OffsetEmit {
   MINKQ_HD void add(unsigned n) { emit.add(n); }
 };
 
+// No reversed cross jobs (EE, VV: the smaller side queries already).
+struct NoReversed {};
+
 // One job: queries first_query .. first_query + num_queries - 1 of its pass, against bvh, by the
-// self source or the cross source.
-template <class SelfQueries, class CrossQueries>
+// self source, the cross source or the reversed cross source (VT, EV: cross_queries.h's
+// CrossPrimVertexQueries, run with the box as its node test and the pass's shape at its leaves).
+template <class SelfQueries, class CrossQueries, class ReversedQueries = NoReversed>
 struct GeometryJob {
+  using Reversed = ReversedQueries;
   int32_t first_query, num_queries;
   bool self;
+  bool reversed;
   bool swap;  // OffsetEmit's
   int32_t first_offset, second_offset;
   BvhView bvh;
   SelfQueries self_queries;
   CrossQueries cross_queries;
+  ReversedQueries reversed_queries;
 };
+
+// The source a reversed job runs with the pass's shape.
+template <class Shape, class Prim>
+MINKQ_HD ReversedVertexPrimQueries<Prim, Shape> reversed_source(const CrossPrimVertexQueries<Prim>& q) {
+  return {q};
+}
 
 // A pass over jobs (executor memory, in order of first_query, none empty): query i runs in the
 // job whose range holds it, found by binary search.
@@ -63,8 +77,12 @@ struct JobPass {
     }
     const Job& job = jobs[lo];
     OffsetEmit<Emit> offset_emit{emit, job.first_offset, job.second_offset, job.swap};
-    if (job.self) run_query<Shape>(job.bvh, job.self_queries, i - job.first_query, offset_emit, work);
-    else run_query<Shape>(job.bvh, job.cross_queries, i - job.first_query, offset_emit, work);
+    const int32_t q = i - job.first_query;
+    if constexpr (!std::is_same<typename Job::Reversed, NoReversed>::value) {
+      if (job.reversed) return run_query<BoxShape>(job.bvh, reversed_source<Shape>(job.reversed_queries), q, offset_emit, work);
+    }
+    if (job.self) run_query<Shape>(job.bvh, job.self_queries, q, offset_emit, work);
+    else run_query<Shape>(job.bvh, job.cross_queries, q, offset_emit, work);
   }
   MINKQ_HD int32_t first_ids() const { return first_bound; }
 };
@@ -75,9 +93,12 @@ struct GeometryShape {
   int32_t vertices, triangles, edges;
 };
 
-// One job of a kind, before it has a tree: geometry `query`'s elements against geometry `tree`'s.
+// One job of a kind, before it has a tree: geometry `query`'s elements against geometry `tree`'s;
+// reversed (VT, EV across geometries): walked from the tree geometry's primitives into the query
+// geometry's vertex tree, which it then needs.
 struct JobPlan {
   int32_t query, tree;
+  bool reversed = false;
 };
 
 // Whether geometries a != b are tested against each other: they share a world (or either is in
@@ -106,8 +127,11 @@ inline std::vector<JobPlan> plan_jobs(const std::vector<GeometryShape>& geometri
   };
   auto takes_part = [&](int32_t g) { return (geometries[g].role.kinds & kind_bit(kind)) != 0; };
   std::vector<JobPlan> plans;
+  // A VT or EV job walks from the side with fewer elements: the vertices of `q` into the tree of
+  // `t`, or reversed, the primitives of `t` into the vertex tree of `q`.
   auto add = [&](int32_t q, int32_t t) {
-    if (queries(q) > 0 && tree_elements(t) > 0) plans.push_back({q, t});
+    if (queries(q) > 0 && tree_elements(t) > 0)
+      plans.push_back({q, t, q != t && !symmetric && tree_elements(t) < queries(q)});
   };
   auto add_cross = [&](int32_t a, int32_t b) {
     if (!takes_part(a) || !takes_part(b) || !may_pair(geometries[a].role, geometries[b].role)) return;

@@ -63,8 +63,8 @@ class MeshStoreOn final : public MeshStore {
   template <class T>
   using Array = typename X::template Array<T>;
   using Geometry = GeometryOn<X>;
-  using VtJob = GeometryJob<VertexTriangleQueries, CrossVertexTriangleQueries>;
-  using EvJob = GeometryJob<VertexEdgeQueries, CrossVertexEdgeQueries>;
+  using VtJob = GeometryJob<VertexTriangleQueries, CrossVertexTriangleQueries, CrossPrimVertexQueries<Triangle>>;
+  using EvJob = GeometryJob<VertexEdgeQueries, CrossVertexEdgeQueries, CrossPrimVertexQueries<Edge>>;
   using EeJob = GeometryJob<EdgeEdgeQueries, CrossEdgeEdgeQueries>;
   using VvJob = GeometryJob<VertexVertexQueries, CrossVertexVertexQueries>;
 
@@ -80,10 +80,14 @@ class MeshStoreOn final : public MeshStore {
       next = {next.vertices + shape.vertices, next.triangles + shape.triangles, next.edges + shape.edges};
     }
     totals_ = next;
-    for (GeometryInput& in : inputs) geometries_.push_back(std::make_unique<Geometry>(x_, std::move(in)));
     for (const QueryKind kind : {QueryKind::kVertexTriangle, QueryKind::kEdgeEdge, QueryKind::kVertexVertex,
                                  QueryKind::kVertexEdge})
       plans_[size_t(kind)] = plan_jobs(shapes_, kind);
+    // The vertex side of a reversed job needs its vertex tree.
+    for (const auto& plans : plans_)
+      for (const JobPlan& plan : plans)
+        if (plan.reversed) inputs[size_t(plan.query)].trees.vertices = true;
+    for (GeometryInput& in : inputs) geometries_.push_back(std::make_unique<Geometry>(x_, std::move(in)));
     x_.finish();
     x_.release();
   }
@@ -282,6 +286,12 @@ class MeshStoreOn final : public MeshStore {
           job.bvh = t.triangle_tree();
           job.first_offset = first_[qi].vertices;
           job.second_offset = first_[ti].triangles;
+          if (job.reversed) {
+            job.bvh = q.vertex_tree();
+            job.reversed_queries = {q.side(), t.side(), t.leaf_triangles(), t.triangle_tree().sorted_prims,
+                                    request.r, request.filters & kLeafExact, q.max_thickness()};
+            return t.num_triangles();
+          }
           if (job.self) job.self_queries = q.vt_queries(request.r, self_filters(qi, request));
           else job.cross_queries = {q.side(), t.side(), t.leaf_triangles(), q.vertex_order(), request.r, request.filters & kLeafExact};
           return q.num_vertices();
@@ -291,6 +301,12 @@ class MeshStoreOn final : public MeshStore {
           job.bvh = t.edge_tree();
           job.first_offset = first_[qi].vertices;
           job.second_offset = first_[ti].edges;
+          if (job.reversed) {
+            job.bvh = q.vertex_tree();
+            job.reversed_queries = {q.side(), t.side(), t.leaf_edges(), t.edge_tree().sorted_prims,
+                                    request.r, request.filters & kLeafExact, q.max_thickness()};
+            return t.num_edges();
+          }
           if (job.self) job.self_queries = q.ev_queries(request.r, self_filters(qi, request));
           else job.cross_queries = {q.side(), t.side(), t.leaf_edges(), q.vertex_order(), request.r, request.filters & kLeafExact};
           return q.num_vertices();
@@ -329,6 +345,7 @@ class MeshStoreOn final : public MeshStore {
     for (const JobPlan& plan : plans) {
       Job job{};
       job.self = plan.query == plan.tree;
+      job.reversed = plan.reversed;
       job.first_query = first_query;
       job.num_queries = fill(job, *geometries_[size_t(plan.query)], *geometries_[size_t(plan.tree)],
                              size_t(plan.query), size_t(plan.tree));

@@ -59,6 +59,63 @@ struct CrossVertexPrimQueries {
 using CrossVertexTriangleQueries = CrossVertexPrimQueries<Triangle>;
 using CrossVertexEdgeQueries = CrossVertexPrimQueries<Edge>;
 
+// The same pairs as CrossVertexPrimQueries, walked the other way round: the primitives of
+// `prims` (query i: its element at leaf position i of its own tree) against the vertex tree of
+// `vertices`, for a geometry with many more vertices than the other has primitives (a large static
+// body against a cloth's triangles: the walk then grows with the body's depth, not its size). The
+// walk's node test is the box test, its radius covering every pair the vertex side's own test
+// accepts; the leaf filter then runs that test itself (Forward, the pass's shape, from the vertex
+// against the primitive's box, then the leaf-exact test), so the pairs are exactly those the vertex
+// side would find.
+template <class Prim>
+struct CrossPrimVertexQueries {
+  GeometrySide vertices, prims;
+  const LeafGroup<Prim>* leaf_prims;  // the primitives in their tree's leaf order
+  const int32_t* sorted_prims;        // that tree's leaf order
+  float r;
+  uint32_t filters;              // kLeafExact
+  float vertex_thickness_max;    // the largest thickness of the vertex side
+  MINKQ_HD float radius() const { return cross_radius(r, vertices, prims); }
+  // A vertex accepted by its own box test lies within next_up(reach(R, t)) of the primitive's box
+  // in each axis (box_gap_within), and its tree box is its box grown by t: so within R plus two
+  // ulps of R + t of the vertex's tree box, which a relative 2^-21 of R + the largest t covers.
+  MINKQ_HD float node_radius() const {
+    const double reach_r = double(radius());
+    return next_up(float_at_or_above(reach_r + (reach_r + double(vertex_thickness_max)) * 0x1p-21));
+  }
+};
+
+// CrossPrimVertexQueries as a query source whose node test is the box (run with BoxShape) and
+// whose leaf filter runs the vertex side's own test, Forward (the pass's shape).
+template <class Prim, class Forward>
+struct ReversedVertexPrimQueries {
+  CrossPrimVertexQueries<Prim> q;
+  MINKQ_HD QueryTarget target(int32_t i) const { return {i, -1}; }
+  MINKQ_HD Box prim_box(int32_t position) const {
+    return reach_box(q.prims.vertices, q.prims.vertices1, q.prims.thickness, leaf_element(q.leaf_prims, position));
+  }
+  MINKQ_HD QueryGeometry geometry(QueryTarget t) const {
+    const Box b = prim_box(t.q);
+    return {b.lo, b.hi, q.node_radius()};
+  }
+  MINKQ_HD unsigned dropped_lanes(QueryTarget, int64_t, unsigned) const { return 0; }
+  template <class Shape>
+  MINKQ_HD bool tests_rest() const {
+    return true;
+  }
+  template <class Shape>
+  MINKQ_HD bool accept_rest(QueryTarget t, int32_t v, int64_t) const {
+    const GeometrySide& side = q.vertices;
+    const float reach_r = q.radius(), tv = vertex_thickness(side.thickness, v);
+    if (!Forward::from(vertex_geometry(side.vertices, side.vertices1, v, reach(reach_r, tv))).overlaps(prim_box(t.q)))
+      return false;
+    if (!(q.filters & kLeafExact)) return true;
+    const Prim e = leaf_element(q.leaf_prims, t.q);
+    return point_within(q.prims.vertices, side.vertices[v], e, reach(reach_r, tv, element_thickness(q.prims.thickness, e)));
+  }
+  MINKQ_HD Pair pair(int32_t position, int32_t v) const { return {v, q.sorted_prims[position]}; }
+};
+
 // The edges of `query` (query i: its edge at leaf position i of its own edge tree) against the
 // edge tree of `tree`; pairs (query edge, tree edge) in the geometries' own ids. query_first:
 // the query geometry's global ids are the lower ones (the order of the leaf-exact test's
