@@ -235,6 +235,208 @@ extern "C" {
 extern "C" {
     pub fn minkq_scene_edges(scene: *const minkq_scene, out_edges: *mut i32, capacity: usize) -> minkq_status;
 }
+pub const MINKQ_GEOMETRY_SELF: minkq_geometry_flags = 1;
+pub const MINKQ_GEOMETRY_DROP_INCIDENT: minkq_geometry_flags = 2;
+pub const MINKQ_GEOMETRY_FLOAT64: minkq_geometry_flags = 4;
+pub const MINKQ_GEOMETRY_STATIC: minkq_geometry_flags = 8;
+pub type minkq_geometry_flags = ::std::os::raw::c_uint;
+#[repr(C)]
+#[derive(Debug, Copy, Clone)]
+pub struct minkq_geometry_desc {
+    pub struct_size: u32,
+    pub kinds: u32,
+    pub flags: u32,
+    pub world: i32,
+    pub group: u32,
+    pub mask: u32,
+    pub vertices: minkq_buffer,
+    pub triangles: minkq_buffer,
+    pub edges: minkq_buffer,
+    pub thickness: minkq_buffer,
+}
+#[test]
+fn bindgen_test_layout_minkq_geometry_desc() {
+    assert_eq!(
+        ::std::mem::size_of::<minkq_geometry_desc>(),
+        152usize,
+        concat!("Size of: ", stringify!(minkq_geometry_desc))
+    );
+    assert_eq!(
+        ::std::mem::align_of::<minkq_geometry_desc>(),
+        8usize,
+        concat!("Alignment of ", stringify!(minkq_geometry_desc))
+    );
+    fn test_field_struct_size() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).struct_size) as usize - ptr as usize
+            },
+            0usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(struct_size))
+        );
+    }
+    test_field_struct_size();
+    fn test_field_kinds() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).kinds) as usize - ptr as usize
+            },
+            4usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(kinds))
+        );
+    }
+    test_field_kinds();
+    fn test_field_flags() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).flags) as usize - ptr as usize
+            },
+            8usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(flags))
+        );
+    }
+    test_field_flags();
+    fn test_field_world() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).world) as usize - ptr as usize
+            },
+            12usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(world))
+        );
+    }
+    test_field_world();
+    fn test_field_group() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).group) as usize - ptr as usize
+            },
+            16usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(group))
+        );
+    }
+    test_field_group();
+    fn test_field_mask() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).mask) as usize - ptr as usize
+            },
+            20usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(mask))
+        );
+    }
+    test_field_mask();
+    fn test_field_vertices() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).vertices) as usize - ptr as usize
+            },
+            24usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(vertices))
+        );
+    }
+    test_field_vertices();
+    fn test_field_triangles() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).triangles) as usize - ptr as usize
+            },
+            56usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(triangles))
+        );
+    }
+    test_field_triangles();
+    fn test_field_edges() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).edges) as usize - ptr as usize
+            },
+            88usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(edges))
+        );
+    }
+    test_field_edges();
+    fn test_field_thickness() {
+        assert_eq!(
+            unsafe {
+                let uninit = ::std::mem::MaybeUninit::<minkq_geometry_desc>::uninit();
+                let ptr = uninit.as_ptr();
+                ::std::ptr::addr_of!((*ptr).thickness) as usize - ptr as usize
+            },
+            120usize,
+            concat!("Offset of field: ", stringify!(minkq_geometry_desc), "::", stringify!(thickness))
+        );
+    }
+    test_field_thickness();
+}
+extern "C" {
+    pub fn minkq_geometry_desc_init(desc: *mut minkq_geometry_desc);
+}
+extern "C" {
+    pub fn minkq_scene_create_geometries(
+        device: *mut minkq_device,
+        geometries: *const minkq_geometry_desc,
+        count: usize,
+        out_scene: *mut *mut minkq_scene,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_geometry_count(scene: *const minkq_scene) -> u32;
+}
+pub const MINKQ_ELEMENT_VERTEX: minkq_element = 0;
+pub const MINKQ_ELEMENT_TRIANGLE: minkq_element = 1;
+pub const MINKQ_ELEMENT_EDGE: minkq_element = 2;
+pub type minkq_element = ::std::os::raw::c_uint;
+extern "C" {
+    pub fn minkq_scene_geometry_range(
+        scene: *const minkq_scene,
+        geometry: u32,
+        element: minkq_element,
+        out_first: *mut usize,
+        out_count: *mut usize,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_geometry_refit(scene: *mut minkq_scene, geometry: u32, vertices: minkq_buffer) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_geometry_rebuild(scene: *mut minkq_scene, geometry: u32, vertices: minkq_buffer)
+        -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_geometry_refit_swept(
+        scene: *mut minkq_scene,
+        geometry: u32,
+        x0: minkq_buffer,
+        x1: minkq_buffer,
+    ) -> minkq_status;
+}
+extern "C" {
+    pub fn minkq_scene_geometry_rebuild_swept(
+        scene: *mut minkq_scene,
+        geometry: u32,
+        x0: minkq_buffer,
+        x1: minkq_buffer,
+    ) -> minkq_status;
+}
 pub const MINKQ_QUERY_VT: minkq_query_kind = 0;
 pub const MINKQ_QUERY_EE: minkq_query_kind = 1;
 pub const MINKQ_QUERY_VV: minkq_query_kind = 2;

@@ -77,8 +77,8 @@ pub(crate) mod sealed {
 use sealed::Precision;
 
 /// The plain records a host slice may hold when it becomes a [`Buffer`]: arrays of `f32`,
-/// `f64` or `i32` without padding, and [`Aabb`]. Sealed: the C API reads these bytes as floats,
-/// doubles and ints.
+/// `f64` or `i32` without padding, [`Aabb`], and `f32` (a geometry's thickness per vertex).
+/// Sealed: the C API reads these bytes as floats, doubles and ints.
 ///
 /// ```
 /// fn record_size<T: minkq::Record>() -> usize { std::mem::size_of::<T>() }
@@ -111,6 +111,7 @@ records!(
     [i32; 3] => None,
     [i32; 2] => None,
     [[f32; 3]; 2] => Some(Precision::F32),
+    f32 => Some(Precision::F32),
     Aabb => Some(Precision::F32)
 );
 impl Vertex for [f32; 3] {}
@@ -308,6 +309,11 @@ impl<'a> Buffer<'a> {
 
     pub(crate) fn raw(&self) -> sys::minkq_buffer {
         self.raw
+    }
+
+    /// The coordinates' type, where the buffer knows it (a slice of float or double records).
+    pub(crate) fn precision(&self) -> Option<Precision> {
+        self.precision
     }
 
     /// The C buffer for a reader of `wanted` precision, or `Err` with the buffer's precision

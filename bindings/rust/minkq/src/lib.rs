@@ -77,6 +77,16 @@
 //! # Ok::<(), minkq::Error>(())
 //! ```
 //!
+//! # Scenes of many geometries
+//! [`Scene::from_geometries`] builds one scene of many [`GeometryDesc`]s: cloth, colliders,
+//! rods and particles, each with its own vertices (`[f32; 3]` or `[f64; 3]`), [`Kinds`],
+//! thickness per vertex, world, collision group and mask, and [`GeometryFlags`] (self pairs,
+//! static). Its queries report self pairs within geometries that ask for them and cross pairs
+//! between geometries that share a kind and a world and pass each other's masks, in one
+//! global numbering ([`Scene::geometry_range`], [`Scene::locate_pair`]). A step moves the
+//! moving geometries together ([`Scene::refit`]) or one at a time
+//! ([`Scene::refit_geometry`]); static ones are built once.
+//!
 //! # Float64 vertices
 //! A scene built from `[f64; 3]` vertices ([`SceneDesc::new_f64`]; [`SceneFlags::FLOAT64`] on
 //! [`SceneBuffers`]) rounds them to float, the precision of its trees and tests, and widens
@@ -162,6 +172,7 @@ mod buffer;
 mod bvh;
 mod device;
 mod error;
+mod geometry;
 mod pairs;
 mod query;
 mod scene;
@@ -179,6 +190,7 @@ pub use buffer::{Buffer, Memory, PairsOut, Record, Vertex};
 pub use bvh::{Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
+pub use geometry::{Element, GeometryDesc, GeometryFlags, Kinds};
 pub use pairs::PairBuffer;
 pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, Reserve, SceneFlags, WorkStats};
 pub use scene::{Scene, SceneBuffers, SceneDesc};

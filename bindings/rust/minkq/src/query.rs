@@ -3,6 +3,7 @@ use std::ops::{BitOr, BitOrAssign};
 use std::str::FromStr;
 
 use crate::error::Error;
+use crate::geometry::Element;
 use crate::sys;
 
 /// What a mesh query pairs up: VT and EE for triangle meshes, VV and EV for codimensional
@@ -89,6 +90,25 @@ impl QueryKind {
             QueryKind::Ee => SceneFlags::EE,
             QueryKind::Vv => SceneFlags::VV,
             QueryKind::Ev => SceneFlags::EV,
+        }
+    }
+
+    /// The elements a pair of this kind joins, in the pair's order: (vertex, triangle) for
+    /// VT, (edge, edge) for EE, (vertex, vertex) for VV, (vertex, edge) for EV. With
+    /// [`Scene::locate_pair`](crate::Scene::locate_pair) it maps a pair's global ids back to
+    /// geometries.
+    ///
+    /// ```
+    /// use minkq::{Element, QueryKind};
+    /// assert_eq!(QueryKind::Vt.elements(), [Element::Vertex, Element::Triangle]);
+    /// assert_eq!(QueryKind::Ev.elements(), [Element::Vertex, Element::Edge]);
+    /// ```
+    pub fn elements(self) -> [Element; 2] {
+        match self {
+            QueryKind::Vt => [Element::Vertex, Element::Triangle],
+            QueryKind::Ee => [Element::Edge, Element::Edge],
+            QueryKind::Vv => [Element::Vertex, Element::Vertex],
+            QueryKind::Ev => [Element::Vertex, Element::Edge],
         }
     }
 
@@ -228,6 +248,8 @@ macro_rules! flags {
         }
     };
 }
+// The geometry flags and kinds (geometry.rs) are flag types of the same shape.
+pub(crate) use flags;
 
 flags! {
     /// What a scene is built for (`minkq_scene_flags`): at least one of `VT`, `EE`, `VV` and

@@ -1,6 +1,6 @@
 //! Mesh scenes (`minkq_scene`): the [`Scene`] type, its creation, refit and rebuild, and its
-//! counts. Its descriptions, blocking queries, stream-ordered calls and swept positions live in
-//! the submodules.
+//! counts. Its descriptions, scenes of many geometries, blocking queries, stream-ordered calls
+//! and swept positions live in the submodules.
 use std::fmt;
 use std::ptr::{self, NonNull};
 use std::sync::Arc;
@@ -9,19 +9,24 @@ use crate::buffer::sealed::Precision;
 use crate::buffer::{Buffer, Vertex};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
+use crate::geometry::GeometryFlags;
 use crate::query::SceneFlags;
 use crate::sys;
 
 mod desc;
+mod geometries;
+mod geometry_moves;
 mod queries;
 mod stream_ordered;
 mod swept;
 
 pub use desc::{SceneBuffers, SceneDesc};
+use geometries::Layout;
 
 /// A triangle mesh, or codimensional elements (particles, rods: [`SceneDesc::codim`]), on a
 /// device with the BVHs its flags ask for, answering VT, EE, VV and EV queries
-/// (`minkq_scene`). Released when dropped; keeps its device alive.
+/// (`minkq_scene`); or a scene of many such geometries ([`Scene::from_geometries`]), answering
+/// the same queries with self and cross pairs. Released when dropped; keeps its device alive.
 ///
 /// Threads: `Send` but not `Sync`. The C API says one scene must not be used by two threads at
 /// the same time, so a `&Scene` may not cross threads (its queries would then run
@@ -53,8 +58,11 @@ pub use desc::{SceneBuffers, SceneDesc};
 /// ```
 pub struct Scene {
     raw: NonNull<sys::minkq_scene>,
-    /// Created with [`SceneFlags::FLOAT64`]: every vertex buffer holds 3 doubles per record.
+    /// Created with [`SceneFlags::FLOAT64`], or every moving geometry is float64: the vertex
+    /// buffers of whole-scene calls hold 3 doubles per record.
     float64: bool,
+    /// Each geometry's precision and first global ids (one geometry for a one-mesh scene).
+    layout: Layout,
     _device: Arc<DeviceHandle>,
 }
 
@@ -106,7 +114,7 @@ impl Scene {
         let float64 = desc.flags.contains(SceneFlags::FLOAT64);
         let raw_desc = sys::minkq_scene_desc {
             flags: desc.flags.bits(),
-            vertices: vertex_buffer("create", &desc.vertices, float64)?,
+            vertices: vertex_buffer("create", &desc.vertices, float64, Holder::Scene)?,
             triangles: desc.triangles.raw(),
             edges: desc.edges.raw(),
         };
@@ -115,7 +123,24 @@ impl Scene {
         // which outlives this call; the library copies them before returning.
         check(unsafe { sys::minkq_scene_create(device.handle.as_ptr(), &raw_desc, &mut raw) })?;
         let raw = NonNull::new(raw).ok_or_else(|| Error::Internal("minkq_scene_create returned NULL".into()))?;
-        Ok(Scene { raw, float64, _device: Arc::clone(&device.handle) })
+        let mut flags = GeometryFlags::SELF;
+        if desc.flags.contains(SceneFlags::DROP_INCIDENT) {
+            flags |= GeometryFlags::DROP_INCIDENT;
+        }
+        if float64 {
+            flags |= GeometryFlags::FLOAT64;
+        }
+        Scene::from_raw(raw, device, vec![flags])
+    }
+
+    /// Owns a scene the library created from geometries of `flags` (FLOAT64 set where a
+    /// geometry's vertices are doubles); releases it if its layout cannot be read.
+    fn from_raw(raw: NonNull<sys::minkq_scene>, device: &Device, flags: Vec<GeometryFlags>) -> Result<Scene> {
+        let layout = Layout::empty();
+        let mut scene = Scene { raw, float64: false, layout, _device: Arc::clone(&device.handle) };
+        scene.layout = Layout::read(&scene, flags)?;
+        scene.float64 = scene.layout.moving_float64();
+        Ok(scene)
     }
 
     /// Moves the vertices (same count) and refits the trees in place: the per-step call of a
@@ -279,7 +304,9 @@ impl Scene {
     }
 
     /// Whether the scene was created with [`SceneFlags::FLOAT64`]: its vertices are
-    /// `[f64; 3]` ([`Scene::refit_f64`], [`Scene::rebuild_f64`]) rather than `[f32; 3]`.
+    /// `[f64; 3]` ([`Scene::refit_f64`], [`Scene::rebuild_f64`]) rather than `[f32; 3]`. For a
+    /// scene of geometries: whether every moving geometry is float64 (and there is one), so
+    /// that whole-scene refits and rebuilds take `[f64; 3]`.
     ///
     /// ```
     /// # use minkq::*;
@@ -294,9 +321,14 @@ impl Scene {
         self.float64
     }
 
-    /// The C buffer of `call`'s vertices on this scene: see [`vertex_buffer`].
+    /// The C buffer of `call`'s vertices on this scene: see [`vertex_buffer`]. A scene whose
+    /// moving geometries mix precisions takes none: the library refuses the call with its
+    /// message before reading the buffer.
     fn vertex_buffer(&self, call: &str, vertices: &Buffer<'_>) -> Result<sys::minkq_buffer> {
-        vertex_buffer(call, vertices, self.float64)
+        if self.layout.mixed_precision() {
+            return Ok(vertices.raw());
+        }
+        vertex_buffer(call, vertices, self.float64, Holder::Scene)
     }
 
     /// How far the refits since the last build (creation or [`Scene::rebuild`]) have stretched
@@ -345,7 +377,7 @@ impl Scene {
         Ok(growth)
     }
 
-    /// The number of vertices.
+    /// The number of vertices (of every geometry).
     ///
     /// ```
     /// # use minkq::*;
@@ -358,7 +390,7 @@ impl Scene {
         unsafe { sys::minkq_scene_vertex_count(self.raw.as_ptr()) }
     }
 
-    /// The number of triangles.
+    /// The number of triangles (of every geometry).
     ///
     /// ```
     /// # use minkq::*;
@@ -371,7 +403,7 @@ impl Scene {
         unsafe { sys::minkq_scene_triangle_count(self.raw.as_ptr()) }
     }
 
-    /// The number of edges (given, or derived for an EE scene).
+    /// The number of edges (given, or derived for an EE scene; of every geometry).
     ///
     /// ```
     /// # use minkq::*;
@@ -384,7 +416,8 @@ impl Scene {
         unsafe { sys::minkq_scene_edge_count(self.raw.as_ptr()) }
     }
 
-    /// The scene's edges, numbered as EE pairs number them.
+    /// The scene's edges, numbered as EE pairs number them (in the global numbering, by global
+    /// vertex ids, for a scene of geometries).
     ///
     /// ```
     /// # use minkq::*;
@@ -400,15 +433,33 @@ impl Scene {
     }
 }
 
-/// The C buffer of `call`'s vertices for a scene of double (`float64`) or float vertices:
-/// [`Error::InvalidArgument`], naming both record types, for a slice of the other precision,
-/// which the C API cannot detect (it would misread the memory). Raw buffers pass: the scene's
-/// flag decides how they are read.
-fn vertex_buffer(call: &str, vertices: &Buffer<'_>, float64: bool) -> Result<sys::minkq_buffer> {
+/// What holds the vertices a buffer is checked for: a whole scene or one of its geometries.
+#[derive(Clone, Copy)]
+enum Holder {
+    Scene,
+    Geometry,
+}
+
+impl Holder {
+    /// The holder and its precision flag, as messages name them.
+    fn names(self) -> (&'static str, &'static str) {
+        match self {
+            Holder::Scene => ("a scene", "SceneFlags::FLOAT64"),
+            Holder::Geometry => ("a geometry", "GeometryFlags::FLOAT64"),
+        }
+    }
+}
+
+/// The C buffer of `call`'s vertices for a scene or geometry of double (`float64`) or float
+/// vertices: [`Error::InvalidArgument`], naming both record types, for a slice of the other
+/// precision, which the C API cannot detect (it would misread the memory). Raw buffers pass:
+/// the holder's flag decides how they are read.
+fn vertex_buffer(call: &str, vertices: &Buffer<'_>, float64: bool, holder: Holder) -> Result<sys::minkq_buffer> {
     let wanted = if float64 { Precision::F64 } else { Precision::F32 };
+    let (name, flag) = holder.names();
     vertices.raw_at(wanted).map_err(|got| {
         Error::InvalidArgument(format!(
-            "{call}: {} vertices, but a scene {} SceneFlags::FLOAT64 reads {}",
+            "{call}: {} vertices, but {name} {} {flag} reads {}",
             got.vertex(),
             if float64 { "with" } else { "without" },
             wanted.vertex()
@@ -418,7 +469,7 @@ fn vertex_buffer(call: &str, vertices: &Buffer<'_>, float64: bool) -> Result<sys
 
 impl Drop for Scene {
     fn drop(&mut self) {
-        // SAFETY: created by minkq_scene_create and released once, before its device (whose
+        // SAFETY: created by minkq_scene_create or _create_geometries and released once, before its device (whose
         // handle this scene still holds).
         unsafe { sys::minkq_scene_release(self.raw.as_ptr()) }
     }
@@ -430,6 +481,7 @@ impl fmt::Debug for Scene {
             .field("vertices", &self.vertex_count())
             .field("triangles", &self.triangle_count())
             .field("edges", &self.edge_count())
+            .field("geometries", &self.geometry_count())
             .field("float64", &self.float64)
             .finish()
     }
