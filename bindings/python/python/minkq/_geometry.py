@@ -83,9 +83,9 @@ class Geometry:
     >>> floor = minkq.Geometry(np.array([[-1, -1, 0], [2, -1, 0], [-1, 2, 0]], np.float32), [[0, 1, 2]],
     ...                        kinds="vt", self_pairs=False, static=True)
     >>> cloth = minkq.Geometry(np.array([[0, 0, .05], [1, 0, .05], [0, 1, .05]], np.float32), [[0, 1, 2]],
-    ...                        kinds="vt", thickness=0.01)
+    ...                        kinds="vt", thickness=0.02)
     >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [floor, cloth])
-    >>> scene.query("vt", "box", 0.035, leaf_exact=True, canonical=True).tolist()  # 0.05 <= 0.035 + 0.01 + 0
+    >>> scene.query("vt", "box", 0.035, leaf_exact=True, canonical=True).tolist()  # 0.05 <= 0.035 + 0.02 + 0
     [[3, 0], [4, 0], [5, 0]]
     >>> scene.geometry_of("vertex", [3, 4, 5])
     (array([1, 1, 1], dtype=int32), array([0, 1, 2], dtype=int32))
