@@ -17,6 +17,7 @@ import minkq
 from minkq._geometry import _thickness
 from oracle import as_set, derive_edges, ee_distances, rolled_sheet, vt_distances
 from test_float64 import CASES
+from test_interop import DLPackOnly
 
 MODES = minkq.MODES
 EE_MODES = ("box", "capsule_ray", "capsule_exact")
@@ -440,3 +441,44 @@ def test_a_particle_set_and_rods_against_a_mesh(device):
         want = split(scene, kind, one.query(kind, "sphere", 0.05, leaf_exact=True))
         cross = {p for g, ps in want.items() if g[0] != g[1] for p in ps}
         assert cross and set().union(*got.values()) == cross, kind
+
+
+def test_arrays_of_other_libraries_are_read_in_place(device):
+    """DLPack host arrays (as PyTorch CPU tensors are) for every array of a geometry and its
+    moves: the pairs of numpy arrays; never converted (a float64 thickness is refused)."""
+    tb = np.full(len(BODY[0]), 0.005, np.float32)
+    reference = minkq.Scene.from_geometries(
+        device, [minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=tb), minkq.Geometry(BODY[0].astype(np.float64) + 0.02, BODY[1])]
+    )
+    body = minkq.Geometry(DLPackOnly(BODY[0]), DLPackOnly(BODY[1]), self_pairs=False, static=True, thickness=DLPackOnly(tb))
+    moving = minkq.Geometry(DLPackOnly(BODY[0].astype(np.float64) + 0.02), DLPackOnly(BODY[1]))
+    scene = minkq.Scene.from_geometries(device, [body, moving])
+    assert scene.dtype == np.float64
+    for kind in ("vt", "ee"):
+        assert scene.query_digest(kind, "box", R)[1] == reference.query_digest(kind, "box", R)[1], kind
+    moved = BODY[0].astype(np.float64) + [0.01, 0.0, 0.03]
+    scene.refit_geometry(1, DLPackOnly(moved))
+    reference.refit_geometry(1, moved)
+    assert scene.query_digest("vt", "box", R)[1] == reference.query_digest("vt", "box", R)[1]
+    with pytest.raises(TypeError, match=r"geometries\[0\]\.thickness: expected a float32 array, got float64"):
+        minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, thickness=DLPackOnly(tb.astype(np.float64)))])
+    with pytest.raises(TypeError, match="expected float64 values"):
+        scene.refit_geometry(1, DLPackOnly(moved.astype(np.float32)))
+
+
+def test_warp_arrays_in_and_out(wp, device):
+    """Warp CPU arrays as geometries: results are Warp arrays, equal to numpy's."""
+    positions = wp.array(CLOTH[0], dtype=wp.vec3, device="cpu")
+    body = minkq.Geometry(*BODY, self_pairs=False, static=True)
+    cloth = minkq.Geometry(positions, wp.array(CLOTH[1], dtype=wp.int32, device="cpu"), thickness=wp.full(len(CLOTH[0]), 0.01, dtype=wp.float32, device="cpu"))
+    scene = minkq.Scene.from_geometries(device, [body, cloth])
+    reference = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH, thickness=0.01)])
+    pairs = scene.query("vt", "box", R, leaf_exact=True, canonical=True)
+    assert isinstance(pairs, wp.array) and pairs.dtype == wp.int32
+    assert np.array_equal(pairs.numpy(), reference.query("vt", "box", R, leaf_exact=True, canonical=True))
+    moved = CLOTH[0] + np.float32([0, 0, -0.02])
+    scene.refit_geometry(1, wp.array(moved, dtype=wp.vec3, device="cpu"))
+    reference.refit_geometry(1, moved)
+    assert scene.query_digest("ee", "box", R)[1] == reference.query_digest("ee", "box", R)[1]
+    g, local = scene.geometry_of("vertex", pairs.numpy()[:, 0])
+    assert set(g.tolist()) == {0, 1} and (local >= 0).all()
