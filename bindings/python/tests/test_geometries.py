@@ -363,6 +363,22 @@ def test_static_geometries_are_refused_and_skipped(device):
         scene.refit_geometry(1, bad)
 
 
+def test_stream_ordered_calls_serve_one_geometry_scenes(device):
+    """The library's stream-ordered calls take one-geometry scenes: a scene of two refuses
+    them with its message; the constructor's scene is one geometry and keeps them."""
+    scene = minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, static=True), minkq.Geometry(*CLOTH)])
+    with pytest.raises(minkq.UnsupportedError, match="stream-ordered calls serve scenes of one geometry"):
+        scene.reserve(refit=True)
+    with pytest.raises(minkq.UnsupportedError, match="this scene has 2 geometries"):
+        scene.refit_async(CLOTH[0])
+    one = minkq.Scene(device, *CLOTH)
+    assert one.geometry_count == 1 and one.geometry_range(0, "triangle") == (0, len(CLOTH[1]))
+    one.reserve(refit=True)
+    one.refit_async(CLOTH[0])
+    one.refit_geometry(0, CLOTH[0])
+    one.async_status()
+
+
 def test_bad_geometries_raise_with_the_geometry_named(device):
     tri = np.zeros((3, 3), np.float32)
     good = minkq.Geometry(tri, [[0, 1, 2]])

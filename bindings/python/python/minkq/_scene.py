@@ -102,6 +102,11 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
     :class:`IndexOutOfRangeError`, :class:`SizeOverflowError` or :class:`InvalidArgumentError`
     (with the library's message) for bad input, and TypeError / ValueError naming the argument
     for a wrong dtype or shape.
+
+    Cloth against colliders, per-vertex thickness, batched worlds: :meth:`from_geometries`
+    makes one scene of several :class:`Geometry` (then :meth:`geometry_range`,
+    :meth:`geometry_of` and :meth:`refit_geometry`); the constructor's scene is its one
+    geometry.
     """
 
     def __init__(
@@ -191,7 +196,9 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
     def dtype(self) -> np.dtype:
         """The precision of the scene's vertices: ``float32``, or ``float64`` for a scene
         created from float64 vertices (every pair within r in double is reported), whose
-        refits and rebuilds take float64."""
+        refits and rebuilds take float64. For a scene of geometries (:meth:`from_geometries`):
+        the precision :meth:`refit` and :meth:`rebuild` take, ``float64`` when every moving
+        geometry is float64 (each geometry keeps its own for :meth:`refit_geometry`)."""
         return self._dtype
 
     @property
