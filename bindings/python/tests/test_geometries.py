@@ -53,7 +53,12 @@ def concatenated(meshes):
 
 def owner(scene: minkq.Scene, kind: str, pairs) -> np.ndarray:
     """Each pair's two geometries, (k, 2)."""
-    elements = {"vt": ("vertex", "triangle"), "ee": ("edge", "edge"), "vv": ("vertex", "vertex"), "ev": ("vertex", "edge")}
+    elements = {
+        "vt": ("vertex", "triangle"),
+        "ee": ("edge", "edge"),
+        "vv": ("vertex", "vertex"),
+        "ev": ("vertex", "edge"),
+    }
     pairs = np.asarray(pairs, np.int32).reshape(-1, 2)
     a, b = (scene.geometry_of(e, pairs[:, k])[0] for k, e in enumerate(elements[kind]))
     return np.stack([a, b], 1)
@@ -92,7 +97,11 @@ def test_numbering_is_the_concatenated_meshes(pair_scenes):
     assert [scene.geometry_range(0, e) for e in ("vertex", "triangle", "edge")] == [(0, nb), (0, tb), (0, eb)]
     assert scene.geometry_range(1, "vertex") == (nb, len(CLOTH[0]))
     assert scene.geometry_range(1, "triangle") == (tb, len(CLOTH[1]))
-    assert (scene.vertex_count, scene.triangle_count, scene.edge_count) == (one.vertex_count, one.triangle_count, one.edge_count)
+    assert (scene.vertex_count, scene.triangle_count, scene.edge_count) == (
+        one.vertex_count,
+        one.triangle_count,
+        one.edge_count,
+    )
     assert np.array_equal(scene.edges(), one.edges())
     assert scene.dtype == np.float32
     assert repr(scene).endswith(", 2 geometries)")
@@ -225,9 +234,14 @@ def test_worlds_never_pair_and_world_minus_one_joins_every_world(device):
 def test_uniform_thickness_is_a_larger_radius(device, t):
     with_t = minkq.Scene.from_geometries(
         device,
-        [minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=t), minkq.Geometry(*CLOTH, thickness=np.full(len(CLOTH[0]), t, np.float32))],
+        [
+            minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=t),
+            minkq.Geometry(*CLOTH, thickness=np.full(len(CLOTH[0]), t, np.float32)),
+        ],
     )
-    without = minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, self_pairs=False, static=True), minkq.Geometry(*CLOTH)])
+    without = minkq.Scene.from_geometries(
+        device, [minkq.Geometry(*BODY, self_pairs=False, static=True), minkq.Geometry(*CLOTH)]
+    )
     r = 0.02
     for kind in ("vt", "ee"):
         for leaf_exact in (False, True):
@@ -252,7 +266,9 @@ def test_varied_thickness_reaches_r_plus_both_thicknesses(device):
         reach = r + a[:, None] + b[None, :]
         got = split(scene, kind, scene.query(kind, "box", r, leaf_exact=True))
         pairs = set().union(*got.values())
-        truth = {p for p in zip(*map(np.ndarray.tolist, np.nonzero(d <= reach))) if p in pairs or owner_ok(scene, kind, p)}
+        truth = {
+            p for p in zip(*map(np.ndarray.tolist, np.nonzero(d <= reach))) if p in pairs or owner_ok(scene, kind, p)
+        }
         assert len(truth) > 10
         assert truth <= pairs, f"{kind} lost {sorted(truth - pairs)[:5]}"
         assert all(d[p] <= reach[p] + SLACK for p in pairs), kind
@@ -313,7 +329,12 @@ def test_refit_of_one_geometry_is_a_fresh_scene(device):
     scene = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH)])
     moved = CLOTH[0] + np.float32([0.02, -0.01, -0.012])
     fresh = minkq.Scene.from_geometries(device, [body, minkq.Geometry(moved, CLOTH[1])])
-    for move in (scene.refit_geometry, scene.rebuild_geometry, lambda g, v: scene.refit(v), lambda g, v: scene.rebuild(v)):
+    for move in (
+        scene.refit_geometry,
+        scene.rebuild_geometry,
+        lambda g, v: scene.refit(v),
+        lambda g, v: scene.rebuild(v),
+    ):
         scene.refit_geometry(1, CLOTH[0])
         move(1, moved)
         for kind in ("vt", "ee"):
@@ -432,7 +453,10 @@ def test_thickness_is_rounded_up_to_float32(device):
     args = minkq._args._Args(device)
     t = _thickness(args, np.array([below, 0.25, 3.0]), "thickness", np.zeros((3, 3), np.float32))
     assert t.dtype == np.float32 and t.tolist() == [float(np.nextafter(np.float32(0.1), np.float32(1))), 0.25, 3.0]
-    assert _thickness(args, np.array([2, 0], np.int64), "thickness", np.zeros((2, 3), np.float32)).tolist() == [2.0, 0.0]
+    assert _thickness(args, np.array([2, 0], np.int64), "thickness", np.zeros((2, 3), np.float32)).tolist() == [
+        2.0,
+        0.0,
+    ]
     assert _thickness(args, below, "thickness", np.zeros((2, 3), np.float32)).tolist() == [t[0]] * 2
     exact = np.array([0.1, 0.2], np.float32)
     assert _thickness(args, exact, "thickness", np.zeros((2, 3), np.float32)) is exact
@@ -464,9 +488,15 @@ def test_arrays_of_other_libraries_are_read_in_place(device):
     moves: the pairs of numpy arrays; never converted (a float64 thickness is refused)."""
     tb = np.full(len(BODY[0]), 0.005, np.float32)
     reference = minkq.Scene.from_geometries(
-        device, [minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=tb), minkq.Geometry(BODY[0].astype(np.float64) + 0.02, BODY[1])]
+        device,
+        [
+            minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=tb),
+            minkq.Geometry(BODY[0].astype(np.float64) + 0.02, BODY[1]),
+        ],
     )
-    body = minkq.Geometry(DLPackOnly(BODY[0]), DLPackOnly(BODY[1]), self_pairs=False, static=True, thickness=DLPackOnly(tb))
+    body = minkq.Geometry(
+        DLPackOnly(BODY[0]), DLPackOnly(BODY[1]), self_pairs=False, static=True, thickness=DLPackOnly(tb)
+    )
     moving = minkq.Geometry(DLPackOnly(BODY[0].astype(np.float64) + 0.02), DLPackOnly(BODY[1]))
     scene = minkq.Scene.from_geometries(device, [body, moving])
     assert scene.dtype == np.float64
@@ -486,7 +516,11 @@ def test_warp_arrays_in_and_out(wp, device):
     """Warp CPU arrays as geometries: results are Warp arrays, equal to numpy's."""
     positions = wp.array(CLOTH[0], dtype=wp.vec3, device="cpu")
     body = minkq.Geometry(*BODY, self_pairs=False, static=True)
-    cloth = minkq.Geometry(positions, wp.array(CLOTH[1], dtype=wp.int32, device="cpu"), thickness=wp.full(len(CLOTH[0]), 0.01, dtype=wp.float32, device="cpu"))
+    cloth = minkq.Geometry(
+        positions,
+        wp.array(CLOTH[1], dtype=wp.int32, device="cpu"),
+        thickness=wp.full(len(CLOTH[0]), 0.01, dtype=wp.float32, device="cpu"),
+    )
     scene = minkq.Scene.from_geometries(device, [body, cloth])
     reference = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH, thickness=0.01)])
     pairs = scene.query("vt", "box", R, leaf_exact=True, canonical=True)

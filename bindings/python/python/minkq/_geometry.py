@@ -187,10 +187,26 @@ def _native_geometries(device: "Device", geometries: Any) -> Tuple[_Args, List[_
         triangles = args.rows(_NO_TRIANGLES if triangles is None else triangles, f"{name}.triangles", np.int32, (3,))
         edges = None if geometry.edges is None else args.rows(geometry.edges, f"{name}.edges", np.int32, (2,))
         thickness = _thickness(args, geometry.thickness, f"{name}.thickness", vertices)
-        kinds = tuple(k in geometry.kinds for k in KINDS)
-        flags = (geometry.self_pairs, geometry.drop_incident, geometry.static)
-        filters = (geometry.world, geometry.group, geometry.mask)
-        natives.append(_NativeGeometry(vertices, triangles, edges, thickness, dtype == FLOAT64, *kinds, *flags, *filters))
+        vt, ee, vv, ev = (k in geometry.kinds for k in KINDS)
+        natives.append(
+            _NativeGeometry(
+                vertices,
+                triangles,
+                edges,
+                thickness,
+                dtype == FLOAT64,
+                vt,
+                ee,
+                vv,
+                ev,
+                geometry.self_pairs,
+                geometry.drop_incident,
+                geometry.static,
+                geometry.world,
+                geometry.group,
+                geometry.mask,
+            )
+        )
         dtypes.append(dtype)
     return args, natives, dtypes, like
 
@@ -215,7 +231,11 @@ class _Geometries:
     if TYPE_CHECKING:
 
         def _move(
-            self, call: Callable[..., None], positions: Dict[str, Any], stream: Any = ..., dtype: Optional[np.dtype] = ...
+            self,
+            call: Callable[..., None],
+            positions: Dict[str, Any],
+            stream: Any = ...,
+            dtype: Optional[np.dtype] = ...,
         ) -> None: ...
 
     @property
