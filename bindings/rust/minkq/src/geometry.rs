@@ -7,7 +7,7 @@ use std::mem::MaybeUninit;
 use std::ops::{BitOr, BitOrAssign};
 
 use crate::buffer::{Buffer, Vertex};
-use crate::query::flags;
+use crate::query::{flags, QueryKind};
 use crate::sys;
 
 flags! {
@@ -59,6 +59,23 @@ flags! {
         /// Never moves: built once, skipped by whole-scene refits and rebuilds (whose vertices
         /// are those of the moving geometries only), refused by the per-geometry ones.
         STATIC = sys::MINKQ_GEOMETRY_STATIC;
+    }
+}
+
+/// The kind of a query's pairs.
+///
+/// ```
+/// use minkq::{Kinds, QueryKind};
+/// assert_eq!(Kinds::from(QueryKind::Ev), Kinds::EV);
+/// ```
+impl From<QueryKind> for Kinds {
+    fn from(kind: QueryKind) -> Kinds {
+        match kind {
+            QueryKind::Vt => Kinds::VT,
+            QueryKind::Ee => Kinds::EE,
+            QueryKind::Vv => Kinds::VV,
+            QueryKind::Ev => Kinds::EV,
+        }
     }
 }
 

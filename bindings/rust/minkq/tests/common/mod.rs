@@ -3,6 +3,8 @@
 // Only some test files use these modules, each only some of their helpers: the rest are not
 // dead code.
 #[allow(dead_code)]
+pub mod draped;
+#[allow(dead_code)]
 pub mod oracle;
 #[allow(dead_code)]
 pub mod sheets;
