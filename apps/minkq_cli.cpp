@@ -36,7 +36,8 @@ commands:
       with the double-precision reference oracle and prints candidates, true contacts,
       false-positive ratio, false negatives, query time (median of 3) and speedup over box
       (the box query of the same kind).
-  query MESH [--to MESH1] --radius R | --radius-factor F [--mode M] [--backend B] [--out PREFIX] [--stats]
+  query MESH [--against MESH_B [--self]] [--thickness FILE] [--to MESH1]
+        --radius R | --radius-factor F [--mode M] [--backend B] [--out PREFIX] [--stats]
       Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) within R
       (or F x the mesh's mean edge length) in mode M:
         box            r-padded boxes
@@ -50,12 +51,24 @@ commands:
       (a, b) pairs in canonical order. --stats adds a line of work counts per kind: internal
       nodes visited, node-shape tests, primitive tests and candidates (MINKQ_QUERY_STATS;
       the same on every backend).
+      --against MESH_B: MESH and MESH_B are geometries 0 and 1 of one scene, and only the pairs
+      between them are reported: MESH's vertices against MESH_B's triangles and MESH_B's against
+      MESH's, and edge pairs across the two (--self adds each mesh's own pairs). Pairs are
+      numbered as in the two meshes concatenated: MESH_B's vertices, triangles and edges come
+      after MESH's, each mesh's edges numbered as a query of it alone numbers them. F scales
+      MESH's mean edge length.
+      --thickness FILE: a thickness t >= 0 per vertex, MESH's then MESH_B's, one number per
+      line (blank lines and lines starting with # are skipped). An element's thickness is the
+      largest of its vertices', and a pair is reported when its distance is <= R + t(a) + t(b).
+      A wrong count, or a value that is not a finite number >= 0 (as a float), is an error that
+      names the line (exit status 3).
       --to MESH1: swept queries from MESH to MESH1 (same vertices and triangles, read in
       double precision): every pair whose elements come within r while each vertex moves
       linearly from its first to its second position, the candidates of a CCD narrow phase.
       Modes: box (default), sphere or capsule_exact (VT: the capsule around each vertex's
       path), capsule_ray (VT: its slab test); EE runs box in every mode; no leaf_exact. The
-      same output lines and files. R = 0 reports elements that touch.
+      same output lines and files. R = 0 reports elements that touch. Not with --against or
+      --thickness.
   version
       Library, ABI and header versions, and the number of CUDA devices.
 
@@ -213,8 +226,97 @@ Scene query_scene(minkq_device* device, const std::string& first, const std::str
   return scene;
 }
 
-int query(const Args& args) {
+// The values of `--thickness FILE`: one per vertex of `meshes` (in order), one number per line;
+// blank lines and lines whose first non-blank character is '#' are skipped. Each value must
+// be a finite number >= 0 that stays finite as a float (the C API takes floats). Errors name
+// the file and line.
+std::vector<float> read_thickness(const std::string& path, const std::vector<meshio::Mesh>& meshes,
+                                  const std::vector<std::string>& names) {
+  size_t needed = 0;
+  std::string counts;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    needed += meshes[i].vertex_count();
+    counts += (i ? ", " : "") + names[i] + " has " + std::to_string(meshes[i].vertex_count());
+  }
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("--thickness: cannot read " + path);
+  std::vector<float> t;
+  t.reserve(needed);
+  std::string line;
+  size_t number = 0;
+  const auto fail = [&](const std::string& what) {
+    throw std::runtime_error("--thickness " + path + ":" + std::to_string(number) + ": " + what);
+  };
+  while (std::getline(f, line)) {
+    ++number;
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::string text = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0') fail("not a number: '" + text + "'");
+    if (!std::isfinite(v)) fail("not a finite number: '" + text + "'");
+    if (v < 0) fail("negative thickness: '" + text + "'");
+    if (!std::isfinite(float(v))) fail("too large for a float: '" + text + "'");
+    if (t.size() == needed)
+      fail("one value too many: " + std::to_string(needed) + " expected, one per vertex (" + counts + ")");
+    t.push_back(v == 0 ? 0.0f : float(v));  // -0 as +0
+  }
+  if (f.bad()) throw std::runtime_error("--thickness: cannot read " + path);
+  if (t.size() != needed)
+    fail("the file ends after " + std::to_string(t.size()) + " values; " + std::to_string(needed) +
+         " expected, one per vertex (" + counts + ")");
+  return t;
+}
+
+// The scene of `query --against` or `--thickness`: each mesh one geometry (VT + EE, incident
+// pairs dropped, edges derived), in order, so that the pairs come in the numbering of the meshes
+// concatenated. With one mesh it reports its own pairs; with two only those across them unless
+// `self` (MINKQ_GEOMETRY_SELF on both). `thickness`: empty, or one value per vertex of all.
+Scene geometry_scene(minkq_device* device, const std::vector<meshio::Mesh>& meshes, const std::vector<float>& thickness,
+                     bool self) {
+  std::vector<minkq_geometry_desc> descs(meshes.size());
+  size_t first_vertex = 0;
+  for (size_t g = 0; g < meshes.size(); ++g) {
+    const meshio::Mesh& m = meshes[g];
+    minkq_geometry_desc& d = descs[g];
+    minkq_geometry_desc_init(&d);
+    d.kinds = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
+    d.flags = MINKQ_GEOMETRY_DROP_INCIDENT | (self || meshes.size() == 1 ? uint32_t(MINKQ_GEOMETRY_SELF) : 0u);
+    d.vertices = host_buffer(m.xyz.data(), m.vertex_count(), 3 * sizeof(float));
+    d.triangles = host_buffer(m.tris.data(), m.triangle_count(), 3 * sizeof(int32_t));
+    if (!thickness.empty()) d.thickness = host_buffer(thickness.data() + first_vertex, m.vertex_count(), sizeof(float));
+    first_vertex += m.vertex_count();
+  }
+  minkq_scene* s = nullptr;
+  check(minkq_scene_create_geometries(device, descs.data(), descs.size(), &s), "minkq_scene_create_geometries");
+  return Scene(s);
+}
+
+// The scene `query` runs on, from its arguments (see the usage text; check_query_options has
+// checked them).
+Scene scene_for_query(minkq_device* device, const Args& args) {
+  const std::string& path = args.positional[0];
+  const std::string *to = args.get("--to"), *against = args.get("--against"), *thickness = args.get("--thickness");
+  if (!against && !thickness) return query_scene(device, path, to);
+  std::vector<meshio::Mesh> meshes{meshio::load_mesh(path)};
+  std::vector<std::string> names{path};
+  if (against) meshes.push_back(meshio::load_mesh(*against)), names.push_back(*against);
+  const std::vector<float> t = thickness ? read_thickness(*thickness, meshes, names) : std::vector<float>{};
+  return geometry_scene(device, meshes, t, args.has("--self"));
+}
+
+// The usage errors of `query`'s options, before any file is read.
+void check_query_options(const Args& args) {
   if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
+  if (args.has("--self") && !args.get("--against"))
+    throw UsageError("--self needs --against (a single mesh's own pairs are always reported)");
+  if (args.get("--to") && (args.get("--against") || args.get("--thickness")))
+    throw UsageError("--to: swept queries take no --against or --thickness");
+}
+
+int query(const Args& args) {
+  check_query_options(args);
   const float radius = query_radius(args, [&] { return meshio::mean_edge_length(meshio::load_mesh(args.positional[0])); });
   const std::string* to = args.get("--to");
   const std::string mode = args.get("--mode") ? *args.get("--mode") : (to ? "box" : "leaf_exact");
@@ -224,7 +326,7 @@ int query(const Args& args) {
   const uint32_t flags = modes.flags | MINKQ_QUERY_DIGEST | (args.has("--stats") ? uint32_t(MINKQ_QUERY_STATS) : 0u);
 
   Device device = open_device(backend);
-  Scene scene = query_scene(device.get(), args.positional[0], to);
+  Scene scene = scene_for_query(device.get(), args);
   Result result = new_result();
   const std::string* out = args.get("--out");
   for (const auto& [kind, name, m] : {std::tuple{MINKQ_QUERY_VT, "vt", vt_mode}, std::tuple{MINKQ_QUERY_EE, "ee", ee_mode}}) {
@@ -262,7 +364,8 @@ int main(int argc, char** argv) {
     if (command == "version" || command == "--version") return version();
     if (command == "demo") return demo(Args(argc, argv, 2, {"--backend", "--size", "--radius-factor"}));
     if (command == "query")
-      return query(Args(argc, argv, 2, {"--radius", "--radius-factor", "--mode", "--backend", "--out", "--to"}, {"--stats"}));
+      return query(Args(argc, argv, 2, {"--radius", "--radius-factor", "--mode", "--backend", "--out", "--to", "--against", "--thickness"},
+                        {"--stats", "--self"}));
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "minkq: %s\n(run 'minkq --help' for usage)\n", e.what());

@@ -265,7 +265,9 @@ MINKQ_API minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_
  * its vertices' (0 without). A pair of elements a, b is then within reach when its distance is
  * <= r + t(a) + t(b): every mode reports every such pair, LEAF_EXACT keeps exactly those (with
  * the slack stated at minkq_scene_query, relative to r + t(a) + t(b)), a float64 geometry keeps
- * the guarantee in double and swept queries use the same reach.
+ * the guarantee in double and swept queries use the same reach. The finer node tests (sphere,
+ * capsules) test a query's shape against the boxes grown by thickness, so with thickness they
+ * keep more pairs beyond reach than without; LEAF_EXACT drops those.
  * A one-mesh scene (minkq_scene_create) is the scene of one moving geometry with MINKQ_GEOMETRY_SELF
  * and its flags' kinds, DROP_INCIDENT and FLOAT64. */
 typedef enum minkq_geometry_flags {
@@ -409,7 +411,9 @@ typedef struct minkq_query_info {
  * r + 2^-19 * S, S the operands' size: the largest distance between the query element's first
  * point and the other element's points (EE: or the edge's length); the leaf test computes
  * distances in double to within 2^-21 * S and accepts those up to r + 2^-20 * S. On a
- * MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho (minkq_scene_flags).
+ * MINKQ_SCENE_FLOAT64 scene r is first grown by 2 rho (minkq_scene_flags). On a scene of several
+ * geometries the pairs are those and in the numbering its section states, with thickness added to
+ * r pair by pair.
  * Errors: INVALID_ARGUMENT (NULL scene, query or info;
  * unknown kind, mode or flag bits; a kind the scene was created without; sphere mode for EE;
  * a negative radius; a NULL out_pairs with a non-zero capacity; device memory on a CPU
@@ -463,6 +467,10 @@ MINKQ_API minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_q
  * were (a rebuild then builds the trees for those positions), and records the scene's pending
  * error, which minkq_scene_async_status returns and clears. Queries run on the positions the
  * scene holds.
+ *
+ * These calls serve scenes of one geometry that reports its own pairs (every minkq_scene_create
+ * scene); on a scene of several geometries they return MINKQ_ERROR_UNSUPPORTED, and its steps run
+ * through the blocking calls.
  *
  * Flags: MINKQ_QUERY_LEAF_EXACT and MINKQ_QUERY_CANONICAL (pairs sorted when they all fit,
  * with scratch reserved for the capacity); MINKQ_QUERY_DIGEST and MINKQ_QUERY_STATS need a

@@ -12,33 +12,8 @@
 #include "contact_checks.h"
 
 using minkq::reference::Pairs;
+using minkq::test::compare_pairs;
 using minkq::test::read_pairs;
-
-template <class Distance>
-int compare(const char* kind, const Pairs& reported, const Pairs& truth, float r, Distance distance) {
-  Pairs missing, extra;
-  std::set_difference(truth.begin(), truth.end(), reported.begin(), reported.end(), std::back_inserter(missing));
-  std::set_difference(reported.begin(), reported.end(), truth.begin(), truth.end(), std::back_inserter(extra));
-  int failures = 0;
-  for (const auto& [a, b] : missing) {
-    if (++failures <= 5) std::printf("%s MISSING true contact (%d, %d)\n", kind, a, b);
-  }
-  double worst = 0;
-  for (const auto& [a, b] : extra) {
-    double s;
-    const long double d = distance(a, b, &s);
-    worst = std::max(worst, double((d - r) / s));
-    if (d > (long double)r + std::ldexp(s, -19) && ++failures <= 10)
-      std::printf("%s extra pair (%d, %d) at distance %.17Lg beyond r + 2^-19 S\n", kind, a, b, d);
-  }
-  std::printf("%s: %zu reported, %zu true, %zu missing, %zu extra (worst excess %.3g S)\n", kind, reported.size(),
-              truth.size(), missing.size(), extra.size(), worst);
-  if (!std::is_sorted(reported.begin(), reported.end())) {
-    std::printf("%s pairs are not in canonical order\n", kind);
-    ++failures;
-  }
-  return failures;
-}
 
 int main(int argc, char** argv) {
   if (argc != 5) {
@@ -58,11 +33,13 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     if (std::system(command.c_str()) != 0) throw std::runtime_error("minkq query failed");
     const Pairs vt = read_pairs(prefix + ".vt.bin"), ee = read_pairs(prefix + ".ee.bin");
-    int failures = compare("VT", vt, minkq::reference::vt_contacts(mesh, r, true), r,
-                           [&](int32_t v, int32_t t, double* s) { return minkq::test::vt_distance(mesh, v, t, s); });
-    failures += compare("EE", ee, minkq::reference::ee_contacts(mesh, r, true), r, [&](int32_t e, int32_t f, double* s) {
-      return minkq::test::ee_distance(mesh, mesh.edges, e, f, s);
-    });
+    const auto reach = [r](int32_t, int32_t) { return (long double)r; };
+    int failures = compare_pairs(
+        "VT", vt, minkq::reference::vt_contacts(mesh, r, true), true,
+        [&](int32_t v, int32_t t, double* s) { return minkq::test::vt_distance(mesh, v, t, s); }, reach);
+    failures += compare_pairs(
+        "EE", ee, minkq::reference::ee_contacts(mesh, r, true), true,
+        [&](int32_t e, int32_t f, double* s) { return minkq::test::ee_distance(mesh, mesh.edges, e, f, s); }, reach);
     return failures == 0 ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "check_query_output: %s\n", e.what());

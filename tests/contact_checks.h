@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -63,6 +64,40 @@ inline reference::Pairs read_pairs(const std::string& path) {
     pairs[i] = {ab[0], ab[1]};
   }
   return pairs;
+}
+
+// Compares the pairs a run reported (`kind` names it in the messages) with the true ones:
+// every true pair must be reported, in canonical order, and with `leaf_exact` every other pair
+// must lie within its reach plus the leaf test's slack: distance(a, b, &S) <= reach(a, b) +
+// 2^-19 * S. Prints a summary line and the first failures; returns the number of failures.
+template <class Distance, class Reach>
+int compare_pairs(const std::string& kind, const reference::Pairs& reported, const reference::Pairs& truth,
+                  bool leaf_exact, Distance distance, Reach reach) {
+  reference::Pairs missing, extra;
+  std::set_difference(truth.begin(), truth.end(), reported.begin(), reported.end(), std::back_inserter(missing));
+  std::set_difference(reported.begin(), reported.end(), truth.begin(), truth.end(), std::back_inserter(extra));
+  int failures = 0;
+  for (const auto& [a, b] : missing)
+    if (++failures <= 5) std::printf("%s MISSING true contact (%d, %d)\n", kind.c_str(), a, b);
+  double worst = 0;
+  for (const auto& [a, b] : extra) {
+    if (!leaf_exact) break;
+    double s;
+    const long double d = distance(a, b, &s), within = reach(a, b);
+    worst = std::max(worst, double((d - within) / s));
+    if (d > within + std::ldexp(s, -19) && ++failures <= 10)
+      std::printf("%s extra pair (%d, %d) at distance %.17Lg beyond its reach %.17Lg + 2^-19 S\n", kind.c_str(), a, b,
+                  d, within);
+  }
+  std::printf("%s: %zu reported, %zu true, %zu missing, %zu extra", kind.c_str(), reported.size(), truth.size(),
+              missing.size(), extra.size());
+  if (leaf_exact) std::printf(" (worst excess %.3g S)", worst);
+  std::printf("\n");
+  if (!std::is_sorted(reported.begin(), reported.end())) {
+    std::printf("%s pairs are not in canonical order\n", kind.c_str());
+    ++failures;
+  }
+  return failures;
 }
 
 }  // namespace minkq::test
