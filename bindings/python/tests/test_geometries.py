@@ -53,15 +53,7 @@ def concatenated(meshes):
 
 def owner(scene: minkq.Scene, kind: str, pairs) -> np.ndarray:
     """Each pair's two geometries, (k, 2)."""
-    elements = {
-        "vt": ("vertex", "triangle"),
-        "ee": ("edge", "edge"),
-        "vv": ("vertex", "vertex"),
-        "ev": ("vertex", "edge"),
-    }
-    pairs = np.asarray(pairs, np.int32).reshape(-1, 2)
-    a, b = (scene.geometry_of(e, pairs[:, k])[0] for k, e in enumerate(elements[kind]))
-    return np.stack([a, b], 1)
+    return scene.geometry_of_pairs(kind, np.asarray(pairs, np.int32).reshape(-1, 2))[0]
 
 
 def split(scene: minkq.Scene, kind: str, pairs) -> dict:
@@ -110,6 +102,30 @@ def test_numbering_is_the_concatenated_meshes(pair_scenes):
     assert g.tolist() == [[0, 0], [1, 1]] and local.tolist() == [[0, nb - 1], [0, 5]]
     assert g.dtype == local.dtype == np.int32
     assert [a.tolist() for a in scene.geometry_of("edge", [])] == [[], []]
+
+
+def test_geometry_of_pairs_follows_the_ranges(device):
+    """Every id maps to the geometry whose range holds it, also past a geometry without such
+    elements (particles: no triangles or edges) and with local ids from its first."""
+    particles = minkq.Geometry(CLOTH[0][::7] + np.float32([0, 0, 0.01]), kinds=("vt", "vv", "ev"))
+    cloth = minkq.Geometry(*CLOTH, kinds=ALL_KINDS)
+    scene = minkq.Scene.from_geometries(device, [cloth, particles, cloth])
+    assert scene.geometry_range(1, "triangle") == (len(CLOTH[1]), 0)
+    for kind in ALL_KINDS:
+        pairs = scene.query(kind, "box", RADII[kind])
+        geometries, local = scene.geometry_of_pairs(kind, pairs)
+        assert geometries.shape == local.shape == pairs.shape and len(pairs) > 10, kind
+        elements = {"vt": ("vertex", "triangle"), "ee": ("edge",) * 2, "vv": ("vertex",) * 2, "ev": ("vertex", "edge")}
+        for column, element in enumerate(elements[kind]):
+            ranges = [scene.geometry_range(g, element) for g in range(3)]
+            for pair, g, lid in zip(pairs.tolist(), geometries[:, column].tolist(), local[:, column].tolist()):
+                first, count = ranges[g]
+                assert first <= pair[column] < first + count and lid == pair[column] - first, (kind, pair)
+        assert {0, 1, 2} <= set(geometries.ravel().tolist()) or kind == "ee", kind
+    with pytest.raises(ValueError, match=r"pairs: expected shape \(k, 2\), got \(3,\)"):
+        scene.geometry_of_pairs("vt", [1, 2, 3])
+    with pytest.raises(ValueError, match="kind: expected one of"):
+        scene.geometry_of_pairs("tv", [[1, 2]])
 
 
 @pytest.mark.parametrize("kind", ALL_KINDS)

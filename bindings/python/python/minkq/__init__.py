@@ -19,7 +19,7 @@ Particles, rods and yarn get vertex-vertex (VV) and edge-vertex (EV) queries, wi
 Cloth against a collider, per-vertex thickness, many worlds: a scene of several geometries,
 ``minkq.Scene.from_geometries(device, [minkq.Geometry(body_v, body_t, static=True,
 self_pairs=False), minkq.Geometry(cloth_v, cloth_t, thickness=t)])``, reports self and cross
-pairs in one global numbering (``scene.geometry_of`` maps ids back to geometries).
+pairs in one global numbering (``scene.geometry_of_pairs`` maps them back to geometries).
 
 Arrays of other libraries (``__dlpack__``, ``__cuda_array_interface__``: Warp, PyTorch, CuPy)
 are read in place, on the GPU for a CUDA device, and results come back in their kind.

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional,
 
 import numpy as np
 
-from ._args import FLOAT32, FLOAT64, KINDS, _Args, _array, _rows
+from ._args import FLOAT32, FLOAT64, KINDS, _Args, _array, _choice, _rows
 from ._interop import has_protocol
 
 if TYPE_CHECKING:
@@ -24,6 +24,13 @@ if TYPE_CHECKING:
 ELEMENTS = ("vertex", "triangle", "edge")
 """The elements :meth:`Scene.geometry_range` and :meth:`Scene.geometry_of` number
 (``minkq_element``)."""
+_PAIR_ELEMENTS = {
+    "vt": ("vertex", "triangle"),
+    "ee": ("edge", "edge"),
+    "vv": ("vertex", "vertex"),
+    "ev": ("vertex", "edge"),
+}
+"""The elements of each kind's pairs, in their order."""
 _NO_TRIANGLES = np.zeros((0, 3), np.int32)
 _INT32_MAX, _UINT32_MAX = 2**31 - 1, 2**32 - 1
 
@@ -287,6 +294,31 @@ class _Geometries:
         # geometry whose first id is <= the id holds it.
         g = np.searchsorted(first, values, side="right") - 1
         return g.astype(np.int32), (values - first[g]).astype(np.int32)
+
+    def geometry_of_pairs(self, kind: "Kind", pairs: Any) -> Tuple["npt.NDArray[np.int32]", "npt.NDArray[np.int32]"]:
+        """:meth:`geometry_of` for both columns of a (k, 2) array of ``kind``'s pairs ((vertex,
+        triangle) for ``"vt"``, (edge, edge) for ``"ee"``, (vertex, vertex) for ``"vv"``,
+        (vertex, edge) for ``"ev"``): each pair's two geometries and its two local ids, as two
+        (k, 2) int32 numpy arrays. ``pairs``: a host array (numpy, or anything numpy reads, such
+        as a Warp CPU array or a PyTorch CPU tensor).
+
+        >>> import numpy as np, minkq
+        >>> tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+        >>> body = minkq.Geometry(tri, [[0, 1, 2]], self_pairs=False, static=True)
+        >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [body, minkq.Geometry(tri + [0, 0, .1], [[0, 1, 2]])])
+        >>> geometries, local = scene.geometry_of_pairs("vt", scene.query("vt", "box", 0.2, canonical=True))
+        >>> geometries[:4].tolist(), local[:4].tolist()
+        ([[0, 1], [0, 1], [0, 1], [1, 0]], [[0, 0], [1, 0], [2, 0], [0, 0]])
+        """
+        elements = _PAIR_ELEMENTS[_choice(kind, "kind", KINDS)]
+        try:
+            values = np.asarray(pairs)
+        except (TypeError, ValueError, RuntimeError) as err:
+            raise TypeError(f"pairs: expected a host array of pairs, got {type(pairs).__name__}: {err}") from None
+        if values.ndim != 2 or values.shape[1] != 2:
+            raise ValueError(f"pairs: expected shape (k, 2), got {values.shape}")
+        columns = [self.geometry_of(element, values[:, k]) for k, element in enumerate(elements)]
+        return np.stack([g for g, _ in columns], 1), np.stack([local for _, local in columns], 1)
 
     def refit_geometry(self, g: int, vertices: Any) -> None:
         """Moves geometry ``g``'s vertices ((n, 3) of its own precision, its vertex count) and

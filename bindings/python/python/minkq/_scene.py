@@ -149,7 +149,8 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         Pairs use one global numbering: the geometries' vertices, triangles and edges
         concatenated in the order given (edges numbered per geometry as a one-mesh scene numbers
         them), so that they read as the pairs of one concatenated mesh; :meth:`geometry_range`
-        gives each geometry's ids and :meth:`geometry_of` maps ids back to (geometry, local id).
+        gives each geometry's ids, :meth:`geometry_of` and :meth:`geometry_of_pairs` map ids back
+        to (geometry, local id).
         EE and VV pairs are (lower, higher) global id. :attr:`vertex_count`,
         :attr:`triangle_count`, :attr:`edge_count` and :meth:`edges` describe the whole scene in
         that numbering.
@@ -157,7 +158,8 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         Moving: :meth:`refit` and :meth:`rebuild` (and their swept forms) take the vertices of
         every geometry that is not static, concatenated in geometry order, all of one precision
         (:attr:`dtype`: float64 when every moving geometry is float64); :meth:`refit_geometry`
-        and its kin move one geometry. The stream-ordered calls serve scenes of one geometry.
+        and its kin move one geometry. The stream-ordered calls serve scenes of one geometry
+        (they raise :class:`UnsupportedError` here): steps run through the blocking calls.
 
         Errors: those of the constructor, messages naming the geometry (``"geometry 1: triangle 3
         references vertex 9 but the geometry has 8 vertices"``), TypeError / ValueError naming
