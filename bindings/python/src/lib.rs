@@ -20,6 +20,7 @@ use pyo3::prelude::*;
 mod arrays;
 mod bvh;
 mod errors;
+mod geometries;
 mod scene;
 
 use bvh::PyBvh;

@@ -1,5 +1,5 @@
-//! The Scene class: a mesh scene's creation, updates (blocking, swept, stream-ordered) and
-//! queries.
+//! The Scene class: a mesh scene's creation (one mesh, or many geometries), updates (blocking,
+//! swept, stream-ordered, of one geometry) and queries.
 use std::sync::Mutex;
 
 use minkq::{Buffer, Query, QueryFlags, QueryKind, Reserve, Scene, SceneBuffers, SceneFlags};
@@ -7,10 +7,12 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::arrays::{Array, Rows, Vertices};
+use crate::geometries::{self, parse_element, GeometryArgs};
 use crate::{lock, parse_kind, parse_mode, query_flags, stream, to_py_err, PyDevice};
 
 /// A mesh scene: VT and EE queries over triangles, VV and EV over vertices and edges (which
-/// need no triangles); float32 vertices, or float64 ones with `float64`.
+/// need no triangles); float32 vertices, or float64 ones with `float64`. Or a scene of many
+/// geometries (`from_geometries`), each of its own precision.
 #[pyclass(module = "minkq._native", name = "Scene")]
 pub(crate) struct PyScene {
     inner: Mutex<Scene>,
@@ -20,9 +22,12 @@ pub(crate) struct PyScene {
     triangle_count: usize,
     #[pyo3(get)]
     edge_count: usize,
-    /// Whether the scene reads its vertices as doubles (MINKQ_SCENE_FLOAT64).
+    /// Whether the scene reads its vertices as doubles (MINKQ_SCENE_FLOAT64; for a scene of
+    /// geometries: whether every moving one is float64, the precision of whole-scene moves).
     #[pyo3(get)]
     float64: bool,
+    /// Whether each geometry's vertices are doubles (one geometry for a one-mesh scene).
+    geometry_float64: Vec<bool>,
 }
 
 #[pymethods]
@@ -70,13 +75,62 @@ impl PyScene {
         };
         let device = &device.inner;
         let scene = py.allow_threads(|| Scene::from_buffers(&lock(device), &desc)).map_err(|e| to_py_err(py, e))?;
-        Ok(PyScene {
-            vertex_count: scene.vertex_count(),
-            triangle_count: scene.triangle_count(),
-            edge_count: scene.edge_count(),
-            float64,
-            inner: Mutex::new(scene),
-        })
+        Ok(PyScene::wrap(scene, vec![float64]))
+    }
+
+    /// A scene of many geometries (minkq_scene_create_geometries), from the package's checked
+    /// descriptions (minkq._geometry._NativeGeometry).
+    #[staticmethod]
+    fn from_geometries(
+        py: Python<'_>,
+        device: PyRef<'_, PyDevice>,
+        geometries: Vec<GeometryArgs<'_>>,
+    ) -> PyResult<Self> {
+        let (scene, geometry_float64) = geometries::create(py, &device.inner, &geometries)?;
+        Ok(PyScene::wrap(scene, geometry_float64))
+    }
+
+    /// The number of geometries (minkq_scene_geometry_count).
+    #[getter]
+    fn geometry_count(&self) -> usize {
+        self.geometry_float64.len()
+    }
+
+    /// Geometry `g`'s (first global id, count) of `element` ("vertex", "triangle", "edge").
+    fn geometry_range(&self, py: Python<'_>, g: u32, element: &str) -> PyResult<(usize, usize)> {
+        let element = parse_element(element)?;
+        let scene = &self.inner;
+        let range = py.allow_threads(|| lock(scene).geometry_range(g, element)).map_err(|e| to_py_err(py, e))?;
+        Ok((range.start, range.len()))
+    }
+
+    /// Moves geometry `g` and refits its trees (minkq_scene_geometry_refit).
+    fn refit_geometry(&self, py: Python<'_>, g: u32, vertices: &PyAny) -> PyResult<()> {
+        let vertices = Vertices::get(vertices, "vertices", self.is_float64(g))?;
+        // SAFETY: rows of 3 floats (doubles for a float64 geometry), alive in this frame.
+        let vertices = unsafe { vertices.buffer() };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).refit_geometry_buffer(g, vertices)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// Moves geometry `g` and builds its trees afresh (minkq_scene_geometry_rebuild).
+    fn rebuild_geometry(&self, py: Python<'_>, g: u32, vertices: &PyAny) -> PyResult<()> {
+        let vertices = Vertices::get(vertices, "vertices", self.is_float64(g))?;
+        // SAFETY: as in refit_geometry.
+        let vertices = unsafe { vertices.buffer() };
+        let scene = &self.inner;
+        py.allow_threads(|| lock(scene).rebuild_geometry_buffer(g, vertices)).map_err(|e| to_py_err(py, e))
+    }
+
+    /// Swept positions of geometry `g`, its trees refitted (minkq_scene_geometry_refit_swept).
+    fn refit_geometry_swept(&self, py: Python<'_>, g: u32, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
+        self.sweep_at(py, self.is_float64(g), x0, x1, |scene, x0, x1| scene.refit_geometry_swept_buffers(g, x0, x1))
+    }
+
+    /// Swept positions of geometry `g`, its trees built afresh
+    /// (minkq_scene_geometry_rebuild_swept).
+    fn rebuild_geometry_swept(&self, py: Python<'_>, g: u32, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
+        self.sweep_at(py, self.is_float64(g), x0, x1, |scene, x0, x1| scene.rebuild_geometry_swept_buffers(g, x0, x1))
     }
 
     fn refit(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
@@ -330,6 +384,22 @@ impl PyScene {
 }
 
 impl PyScene {
+    fn wrap(scene: Scene, geometry_float64: Vec<bool>) -> PyScene {
+        PyScene {
+            vertex_count: scene.vertex_count(),
+            triangle_count: scene.triangle_count(),
+            edge_count: scene.edge_count(),
+            float64: scene.is_float64(),
+            geometry_float64,
+            inner: Mutex::new(scene),
+        }
+    }
+
+    /// Whether geometry `g` reads doubles (false out of range: the library refuses `g` then).
+    fn is_float64(&self, g: u32) -> bool {
+        self.geometry_float64.get(g as usize).copied().unwrap_or(false)
+    }
+
     /// Runs `call` on the scene, without the GIL, with the swept positions `x0` and `x1` as
     /// buffers of the scene's precision: the one path of the blocking and stream-ordered swept
     /// calls.
@@ -337,8 +407,17 @@ impl PyScene {
     where
         F: for<'a> FnOnce(&mut Scene, Buffer<'a>, Buffer<'a>) -> minkq::Result<()> + Send,
     {
-        let x0 = Vertices::get(x0, "x0", self.float64)?;
-        let x1 = Vertices::get(x1, "x1", self.float64)?;
+        self.sweep_at(py, self.float64, x0, x1, call)
+    }
+
+    /// `sweep` with positions of doubles (`float64`) or floats: a whole scene's or one
+    /// geometry's.
+    fn sweep_at<F>(&self, py: Python<'_>, float64: bool, x0: &PyAny, x1: &PyAny, call: F) -> PyResult<()>
+    where
+        F: for<'a> FnOnce(&mut Scene, Buffer<'a>, Buffer<'a>) -> minkq::Result<()> + Send,
+    {
+        let x0 = Vertices::get(x0, "x0", float64)?;
+        let x1 = Vertices::get(x1, "x1", float64)?;
         // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame (on CUDA,
         // for the stream-ordered calls, the caller keeps them alive until the enqueued work has
         // run).

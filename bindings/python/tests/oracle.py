@@ -59,6 +59,20 @@ def segment_segment_sq(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.nd
     return np.minimum(best, np.where(inside, _dot(w, w), np.inf))
 
 
+def vt_distances(xyz: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Every (vertex, triangle) distance, (n, m), in double."""
+    x = xyz.astype(np.float64)
+    a, b, c = (x[tris[:, k]][None, :, :] for k in range(3))
+    return np.sqrt(point_triangle_sq(x[:, None, :], a, b, c))
+
+
+def ee_distances(xyz: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Every (edge, edge) distance, (e, e), in double."""
+    x = xyz.astype(np.float64)
+    p0, p1 = x[edges[:, 0]][:, None, :], x[edges[:, 1]][:, None, :]
+    return np.sqrt(segment_segment_sq(p0, p1, p0.transpose(1, 0, 2), p1.transpose(1, 0, 2)))
+
+
 def derive_edges(tris: np.ndarray) -> np.ndarray:
     e = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
     e = np.sort(e, axis=1).astype(np.int64)

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 import minkq
-from minkq import _args, _bvh, _device, _scene, _stream_ordered
+from minkq import _args, _bvh, _device, _geometry, _scene, _stream_ordered
 from oracle import rolled_sheet
 
 
 def test_package_ships_type_information():
     root = os.path.dirname(minkq.__file__)
     for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_args.py",
-                 "_results.py", "_device.py", "_scene.py", "_stream_ordered.py", "_bvh.py", "_interop.py",
+                 "_results.py", "_device.py", "_scene.py", "_stream_ordered.py", "_geometry.py", "_bvh.py", "_interop.py",
                  "newton/__init__.py", "newton/_compat.py", "newton/_kernels.py", "newton/_capture.py", "newton/_detector.py",
                  "newton/_install.py", "newton/examples.py", "demo.py", "mpi.py"):
         assert os.path.exists(os.path.join(root, name)), name
@@ -32,9 +32,11 @@ def test_public_items_have_docstrings():
         item = getattr(minkq, name)
         if callable(item):
             assert item.__doc__, name
-    # The classes and the package's own bases they take methods from (Scene's stream-ordered calls).
-    own = [c for cls in (minkq.Device, minkq.Scene, minkq.BVH) for c in cls.__mro__ if c.__module__.startswith("minkq.")]
-    assert _stream_ordered._StreamOrdered in own
+    # The classes and the package's own bases they take methods from (Scene's stream-ordered
+    # calls and its geometries' calls).
+    classes = (minkq.Device, minkq.Scene, minkq.Geometry, minkq.BVH)
+    own = [c for cls in classes for c in cls.__mro__ if c.__module__.startswith("minkq.")]
+    assert _stream_ordered._StreamOrdered in own and _geometry._Geometries in own
     for cls in own:
         for attr, member in vars(cls).items():
             if not attr.startswith("_") and (callable(member) or isinstance(member, property)):
@@ -42,7 +44,7 @@ def test_public_items_have_docstrings():
 
 
 def test_docstring_examples_run():
-    for module in (_device, _scene, _stream_ordered, _bvh):
+    for module in (_device, _scene, _stream_ordered, _geometry, _bvh):
         failures, tried = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         assert tried >= 1 and failures == 0, module.__name__
 

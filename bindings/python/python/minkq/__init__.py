@@ -16,6 +16,11 @@ Particles, rods and yarn get vertex-vertex (VV) and edge-vertex (EV) queries, wi
 ``minkq.Scene(device, vertices, None, edges, vt=False, ee=False, vv=True, ev=True)``, then
 ``scene.query("vv", ...)`` and ``scene.query("ev", ...)``.
 
+Cloth against a collider, per-vertex thickness, many worlds: a scene of several geometries,
+``minkq.Scene.from_geometries(device, [minkq.Geometry(body_v, body_t, static=True,
+self_pairs=False), minkq.Geometry(cloth_v, cloth_t, thickness=t)])``, reports self and cross
+pairs in one global numbering (``scene.geometry_of_pairs`` maps them back to geometries).
+
 Arrays of other libraries (``__dlpack__``, ``__cuda_array_interface__``: Warp, PyTorch, CuPy)
 are read in place, on the GPU for a CUDA device, and results come back in their kind.
 :mod:`minkq.newton` (import it explicitly; it needs warp and newton) is a drop-in for Newton's
@@ -25,7 +30,7 @@ Errors raise subclasses of :class:`MinkqError` named after the C error codes.
 """
 
 from . import _native
-from ._api import BVH, KINDS, MODES, Device, QueryInfo, Scene, WorkStats, abi_version, cuda_device_count, version
+from ._api import BVH, ELEMENTS, KINDS, MODES, Device, Geometry, QueryInfo, Scene, WorkStats, abi_version, cuda_device_count, version
 from ._errors import *  # noqa: F401, F403 - the exceptions, _errors.__all__ (listed below)
 
 ABI_VERSION: int = _native.ABI_VERSION
@@ -41,6 +46,8 @@ __all__ = [
     "CapacityError",
     "Device",
     "DeviceError",
+    "ELEMENTS",
+    "Geometry",
     "IndexOutOfRangeError",
     "InternalError",
     "InvalidArgumentError",

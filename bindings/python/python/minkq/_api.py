@@ -2,12 +2,13 @@
 argument checks with messages naming the argument (minkq._args); numpy arrays, and arrays of
 other libraries read in place through DLPack or the CUDA array interface (minkq._interop), in
 and out; output arrays sized from the exact counts (minkq._results); devices (minkq._device),
-mesh scenes (minkq._scene, their stream-ordered calls in minkq._stream_ordered) and box BVHs
-(minkq._bvh)."""
+mesh scenes (minkq._scene, their stream-ordered calls in minkq._stream_ordered, their
+geometries in minkq._geometry) and box BVHs (minkq._bvh)."""
 
 from ._args import KINDS, MODES
 from ._bvh import BVH
 from ._device import Device, abi_version, cuda_device_count, version
+from ._geometry import ELEMENTS, Geometry
 from ._results import QueryInfo, WorkStats
 from ._scene import Scene
 
@@ -16,6 +17,8 @@ __all__ = [
     "KINDS",
     "MODES",
     "Device",
+    "ELEMENTS",
+    "Geometry",
     "QueryInfo",
     "Scene",
     "WorkStats",

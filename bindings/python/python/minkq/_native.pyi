@@ -5,7 +5,7 @@ that minkq._interop built from DLPack / CUDA array interface objects it keeps al
 *_async methods take the cudaStream_t they are enqueued on as an int (``stream_address``; 0:
 CUDA's default stream; ignored on the CPU)."""
 
-from typing import Optional, Tuple, Union
+from typing import Any, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -27,7 +27,10 @@ class Scene:
     vertex_count: int
     triangle_count: int
     edge_count: int
+    # Whether whole-scene moves read doubles (MINKQ_SCENE_FLOAT64; for a scene of geometries,
+    # every moving geometry is float64).
     float64: bool
+    geometry_count: int
     def __init__(
         self,
         device: Device,
@@ -41,6 +44,17 @@ class Scene:
         drop_incident: bool,
         float64: bool,
     ) -> None: ...
+    # A scene of geometries: minkq._geometry._NativeGeometry descriptions (read by attribute:
+    # vertices, triangles, edges, thickness, float64, vt, ee, vv, ev, self_pairs, drop_incident,
+    # static, world (-1: every world), group, mask).
+    @staticmethod
+    def from_geometries(device: Device, geometries: List[Any]) -> "Scene": ...
+    # (first global id, count) of "vertex", "triangle" or "edge".
+    def geometry_range(self, g: int, element: str) -> Tuple[int, int]: ...
+    def refit_geometry(self, g: int, vertices: Vertices) -> None: ...
+    def rebuild_geometry(self, g: int, vertices: Vertices) -> None: ...
+    def refit_geometry_swept(self, g: int, x0: Vertices, x1: Vertices) -> None: ...
+    def rebuild_geometry_swept(self, g: int, x0: Vertices, x1: Vertices) -> None: ...
     def refit(self, vertices: Vertices) -> None: ...
     def rebuild(self, vertices: Vertices) -> None: ...
     def refit_swept(self, x0: Vertices, x1: Vertices) -> None: ...

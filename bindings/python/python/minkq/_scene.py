@@ -3,13 +3,14 @@ blocking (the stream-ordered calls are in minkq._stream_ordered)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
 from . import _native
 from ._args import FLOAT64, KINDS, MODES, _Args, _choice, _like, _radius
 from ._device import Device
+from ._geometry import Geometry, _Geometries, _moving_dtype, _native_geometries
 from ._interop import stream_handle
 from ._results import QueryInfo, WorkStats, _SizedQueries
 from ._stream_ordered import _StreamOrdered
@@ -23,7 +24,7 @@ _NO_TRIANGLES = np.zeros((0, 3), np.int32)
 """``triangles=None``: a scene of vertices and edges only."""
 
 
-class Scene(_StreamOrdered, _SizedQueries):
+class Scene(_StreamOrdered, _SizedQueries, _Geometries):
     """A triangle mesh, or codimensional elements (particles, rods), on a device with the BVHs
     for its queries: VT and EE over triangles, VV and EV over vertices and edges.
 
@@ -101,6 +102,11 @@ class Scene(_StreamOrdered, _SizedQueries):
     :class:`IndexOutOfRangeError`, :class:`SizeOverflowError` or :class:`InvalidArgumentError`
     (with the library's message) for bad input, and TypeError / ValueError naming the argument
     for a wrong dtype or shape.
+
+    Cloth against colliders, per-vertex thickness, batched worlds: :meth:`from_geometries`
+    makes one scene of several :class:`Geometry` (then :meth:`geometry_range`,
+    :meth:`geometry_of` and :meth:`refit_geometry`); the constructor's scene is its one
+    geometry.
     """
 
     def __init__(
@@ -129,12 +135,72 @@ class Scene(_StreamOrdered, _SizedQueries):
         flags = (bool(vt), bool(ee), bool(vv), bool(ev), bool(drop_incident), self._dtype == FLOAT64)
         self._native = _native.Scene(device._native, vertices, triangles, edges, *flags)
         self._stream = 0  # the stream of the last stream-ordered call, for async_status
+        self._geometry_dtypes = [self._dtype]
+        self._ranges = None
+
+    @classmethod
+    def from_geometries(cls, device: Device, geometries: Sequence[Geometry]) -> "Scene":
+        """A scene of several geometries (:class:`Geometry`: meshes, rods, particles), each with
+        its own trees, pair kinds, thickness, world and collision filter, moving or static
+        (``minkq_scene_create_geometries``). Its queries report each geometry's self pairs (where
+        it has ``self_pairs``) and the cross pairs its geometries' worlds, groups and masks allow,
+        in every mode, with ``leaf_exact``, float64 and swept positions as for a one-mesh scene.
+
+        Pairs use one global numbering: the geometries' vertices, triangles and edges
+        concatenated in the order given (edges numbered per geometry as a one-mesh scene numbers
+        them), so that they read as the pairs of one concatenated mesh; :meth:`geometry_range`
+        gives each geometry's ids, :meth:`geometry_of` and :meth:`geometry_of_pairs` map ids back
+        to (geometry, local id).
+        EE and VV pairs are (lower, higher) global id. :attr:`vertex_count`,
+        :attr:`triangle_count`, :attr:`edge_count` and :meth:`edges` describe the whole scene in
+        that numbering.
+
+        Moving: :meth:`refit` and :meth:`rebuild` (and their swept forms) take the vertices of
+        every geometry that is not static, concatenated in geometry order, all of one precision
+        (:attr:`dtype`: float64 when every moving geometry is float64); :meth:`refit_geometry`
+        and its kin move one geometry. The stream-ordered calls serve scenes of one geometry
+        (they raise :class:`UnsupportedError` here): steps run through the blocking calls.
+
+        Errors: those of the constructor, messages naming the geometry (``"geometry 1: triangle 3
+        references vertex 9 but the geometry has 8 vertices"``), TypeError / ValueError naming
+        the argument (``geometries[1].vertices``); :class:`InvalidArgumentError` for an empty
+        list or a thickness count other than the vertex count, :class:`NonFiniteError` or
+        :class:`InvalidArgumentError` for a non-finite or negative thickness.
+
+        >>> import numpy as np, minkq
+        >>> tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+        >>> body = minkq.Geometry(tri, [[0, 1, 2]], self_pairs=False, static=True)
+        >>> cloth = minkq.Geometry(tri + [0, 0, .1], [[0, 1, 2]])
+        >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [body, cloth])
+        >>> scene.geometry_count, scene.geometry_range(1, "vertex"), scene.vertex_count
+        (2, (3, 3), 6)
+        >>> scene.query("vt", "box", 0.2, leaf_exact=True, canonical=True).tolist()
+        [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
+        >>> scene.refit_geometry(1, tri + [0, 0, 1])  # the cloth moves away; the body stays
+        >>> scene.query("vt", "box", 0.2).tolist()
+        []
+        """
+        if not isinstance(device, Device):
+            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
+        args, natives, dtypes, like = _native_geometries(device, geometries)
+        scene = cls.__new__(cls)
+        _SizedQueries.__init__(scene)
+        scene.device = device
+        scene._native = _native.Scene.from_geometries(device._native, natives)
+        scene._dtype = _moving_dtype(list(geometries), dtypes)
+        scene._like = _like(like)
+        scene._stream = 0
+        scene._geometry_dtypes = dtypes
+        scene._ranges = None
+        return scene
 
     @property
     def dtype(self) -> np.dtype:
         """The precision of the scene's vertices: ``float32``, or ``float64`` for a scene
         created from float64 vertices (every pair within r in double is reported), whose
-        refits and rebuilds take float64."""
+        refits and rebuilds take float64. For a scene of geometries (:meth:`from_geometries`):
+        the precision :meth:`refit` and :meth:`rebuild` take, ``float64`` when every moving
+        geometry is float64 (each geometry keeps its own for :meth:`refit_geometry`)."""
         return self._dtype
 
     @property
@@ -381,16 +447,23 @@ class Scene(_StreamOrdered, _SizedQueries):
         )
         return vt, ee
 
-    def _move(self, call: Callable[..., None], positions: Dict[str, Any], stream: Any = _BLOCKING) -> None:
+    def _move(
+        self,
+        call: Callable[..., None],
+        positions: Dict[str, Any],
+        stream: Any = _BLOCKING,
+        dtype: Optional[np.dtype] = None,
+    ) -> None:
         """Passes vertex positions (by argument name: ``vertices``, or ``x0`` and ``x1``) of the
-        scene's precision to ``call``: for a blocking call (no ``stream``) with host arrays
-        converted to it; for a stream-ordered one read in place, with the handle of ``stream``
-        (None: the current stream of the positions' library) after them. Results are then made
-        like the last array of another library among them."""
+        scene's precision (or ``dtype``: one geometry's) to ``call``: for a blocking call (no
+        ``stream``) with host arrays converted to it; for a stream-ordered one read in place,
+        with the handle of ``stream`` (None: the current stream of the positions' library) after
+        them. Results are then made like the last array of another library among them."""
         blocking = stream is _BLOCKING
         handle = None if blocking else stream_handle(stream, self.device, tuple(positions.values()))
         args = _Args(self.device, handle)
-        native = [args.vertices(value, name, self._dtype, convert=blocking)[0] for name, value in positions.items()]
+        dtype = self._dtype if dtype is None else dtype
+        native = [args.vertices(value, name, dtype, convert=blocking)[0] for name, value in positions.items()]
         if blocking:
             call(*native)
         else:
@@ -436,4 +509,6 @@ class Scene(_StreamOrdered, _SizedQueries):
 
     def __repr__(self) -> str:
         precision = ", float64" if self._dtype == FLOAT64 else ""
+        if self.geometry_count > 1:
+            precision += f", {self.geometry_count} geometries"
         return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges{precision})"
