@@ -26,7 +26,7 @@ struct Options {
   double list_at = 0;  // --list-at: list the scenes at this many triangles
   bool export_only = false;
   int frames = 4, repeats = 5, warmup = 1, threads = 0;
-  std::set<std::string> suites = {"scenes", "real", "sweep", "scale", "count", "float64", "swept"};
+  std::set<std::string> suites = {"scenes", "real", "sweep", "scale", "count", "float64", "swept", "geometries"};
   int suite_repeats = 0;  // --repeats as given, else 0: the count, float64 and swept suites' own default
   bool large = false;     // --large: the count suite adds the 1M-triangle twisted sheet
   std::vector<std::string> backends;

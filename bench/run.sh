@@ -51,7 +51,7 @@ echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-), $(nproc) C
 
 status=0
 if [ $quick = 1 ]; then
-  "$bin/minkq_bench" --quick --suites scenes,count,float64,swept --out "$out" || status=$?
+  "$bin/minkq_bench" --quick --suites scenes,count,float64,swept,geometries --out "$out" || status=$?
   [ $status = 0 ] && echo "bench quick run: 1 passed, 0 failed (no false negatives; results in $out)" \
                   || echo "bench quick run: 0 passed, 1 failed (status $status; see $out)"
   exit $status

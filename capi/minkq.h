@@ -268,6 +268,8 @@ MINKQ_API minkq_status minkq_scene_edges(const minkq_scene* scene, int32_t* out_
  * the guarantee in double and swept queries use the same reach. The finer node tests (sphere,
  * capsules) test a query's shape against the boxes grown by thickness, so with thickness they
  * keep more pairs beyond reach than without; LEAF_EXACT drops those.
+ * All of a query's self and cross jobs run in one pass (one parallel loop, one kernel launch);
+ * minkq_scene_query_vt_ee runs its VT and its EE query one after the other on such a scene.
  * A one-mesh scene (minkq_scene_create) is the scene of one moving geometry with MINKQ_GEOMETRY_SELF
  * and its flags' kinds, DROP_INCIDENT and FLOAT64. */
 typedef enum minkq_geometry_flags {

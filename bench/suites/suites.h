@@ -67,6 +67,9 @@ struct SuiteRun {
 std::string float64_report(const SuiteRun& run, bool& ok);
 // swept.cpp: swept.md, swept steps by mode against box mode and the static queries.
 std::string swept_report(const SuiteRun& run, bool& ok);
+// geometries.cpp: geometries.md, scenes of many geometries (cloth on a body, batched worlds)
+// against the concatenated mesh, Embree's rtcCollide and one scene per world.
+std::string geometries_report(const SuiteRun& run, bool& ok);
 // count.cpp: count.md, count-only queries against stored ones; `large` adds the 1M-triangle
 // twisted sheet.
 std::string count_report(const SuiteRun& run, bool large, bool& ok);
