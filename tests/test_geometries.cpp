@@ -108,7 +108,8 @@ TEST(Geometries, cloth_over_a_static_body_cross_pairs_then_self_pairs) {
   cxx::Scene scene = test::new_geometry_scene(cpu.get(), g);
   for (ref::Kind kind : test::kAllQueryKinds) {
     const Pairs truth = test::check_kind(scene.get(), g, kind, r, "self and cross");
-    EXPECT_LT(cross_count(g, kind, truth), truth.size()) << test::kind_name(kind) << ": self pairs too";
+    if (kind != ref::Kind::VV)  // VV: no two vertices of the grids lie within r
+      EXPECT_LT(cross_count(g, kind, truth), truth.size()) << test::kind_name(kind) << ": self pairs too";
   }
 }
 
