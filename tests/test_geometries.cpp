@@ -111,6 +111,24 @@ TEST(Geometries, cloth_over_a_static_body_cross_pairs_then_self_pairs) {
     if (kind != ref::Kind::VV)  // VV: no two vertices of the grids lie within r
       EXPECT_LT(cross_count(g, kind, truth), truth.size()) << test::kind_name(kind) << ": self pairs too";
   }
+  // The combined VT + EE call and COUNT give each query's own pairs and count.
+  const cxx::Result vt = test::new_result(), ee = test::new_result();
+  const minkq_query_desc vt_desc{MINKQ_QUERY_VT, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL | MINKQ_QUERY_LEAF_EXACT, r};
+  const minkq_query_desc ee_desc{MINKQ_QUERY_EE, MINKQ_MODE_CAPSULE_EXACT, MINKQ_QUERY_CANONICAL, r};
+  ASSERT_EQ(minkq_scene_query_vt_ee_result(scene.get(), &vt_desc, &ee_desc, vt.get(), ee.get()), MINKQ_SUCCESS)
+      << minkq_last_error_message();
+  for (auto [result, desc] : {std::pair{vt.get(), vt_desc}, std::pair{ee.get(), ee_desc}}) {
+    const Pairs alone = test::Scene::query_pairs(scene.get(), desc.kind, desc.mode, r, desc.flags);
+    const int32_t* raw = minkq_result_pairs(result);
+    Pairs got(minkq_result_count(result));
+    for (size_t i = 0; i < got.size(); ++i) got[i] = {raw[2 * i], raw[2 * i + 1]};
+    EXPECT_EQ(got, alone) << "kind " << desc.kind;
+    minkq_query_desc count = desc;
+    count.flags = MINKQ_QUERY_COUNT | (desc.flags & MINKQ_QUERY_LEAF_EXACT);
+    minkq_query_info info{};
+    ASSERT_EQ(minkq_scene_query(scene.get(), &count, nullptr, 0, MINKQ_MEMORY_HOST, &info), MINKQ_SUCCESS);
+    EXPECT_EQ(info.count, alone.size()) << "kind " << desc.kind;
+  }
 }
 
 // Moving geometries refit or rebuilt one at a time, or all at once from one buffer of theirs
@@ -282,6 +300,14 @@ TEST(Geometries, float64_geometries_keep_the_guarantee_in_double) {
   ASSERT_EQ(minkq_scene_geometry_refit(scene.get(), 0, test::geometry_vertices(g[0])), MINKQ_SUCCESS)
       << minkq_last_error_message();
   test::check_scene(scene.get(), g, r, "float64 cloth refit");
+  // Moving geometries of mixed precision cannot move together from one buffer.
+  g[1].flags = 0;
+  cxx::Scene mixed = test::new_geometry_scene(cpu.get(), g);
+  const std::vector<float> floats = ref::concatenate(g).xyz;
+  EXPECT_EQ(minkq_scene_refit(mixed.get(), cxx::host_buffer(floats.data(), floats.size() / 3)),
+            MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(minkq_scene_geometry_refit(mixed.get(), 1, test::geometry_vertices(g[1])), MINKQ_SUCCESS)
+      << minkq_last_error_message();
 }
 
 // A swept step of the cloth alone: at zero motion the static pairs; moving, every contact of
@@ -333,6 +359,13 @@ TEST(Geometries, swept_steps_of_one_geometry) {
                                                  << test::describe(test::difference(sampled, got));
     }
   }
+  // The whole-scene swept call moves every moving geometry (here the cloth alone) the same way.
+  ASSERT_EQ(minkq_scene_refit_swept(fixed.get(), x0, cxx::host_buffer(to.xyz.data(), to.vertex_count())), MINKQ_SUCCESS)
+      << minkq_last_error_message();
+  for (ref::Kind kind : test::kAllQueryKinds)
+    EXPECT_EQ(test::Scene::query_pairs(fixed.get(), test::query_kind(kind), MINKQ_MODE_BOX, r),
+              test::Scene::query_pairs(scene.get(), test::query_kind(kind), MINKQ_MODE_BOX, r))
+        << test::kind_name(kind);
   ASSERT_EQ(minkq_scene_geometry_refit(scene.get(), 1, x0), MINKQ_SUCCESS);
   EXPECT_EQ(minkq_scene_is_swept(scene.get()), 0);
 }
