@@ -215,6 +215,42 @@ TEST(Geometries, groups_and_masks_decide_the_cross_pairs) {
   EXPECT_GT(ref::geometry_contacts(open, ref::Kind::VT, r).size(), ref::geometry_contacts(g, ref::Kind::VT, r).size());
 }
 
+// Random mixed scenes: meshes, rods and particles with random kinds, SELF, DROP_INCIDENT,
+// worlds, groups, masks, thickness, precision and static flags, all in one unit cube.
+TEST(Geometries, random_mixed_scenes_lose_no_contact) {
+  const test::Device cpu;
+  const uint64_t seed = test::fresh_seed();
+  test::Random rng(seed);
+  for (int trial = 0; trial < 10; ++trial) {
+    std::vector<Geometry> g;
+    const int count = rng.integer(2, 7);
+    for (int k = 0; k < count; ++k) {
+      Mesh m = ref::random_soup(rng.integer(1, 50), seed + uint64_t(10 * trial + k), rng.uniform(0.02f, 0.3f));
+      const int type = rng.integer(0, 2);  // mesh, rods, particles
+      if (type > 0) m.tris.clear();
+      if (type == 2) m.edges.clear();
+      else if (type == 0 && rng.integer(0, 1)) m.edges.clear();  // derived by the scene
+      uint32_t kinds = uint32_t(rng.integer(1, 15));               // bits of VT, EE, VV, EV
+      kinds = (kinds & 3u) | ((kinds & 12u) << 2);
+      uint32_t flags = uint32_t(rng.integer(0, 3)) | (rng.integer(0, 3) == 0 ? MINKQ_GEOMETRY_STATIC : 0u);
+      if (rng.integer(0, 3) == 0) {
+        flags |= MINKQ_GEOMETRY_FLOAT64;
+        std::vector<double> xyz(m.xyz.begin(), m.xyz.end());
+        for (double& x : xyz) x += rng.uniform(-1e-7f, 1e-7f);
+        ref::set_float64(m, std::move(xyz));
+      }
+      Geometry x = test::make_geometry(std::move(m), kinds, flags, rng.integer(-1, 2));
+      x.group = 1u << rng.integer(0, 2);
+      x.mask = rng.integer(0, 2) ? ~0u : uint32_t(rng.integer(0, 7));
+      if (rng.integer(0, 1)) test::set_thickness(x, random_thickness(rng, x.mesh.vertex_count(), 0.05f));
+      g.push_back(std::move(x));
+    }
+    cxx::Scene scene = test::new_geometry_scene(cpu.get(), g);
+    test::check_scene(scene.get(), g, rng.integer(0, 4) ? rng.uniform(0.0f, 0.05f) : 0.0f,
+                      "trial " + std::to_string(trial));
+  }
+}
+
 // Eight copies of a sheet at the same place, each in its own world, over a plane of every world
 // (-1): no pair between two copies, and each copy meets itself and the plane as the first does.
 TEST(Geometries, worlds_never_meet_and_each_sees_the_same_pairs) {
