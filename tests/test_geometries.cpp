@@ -311,6 +311,20 @@ TEST(Geometries, per_vertex_thickness_up_to_several_radii) {
     for (Geometry& x : thin) x.thickness.clear();
     EXPECT_GT(ref::geometry_contacts(g, ref::Kind::VT, radius).size(), ref::geometry_contacts(thin, ref::Kind::VT, radius).size());
   }
+  // Thickness 0 everywhere is no thickness: the same pairs and digests.
+  std::vector<Geometry> zero = g, none = g;
+  for (Geometry& x : zero) x.thickness.assign(x.mesh.vertex_count(), 0.0);
+  for (Geometry& x : none) x.thickness.clear();
+  cxx::Scene zeros = test::new_geometry_scene(cpu.get(), zero), nones = test::new_geometry_scene(cpu.get(), none);
+  for (ref::Kind kind : test::kAllQueryKinds)
+    for (uint32_t flags : {0u, uint32_t(MINKQ_QUERY_LEAF_EXACT)})
+      for (minkq_mode mode : test::modes_of(kind)) {
+        uint64_t a = 0, b = 0;
+        EXPECT_EQ(test::Scene::query_pairs(zeros.get(), test::query_kind(kind), mode, r, flags, &a),
+                  test::Scene::query_pairs(nones.get(), test::query_kind(kind), mode, r, flags, &b))
+            << test::kind_name(kind) << " mode " << mode << " flags " << flags;
+        EXPECT_EQ(a, b);
+      }
 }
 
 // Double input far from the origin beside a float geometry; refit in double.
