@@ -5,7 +5,8 @@
 // not be able to hide itself by also living in the oracle. Distances are evaluated in long
 // double on float meshes (whose coordinates are exact in double) or on a mesh's double input
 // (Mesh::xyz64, exact in long double), and a pair is a contact when
-// its distance is <= r (compared as squared distance <= r^2, both in long double). Everything here favours being obviously right over being fast; the
+// its distance is <= r (compared as squared distance <= r^2, both in long double; in scenes of
+// many geometries r + t(a) + t(b)). Everything here favours being obviously right over being fast; the
 // grid-accelerated queries exist only so that ~300k-triangle scenes can be checked in seconds.
 #pragma once
 
@@ -47,6 +48,62 @@ Pairs ee_contacts(const Mesh& mesh, double r, bool drop_incident);
 // The same sets by testing every pair: O(N * M), for small meshes and for checking the grid.
 Pairs vt_contacts_brute(const Mesh& mesh, double r, bool drop_incident);
 Pairs ee_contacts_brute(const Mesh& mesh, double r, bool drop_incident);
+
+// ---- Scenes of many geometries ---------------------------------------------------------------
+// A scene of several geometries (triangle meshes, rods, particles), as minkq.h's
+// minkq_scene_create_geometries describes it, and its contacts in the global numbering. The
+// bit values are the C API's (the tests check that they agree), but the oracle does not
+// include minkq.h: it is the description of the rules, written again.
+enum class Kind { VT, EE, VV, EV };
+// Geometry::kinds bits: the kinds of pairs a geometry takes part in (MINKQ_SCENE_VT, ...).
+inline constexpr uint32_t kKindVT = 1, kKindEE = 2, kKindVV = 16, kKindEV = 32;
+// Geometry::flags bits (minkq_geometry_flags).
+inline constexpr uint32_t kSelf = 1, kDropIncident = 2, kFloat64 = 4, kStatic = 8;
+
+struct Geometry {
+  // Its vertices (xyz64 when not empty, else xyz), triangles and edges: mesh.edges when not
+  // empty (given), else derive_edges(mesh.tris) when it takes part in EE or EV, else none.
+  Mesh mesh;
+  std::vector<double> thickness;  // one per vertex (>= 0), or empty for none
+  uint32_t kinds = kKindVT | kKindEE;
+  uint32_t flags = kSelf | kDropIncident;  // kFloat64 and kStatic change no pair
+  int32_t world = 0;                       // >= 0, or -1: part of every world
+  uint32_t group = 1, mask = ~0u;
+};
+
+// The geometry's edges, as above.
+std::vector<int32_t> geometry_edges(const Geometry& g);
+// The geometries concatenated in order: the global numbering of vertices, triangles and edges
+// (geometry_edges of each, offset by the vertices before it). xyz64 holds the positions in
+// double (floats widened) when any geometry has double input, else it is empty.
+Mesh concatenate(const std::vector<Geometry>& geometries);
+// Geometry g's first global id and count of vertices, triangles or edges (k: 0, 1, 2, the
+// order of minkq_element).
+std::pair<size_t, size_t> geometry_range(const std::vector<Geometry>& geometries, size_t g, int k);
+
+// Of `pairs` (global ids of `kind`: (vertex, triangle), (edge, edge), (vertex, vertex),
+// (vertex, edge)), those that are not looked for at all: out of range, EE or VV not (lower,
+// higher), or not allowed. Allowed are self pairs within a geometry with kSelf, less incident
+// ones under kDropIncident (VT: the vertex is the triangle's, EE: the edges share a vertex, EV:
+// the vertex is the edge's), and cross pairs between geometries that both take part in the
+// kind, share a world (equal, or either -1) and pass each other's mask.
+Pairs not_allowed(const std::vector<Geometry>& geometries, Kind kind, const Pairs& pairs);
+
+// A global pair's distance (long double, on the input as given), its reach r + t(a) + t(b)
+// (an element's thickness the largest of its vertices', 0 without) and the operand size S:
+// the largest distance between any two of its points. Throws for a pair out of range.
+struct PairMeasure {
+  long double distance;
+  double reach, scale;
+};
+std::vector<PairMeasure> measure_pairs(const std::vector<Geometry>& geometries, Kind kind, const Pairs& pairs, double r);
+
+// Every allowed pair of `kind` whose distance is <= its reach (squared, in long double),
+// sorted, in global ids. Grid-accelerated and parallel; the brute form tests every pair.
+// Throws std::invalid_argument for a description minkq_scene_create_geometries refuses
+// (bad indices, thickness count or value, world, kinds or flags).
+Pairs geometry_contacts(const std::vector<Geometry>& geometries, Kind kind, double r);
+Pairs geometry_contacts_brute(const std::vector<Geometry>& geometries, Kind kind, double r);
 
 // ---- Scene generators (deterministic on every platform) -------------------------------------
 // n x n vertices on [0,1]^2 at z = 0; vertex (i, j) is index j * n + i at (i, j) / (n - 1).

@@ -287,3 +287,203 @@ TEST(ReferenceLoad, AsciiPlyAndErrors) {
   EXPECT_THROW(ref::load_mesh(bad), std::runtime_error);
   std::remove(bad.c_str());
 }
+
+// ---- Scenes of many geometries ----------------------------------------------------------------
+namespace {
+
+const ref::Kind kKinds[] = {ref::Kind::VT, ref::Kind::EE, ref::Kind::VV, ref::Kind::EV};
+constexpr uint32_t kAllKinds = ref::kKindVT | ref::kKindEE | ref::kKindVV | ref::kKindEV;
+
+ref::Geometry geometry(ref::Mesh mesh, uint32_t kinds = kAllKinds, uint32_t flags = ref::kSelf | ref::kDropIncident) {
+  ref::Geometry g;
+  g.mesh = std::move(mesh);
+  g.kinds = kinds;
+  g.flags = flags;
+  return g;
+}
+
+ref::Mesh points(std::vector<float> xyz) {
+  ref::Mesh m;
+  m.xyz = std::move(xyz);
+  return m;
+}
+
+// A sheet of n x n vertices moved by (dx, dy, dz).
+ref::Mesh moved_sheet(int n, double dx, double dy, double dz) {
+  ref::Mesh m = ref::grid_sheet(n);
+  for (size_t v = 0; v < m.vertex_count(); ++v)
+    m.xyz[3 * v] += float(dx), m.xyz[3 * v + 1] += float(dy), m.xyz[3 * v + 2] += float(dz);
+  return m;
+}
+
+}  // namespace
+
+// Thickness adds to the reach exactly (binary fractions), the bound included; worlds, groups,
+// masks, kinds and SELF decide which pairs are looked for at all.
+TEST(ReferenceGeometries, ReachAndRulesByHand) {
+  std::vector<ref::Geometry> two = {geometry(points({0, 0, 0})), geometry(points({1, 0, 0}))};
+  two[0].thickness = {0.25};
+  two[1].thickness = {0.125};
+  EXPECT_EQ(ref::geometry_contacts(two, ref::Kind::VV, 0.625), (ref::Pairs{{0, 1}}));
+  EXPECT_TRUE(ref::geometry_contacts(two, ref::Kind::VV, 0.624).empty());
+  const auto m = ref::measure_pairs(two, ref::Kind::VV, {{0, 1}}, 0.5);
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(double(m[0].distance), 1.0);
+  EXPECT_EQ(m[0].reach, 0.875);
+  EXPECT_EQ(m[0].scale, 1.0);
+  // A triangle's thickness is its thickest vertex's, wherever that is.
+  ref::Mesh tri = points({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  tri.tris = {0, 1, 2};
+  std::vector<ref::Geometry> over = {geometry(tri), geometry(points({0.25f, 0.25f, 0.5f}))};
+  over[0].thickness = {0, 0, 0.25};
+  over[1].thickness = {0.25};
+  EXPECT_EQ(ref::geometry_contacts(over, ref::Kind::VT, 0.0), (ref::Pairs{{3, 0}}));
+  over[0].thickness = {0, 0, 0.125};
+  EXPECT_TRUE(ref::geometry_contacts(over, ref::Kind::VT, 0.0).empty());
+
+  // Four particles at one point: worlds 0, 1, -1, and 0 again in another group.
+  std::vector<ref::Geometry> g;
+  for (int32_t world : {0, 1, -1, 0}) {
+    g.push_back(geometry(points({0, 0, 0}), ref::kKindVV));
+    g.back().world = world;
+  }
+  g[3].group = 2, g[3].mask = 2;  // passes only its own group's mask; the others' group 1 fails it
+  EXPECT_EQ(ref::geometry_contacts(g, ref::Kind::VV, 0.0), (ref::Pairs{{0, 2}, {1, 2}}));
+  g[3].mask = 1;  // now each passes the other's mask (group 2 & mask ~0, group 1 & mask 1)
+  EXPECT_EQ(ref::geometry_contacts(g, ref::Kind::VV, 0.0), (ref::Pairs{{0, 2}, {0, 3}, {1, 2}, {2, 3}}));
+  g[2].kinds = ref::kKindVT;  // takes no part in VV
+  EXPECT_EQ(ref::geometry_contacts(g, ref::Kind::VV, 0.0), (ref::Pairs{{0, 3}}));
+  EXPECT_EQ(ref::not_allowed(g, ref::Kind::VV, {{0, 3}, {0, 1}, {3, 0}, {0, 2}, {0, 9}}),
+            (ref::Pairs{{0, 1}, {3, 0}, {0, 2}, {0, 9}}));
+
+  // SELF and DROP_INCIDENT act within a geometry only: a unit square (grid_sheet(2)) against
+  // itself, then beside a copy of itself one unit up (exactly r away).
+  std::vector<ref::Geometry> square = {geometry(ref::grid_sheet(2), kAllKinds, 0)};
+  for (ref::Kind kind : kKinds) EXPECT_TRUE(ref::geometry_contacts(square, kind, 1.0).empty());
+  square[0].flags = ref::kSelf | ref::kDropIncident;
+  EXPECT_EQ(ref::geometry_contacts(square, ref::Kind::VT, 1.0), (ref::Pairs{{1, 1}, {2, 0}}));
+  EXPECT_EQ(ref::geometry_contacts(square, ref::Kind::EV, 1.0).size(), 5u * 2u);  // each edge's 2 other vertices
+  square[0].flags = ref::kSelf;
+  EXPECT_EQ(ref::geometry_contacts(square, ref::Kind::VT, 1.0).size(), 8u);
+  square[0].flags = 0;
+  square.push_back(geometry(moved_sheet(2, 0, 0, 1), kAllKinds, 0));
+  // Each square's vertices over the other's triangles: the diagonal's two ends over both, the
+  // other two corners over one (the other triangle is sqrt(1.5) away), both ways: 2 * 6.
+  EXPECT_EQ(ref::geometry_contacts(square, ref::Kind::VT, 1.0).size(), 12u);
+  EXPECT_TRUE(ref::geometry_contacts(square, ref::Kind::VT, 0.99).empty());
+  EXPECT_EQ(ref::geometry_contacts(square, ref::Kind::VV, 1.0), (ref::Pairs{{0, 4}, {1, 5}, {2, 6}, {3, 7}}));
+}
+
+// One geometry with SELF is the one-mesh oracle; cross pairs of two are those of the
+// concatenated mesh between the two; thickness 0 is no thickness; the grid is the brute force.
+TEST(ReferenceGeometries, AgreeWithTheOneMeshOracle) {
+  const ref::Mesh sheet = ref::twisted_sheet(14, 2.0);
+  const double r = 0.5 * ref::mean_edge_length(sheet);
+  for (bool drop : {false, true}) {
+    const std::vector<ref::Geometry> one = {
+        geometry(sheet, kAllKinds, ref::kSelf | (drop ? ref::kDropIncident : 0u))};
+    EXPECT_EQ(ref::geometry_contacts(one, ref::Kind::VT, r), ref::vt_contacts(sheet, r, drop)) << drop;
+    EXPECT_EQ(ref::geometry_contacts(one, ref::Kind::EE, r), ref::ee_contacts(sheet, r, drop)) << drop;
+  }
+  // Two twisted sheets crossing each other, neither with SELF.
+  ref::Mesh other = ref::twisted_sheet(11, -1.5);
+  ref::transform(other, 1.0, 0.05);
+  std::vector<ref::Geometry> two = {geometry(sheet, kAllKinds, 0), geometry(other, kAllKinds, 0)};
+  const ref::Mesh both = ref::concatenate(two);
+  EXPECT_EQ(both.edges, ref::derive_edges(both.tris));  // two meshes sharing no vertex
+  const size_t nv0 = sheet.vertex_count(), nt0 = sheet.triangle_count(), ne0 = sheet.edge_count();
+  EXPECT_EQ(ref::geometry_range(two, 1, 0), (std::pair<size_t, size_t>{nv0, other.vertex_count()}));
+  EXPECT_EQ(ref::geometry_range(two, 1, 1), (std::pair<size_t, size_t>{nt0, other.triangle_count()}));
+  EXPECT_EQ(ref::geometry_range(two, 1, 2), (std::pair<size_t, size_t>{ne0, other.edge_count()}));
+  auto cross = [](const ref::Pairs& all, size_t first_a, size_t first_b) {
+    ref::Pairs out;
+    for (const auto& [a, b] : all)
+      if ((size_t(a) < first_a) != (size_t(b) < first_b)) out.emplace_back(a, b);
+    return out;
+  };
+  const ref::Pairs vt = ref::geometry_contacts(two, ref::Kind::VT, r), ee = ref::geometry_contacts(two, ref::Kind::EE, r);
+  EXPECT_FALSE(vt.empty());
+  EXPECT_FALSE(ee.empty());
+  EXPECT_EQ(vt, cross(ref::vt_contacts(both, r, false), nv0, nt0));
+  EXPECT_EQ(ee, cross(ref::ee_contacts(both, r, false), ne0, ne0));
+  // Thickness 0 everywhere is no thickness; the grid equals the brute force, for every kind.
+  for (ref::Geometry& g : two) g.flags = ref::kSelf | ref::kDropIncident;
+  std::vector<ref::Geometry> zero = two;
+  for (ref::Geometry& g : zero) g.thickness.assign(g.mesh.vertex_count(), 0.0);
+  for (ref::Kind kind : kKinds) {
+    const ref::Pairs plain = ref::geometry_contacts(two, kind, r);
+    EXPECT_FALSE(plain.empty());
+    EXPECT_EQ(ref::geometry_contacts(zero, kind, r), plain);
+    EXPECT_EQ(ref::geometry_contacts_brute(two, kind, r), plain);
+  }
+  // A uniform thickness t is the radius r + 2t (binary fractions: both reaches exact).
+  std::vector<ref::Geometry> thick = two;
+  for (ref::Geometry& g : thick) g.thickness.assign(g.mesh.vertex_count(), 1.0 / 128);
+  for (ref::Kind kind : kKinds)
+    EXPECT_EQ(ref::geometry_contacts(thick, kind, 1.0 / 64), ref::geometry_contacts(two, kind, 1.0 / 32));
+}
+
+// The grid equals the brute force on mixed scenes: random thickness up to several r, worlds,
+// groups and masks, particles, rods and meshes, double input, SELF on some.
+TEST(ReferenceGeometries, GridEqualsBruteOnMixedScenes) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int trial = 0; trial < 4; ++trial) {
+    std::vector<ref::Geometry> scene;
+    for (int k = 0; k < 6; ++k) {
+      ref::Mesh m = ref::random_soup(40, 100 * trial + k, 0.15);
+      if (k % 3 == 1) m.tris.clear();  // rods: the soup's edges only
+      if (k % 3 == 2) m.tris.clear(), m.edges.clear();  // particles
+      if (k == 4) {
+        std::vector<double> xyz(m.xyz.begin(), m.xyz.end());
+        for (double& x : xyz) x += 1e-9 * u(rng);
+        ref::set_float64(m, std::move(xyz));
+      }
+      ref::Geometry g = geometry(std::move(m), kAllKinds, (k % 2 ? ref::kSelf : 0u) | ref::kDropIncident);
+      g.world = int32_t(rng() % 3) - 1;
+      g.group = 1u << (rng() % 3);
+      g.mask = uint32_t(rng() % 8);
+      if (k != 3) g.thickness.resize(g.mesh.vertex_count());
+      for (double& t : g.thickness) t = u(rng) < 0.3 ? 0.0 : 0.05 * u(rng);
+      scene.push_back(std::move(g));
+    }
+    for (ref::Kind kind : kKinds) {
+      const ref::Pairs grid = ref::geometry_contacts(scene, kind, 0.01);
+      EXPECT_EQ(grid, ref::geometry_contacts_brute(scene, kind, 0.01)) << "trial " << trial;
+      EXPECT_TRUE(ref::not_allowed(scene, kind, grid).empty());
+      for (const ref::PairMeasure& m : ref::measure_pairs(scene, kind, grid, 0.01)) EXPECT_LE(m.distance, m.reach);
+    }
+  }
+}
+
+TEST(ReferenceGeometries, EdgesRangesAndRefusals) {
+  // A VT-only geometry derives no edges (the C API's rule); given edges are kept.
+  std::vector<ref::Geometry> g = {geometry(ref::grid_sheet(3), ref::kKindVT), geometry(ref::grid_sheet(2))};
+  g[0].mesh.edges.clear();
+  g[1].mesh.edges.clear();
+  EXPECT_TRUE(ref::geometry_edges(g[0]).empty());
+  EXPECT_EQ(ref::geometry_edges(g[1]), ref::derive_edges(g[1].mesh.tris));
+  const ref::Mesh all = ref::concatenate(g);
+  EXPECT_EQ(all.vertex_count(), 13u);
+  EXPECT_EQ(all.edges, (std::vector<int32_t>{9, 10, 9, 11, 9, 12, 10, 12, 11, 12}));
+  EXPECT_EQ(ref::geometry_range(g, 1, 2), (std::pair<size_t, size_t>{0, 5}));
+  EXPECT_THROW(ref::geometry_range(g, 2, 0), std::invalid_argument);
+  auto refused = [&](auto change) {
+    std::vector<ref::Geometry> bad = g;
+    change(bad[1]);
+    try {
+      ref::geometry_contacts(bad, ref::Kind::VT, 0.1);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what()).find("geometry 1: ") != std::string::npos;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.thickness = {0.1}; }));
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.thickness = {0, 0, NAN, 0}; }));
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.thickness = {0, 0, -1, 0}; }));
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.world = -2; }));
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.kinds = 0; }));
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.flags = 64; }));
+  EXPECT_TRUE(refused([](ref::Geometry& x) { x.mesh.tris[4] = 4; }));
+  EXPECT_THROW(ref::geometry_contacts({}, ref::Kind::VT, 0.1), std::invalid_argument);
+}
