@@ -8,16 +8,12 @@
 #include <stdexcept>
 
 #include "minkq/predicates.h"
+#include "peers/embree_errors.h"
 #include "minkq/elements.h"
 
 namespace minkq::bench {
 
 namespace {
-
-void check_device(RTCDevice device, const char* what) {
-  const RTCError e = rtcGetDeviceError(device);
-  if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("embree: ") + what + " failed (error " + std::to_string(int(e)) + ")");
-}
 
 struct QueryUser {
   int32_t vertex;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -154,6 +155,23 @@ class GeometryOn {
   }
   VertexVertexQueries vv_queries(float r, uint32_t filters) {
     return {vertices_.data(), vertex_tree_.view().sorted_prims, r, filters, rho(), vertices1(), thickness()};
+  }
+  // The same by primitive type (Triangle: the triangle tree, Edge: the edge tree).
+  template <class Prim>
+  VertexPrimQueries<Prim> vertex_prim_queries(float r, uint32_t filters) {
+    if constexpr (std::is_same<Prim, Triangle>::value) return vt_queries(r, filters); else return ev_queries(r, filters);
+  }
+  template <class Prim>
+  BvhView prim_tree() const {
+    if constexpr (std::is_same<Prim, Triangle>::value) return triangle_tree(); else return edge_tree();
+  }
+  template <class Prim>
+  const LeafGroup<Prim>* leaf_prims() const {
+    if constexpr (std::is_same<Prim, Triangle>::value) return leaf_triangles(); else return leaf_edges();
+  }
+  template <class Prim>
+  int32_t num_prims() const {
+    if constexpr (std::is_same<Prim, Triangle>::value) return num_triangles(); else return num_edges();
   }
   // This geometry as one side of a cross query.
   GeometrySide side() { return {vertices_.data(), vertices1(), thickness(), rho()}; }

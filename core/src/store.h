@@ -283,33 +283,11 @@ class MeshStoreOn final : public MeshStore {
     switch (request.kind) {
       case QueryKind::kVertexTriangle:
         return run_jobs<true>(request, out, make_jobs<VtJob>(plans, [&](VtJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
-          job.bvh = t.triangle_tree();
-          job.first_offset = first_[qi].vertices;
-          job.second_offset = first_[ti].triangles;
-          if (job.reversed) {
-            job.bvh = q.vertex_tree();
-            job.reversed_queries = {q.side(), t.side(), t.leaf_triangles(), t.triangle_tree().sorted_prims,
-                                    request.r, request.filters & kLeafExact, q.max_thickness()};
-            return t.num_triangles();
-          }
-          if (job.self) job.self_queries = q.vt_queries(request.r, self_filters(qi, request));
-          else job.cross_queries = {q.side(), t.side(), t.leaf_triangles(), q.vertex_order(), request.r, request.filters & kLeafExact};
-          return q.num_vertices();
+          return fill_vertex_job(job, q, t, first_[qi].vertices, first_[ti].triangles, self_filters(qi, request), request);
         }), vt_jobs_, totals_.vertices, fn);
       case QueryKind::kVertexEdge:
         return run_jobs<true>(request, out, make_jobs<EvJob>(plans, [&](EvJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
-          job.bvh = t.edge_tree();
-          job.first_offset = first_[qi].vertices;
-          job.second_offset = first_[ti].edges;
-          if (job.reversed) {
-            job.bvh = q.vertex_tree();
-            job.reversed_queries = {q.side(), t.side(), t.leaf_edges(), t.edge_tree().sorted_prims,
-                                    request.r, request.filters & kLeafExact, q.max_thickness()};
-            return t.num_edges();
-          }
-          if (job.self) job.self_queries = q.ev_queries(request.r, self_filters(qi, request));
-          else job.cross_queries = {q.side(), t.side(), t.leaf_edges(), q.vertex_order(), request.r, request.filters & kLeafExact};
-          return q.num_vertices();
+          return fill_vertex_job(job, q, t, first_[qi].vertices, first_[ti].edges, self_filters(qi, request), request);
         }), ev_jobs_, totals_.vertices, fn);
       case QueryKind::kVertexVertex:
         return run_jobs<true>(request, out, make_jobs<VvJob>(plans, [&](VvJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
@@ -334,6 +312,26 @@ class MeshStoreOn final : public MeshStore {
         }), ee_jobs_, totals_.edges, fn);
       default: fail(Status::kInternal, "not a mesh query kind");
     }
+  }
+  // A VT or EV job (Job's cross source names the primitive): q's vertices against t's
+  // triangles or edges, or reversed, those against q's vertex tree; returns its query count.
+  template <class Job>
+  int32_t fill_vertex_job(Job& job, Geometry& q, Geometry& t, int32_t first_vertex, int32_t first_prim,
+                          uint32_t self_filters, const QueryRequest& request) {
+    using Prim = typename Job::Reversed::Prim;
+    job.first_offset = first_vertex;
+    job.second_offset = first_prim;
+    const uint32_t leaf_exact = request.filters & kLeafExact;
+    if (job.reversed) {
+      job.bvh = q.vertex_tree();
+      job.reversed_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), t.template prim_tree<Prim>().sorted_prims,
+                              request.r, leaf_exact, q.max_thickness()};
+      return t.template num_prims<Prim>();
+    }
+    job.bvh = t.template prim_tree<Prim>();
+    if (job.self) job.self_queries = q.template vertex_prim_queries<Prim>(request.r, self_filters);
+    else job.cross_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), q.vertex_order(), request.r, leaf_exact};
+    return q.num_vertices();
   }
   // A kind's jobs on the host, in plan order: fill(job, query geometry, tree geometry, their
   // indices) sets the tree, offsets and source and returns the job's query count.

@@ -67,8 +67,9 @@ using CrossVertexEdgeQueries = CrossVertexPrimQueries<Edge>;
 // accepts; the leaf filter then runs that test itself (Forward, the pass's shape, from the vertex
 // against the primitive's box, then the leaf-exact test), so the pairs are exactly those the vertex
 // side would find.
-template <class Prim>
+template <class Prim_>
 struct CrossPrimVertexQueries {
+  using Prim = Prim_;
   GeometrySide vertices, prims;
   const LeafGroup<Prim>* leaf_prims;  // the primitives in their tree's leaf order
   const int32_t* sorted_prims;        // that tree's leaf order
