@@ -192,25 +192,32 @@ class GeometryOn {
   const float* thickness() const { return has_thickness_ ? thickness_.data() : nullptr; }
   // Where the queries read rho (executor memory): nullptr for float input, whose radius stays r.
   float* rho() { return float64_ ? rho_.data() : nullptr; }
+  // Calls fn with `boxes`, grown by their elements' thickness where the geometry has any.
+  template <class Boxes, class Fn>
+  void with_grown(const Boxes& boxes, Fn&& fn) const {
+    if (has_thickness_) fn(GrownBoxes<Boxes>{boxes, thickness_.data()}); else fn(boxes);
+  }
   void refit_trees() {
-    if (has_triangle_tree_) triangle_tree_.refit(triangle_boxes());
-    if (has_edge_tree_) edge_tree_.refit(edge_boxes());
-    if (has_vertex_tree_) vertex_tree_.refit(vertex_boxes());
+    if (has_triangle_tree_) with_grown(triangle_boxes(), [&](const auto& boxes) { triangle_tree_.refit(boxes); });
+    if (has_edge_tree_) with_grown(edge_boxes(), [&](const auto& boxes) { edge_tree_.refit(boxes); });
+    if (has_vertex_tree_) with_grown(vertex_boxes(), [&](const auto& boxes) { vertex_tree_.refit(boxes); });
   }
   // The trees the flags ask for, and the VT / EV query order, from the current vertices;
   // triangles and edges: the elements by id (with their trees), which they then hold in leaf
   // order.
   void build_trees(X& x, const Array<Triangle>& triangles, const Array<Edge>& edges) {
     if (has_triangle_tree_) {
-      triangle_tree_.build(TriangleBoxes{vertices_.data(), triangles.data(), vertices1(), thickness()}, num_triangles_);
+      with_grown(TriangleBoxes{vertices_.data(), triangles.data(), vertices1()},
+                 [&](const auto& boxes) { triangle_tree_.build(boxes, num_triangles_); });
       x.fill_groups(triangles.data(), triangle_tree_.view().sorted_prims, num_triangles_, leaf_triangles_);
     }
     if (keeps_vertex_order_) x.sort_by_morton(PointBoxes{vertices_.data()}, num_vertices_, vertex_order_);
     if (has_edge_tree_) {
-      edge_tree_.build(EdgeBoxes{vertices_.data(), edges.data(), vertices1(), thickness()}, num_edges_);
+      with_grown(EdgeBoxes{vertices_.data(), edges.data(), vertices1()},
+                 [&](const auto& boxes) { edge_tree_.build(boxes, num_edges_); });
       x.fill_groups(edges.data(), edge_tree_.view().sorted_prims, num_edges_, leaf_edges_);
     }
-    if (has_vertex_tree_) vertex_tree_.build(vertex_boxes(), num_vertices_);
+    if (has_vertex_tree_) with_grown(vertex_boxes(), [&](const auto& boxes) { vertex_tree_.build(boxes, num_vertices_); });
   }
   // The same for a rebuild: the elements back in id order first, into the scratch members once
   // a rebuild is reserved (an asynchronous one allocates nothing), else into this call's own.
@@ -225,9 +232,10 @@ class GeometryOn {
     build_trees(x, triangles, edges);
   }
   // The elements' boxes by leaf position, for refits (a build reads them by id: build_trees).
-  LeafBoxes<Triangle> triangle_boxes() const { return {vertices_.data(), leaf_triangles_.data(), vertices1(), thickness()}; }
-  LeafBoxes<Edge> edge_boxes() const { return {vertices_.data(), leaf_edges_.data(), vertices1(), thickness()}; }
-  PointBoxes vertex_boxes() const { return {vertices_.data(), vertices1(), thickness()}; }
+  // The elements' boxes, ungrown (with_grown grows them).
+  LeafBoxes<Triangle> triangle_boxes() const { return {vertices_.data(), leaf_triangles_.data(), vertices1()}; }
+  LeafBoxes<Edge> edge_boxes() const { return {vertices_.data(), leaf_edges_.data(), vertices1()}; }
+  PointBoxes vertex_boxes() const { return {vertices_.data(), vertices1()}; }
 
   Array<Vec3> vertices_;
   Array<float> thickness_;               // per vertex, when the geometry has any

@@ -178,7 +178,7 @@ struct CrossVertexVertexQueries {
   template <class Shape>
   MINKQ_HD bool accept_rest(QueryTarget t, int32_t w, int64_t) const {
     const int32_t v = t.q;
-    const Box own = PointBoxes{query.vertices, query.vertices1, query.thickness}(v);
+    const Box own = GrownBoxes<PointBoxes>{{query.vertices, query.vertices1}, query.thickness}(v);
     if (!Shape::from(vertex_geometry(tree.vertices, tree.vertices1, w, radius_of(tree, w))).finer(own)) return false;
     if (!(filters & kLeafExact)) return true;
     const float tv = vertex_thickness(query.thickness, v), tw = vertex_thickness(tree.thickness, w);

@@ -44,14 +44,14 @@ template <class Prim>
 MINKQ_HD Box reach_box(const Vec3* vertices, const Vec3* vertices1, const float* thickness, const Prim& e) {
   return grow_box(element_box(vertices, vertices1, e), element_thickness(thickness, e));
 }
-// The box of element i, by id.
+// The box of element i, by id; thickness_of(t, i) its thickness.
 template <class Prim>
 struct ElementBoxes {
   const Vec3* vertices;
   const Prim* prims;
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  const float* thickness = nullptr;  // per vertex, or none
-  MINKQ_HD Box operator()(int32_t i) const { return reach_box(vertices, vertices1, thickness, prims[i]); }
+  MINKQ_HD Box operator()(int32_t i) const { return element_box(vertices, vertices1, prims[i]); }
+  MINKQ_HD float thickness_of(const float* thickness, int32_t i) const { return element_thickness(thickness, prims[i]); }
 };
 using TriangleBoxes = ElementBoxes<Triangle>;
 using EdgeBoxes = ElementBoxes<Edge>;
@@ -59,11 +59,20 @@ using EdgeBoxes = ElementBoxes<Edge>;
 struct PointBoxes {
   const Vec3* points;
   const Vec3* points1 = nullptr;  // swept: the positions at t = 1 (the box of the path)
-  const float* thickness = nullptr;  // per point, or none: the box grown by it
   MINKQ_HD Box operator()(int32_t i) const {
     const Box b = Box::of_point(points[i]);
-    return grow_box(points1 ? box_expand(b, points1[i]) : b, vertex_thickness(thickness, i));
+    return points1 ? box_expand(b, points1[i]) : b;
   }
+  MINKQ_HD float thickness_of(const float* thickness, int32_t i) const { return vertex_thickness(thickness, i); }
+};
+
+// Boxes (ElementBoxes, PointBoxes, LeafBoxes) grown by their elements' thickness: what a tree
+// holds for a geometry with thickness. A type of its own, so that a tree without thickness runs
+// the plain boxes' code.
+template <class Boxes>
+struct GrownBoxes : Boxes {
+  const float* thickness;
+  MINKQ_HD Box operator()(int32_t i) const { return grow_box(Boxes::operator()(i), Boxes::thickness_of(thickness, i)); }
 };
 
 // The leaf-exact test of a vertex against a triangle or an edge.

@@ -83,8 +83,10 @@ struct LeafBoxes {
   const Vec3* vertices;
   const LeafGroup<Prim>* groups;
   const Vec3* vertices1 = nullptr;  // swept: the positions at t = 1
-  const float* thickness = nullptr;  // per vertex, or none
-  MINKQ_HD Box operator()(int32_t p) const { return reach_box(vertices, vertices1, thickness, leaf_element(groups, p)); }
+  MINKQ_HD Box operator()(int32_t p) const { return element_box(vertices, vertices1, leaf_element(groups, p)); }
+  MINKQ_HD float thickness_of(const float* thickness, int32_t p) const {
+    return element_thickness(thickness, leaf_element(groups, p));
+  }
 };
 
 }  // namespace minkq

@@ -241,7 +241,7 @@ struct VertexVertexQueries {
   template <class Shape>
   MINKQ_HD bool accept_rest(QueryTarget target, int32_t w, int64_t) const {
     const int32_t v = target.q;
-    if (!Shape::from(vertex_geometry(vertices, vertices1, w, radius_of(w))).finer(PointBoxes{vertices, vertices1, thickness}(v)))
+    if (!Shape::from(vertex_geometry(vertices, vertices1, w, radius_of(w))).finer(GrownBoxes<PointBoxes>{{vertices, vertices1}, thickness}(v)))
       return false;
     if (!(filters & kLeafExact)) return true;
     const int32_t lo = v < w ? v : w, hi = v < w ? w : v;  // in the pair's own order, as EE
