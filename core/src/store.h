@@ -321,16 +321,16 @@ class MeshStoreOn final : public MeshStore {
     using Prim = typename Job::Reversed::Prim;
     job.first_offset = first_vertex;
     job.second_offset = first_prim;
-    const uint32_t leaf_exact = request.filters & kLeafExact;
     if (job.reversed) {
       job.bvh = q.vertex_tree();
       job.reversed_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), t.template prim_tree<Prim>().sorted_prims,
-                              request.r, leaf_exact, q.max_thickness()};
+                              request.r, request.filters & kLeafExact, q.max_thickness()};
       return t.template num_prims<Prim>();
     }
     job.bvh = t.template prim_tree<Prim>();
     if (job.self) job.self_queries = q.template vertex_prim_queries<Prim>(request.r, self_filters);
-    else job.cross_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), q.vertex_order(), request.r, leaf_exact};
+    else job.cross_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), q.vertex_order(), request.r,
+                              request.filters & kLeafExact};
     return q.num_vertices();
   }
   // A kind's jobs on the host, in plan order: fill(job, query geometry, tree geometry, their
