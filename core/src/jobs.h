@@ -57,6 +57,12 @@ MINKQ_HD ReversedVertexPrimQueries<Prim, Shape> reversed_source(const CrossPrimV
   return {q};
 }
 
+// The jobs of each kind.
+using VertexTriangleJob = GeometryJob<VertexTriangleQueries, CrossVertexTriangleQueries, CrossPrimVertexQueries<Triangle>>;
+using VertexEdgeJob = GeometryJob<VertexEdgeQueries, CrossVertexEdgeQueries, CrossPrimVertexQueries<Edge>>;
+using EdgeEdgeJob = GeometryJob<EdgeEdgeQueries, CrossEdgeEdgeQueries>;
+using VertexVertexJob = GeometryJob<VertexVertexQueries, CrossVertexVertexQueries>;
+
 // A pass over jobs (executor memory, in order of first_query, none empty): query i runs in the
 // job whose range holds it, found by binary search.
 template <class Shape_, class Job>
@@ -86,6 +92,13 @@ struct JobPass {
   }
   MINKQ_HD int32_t first_ids() const { return first_bound; }
 };
+
+// Whether a pass is a JobPass (a blocking call's only: scenes of several geometries take no
+// stream-ordered calls).
+template <class Pass>
+struct IsJobPass : std::false_type {};
+template <class Shape, class Job>
+struct IsJobPass<JobPass<Shape, Job>> : std::true_type {};
 
 // What a geometry brings to the planning of jobs: its role and element counts.
 struct GeometryShape {

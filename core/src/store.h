@@ -63,10 +63,10 @@ class MeshStoreOn final : public MeshStore {
   template <class T>
   using Array = typename X::template Array<T>;
   using Geometry = GeometryOn<X>;
-  using VtJob = GeometryJob<VertexTriangleQueries, CrossVertexTriangleQueries, CrossPrimVertexQueries<Triangle>>;
-  using EvJob = GeometryJob<VertexEdgeQueries, CrossVertexEdgeQueries, CrossPrimVertexQueries<Edge>>;
-  using EeJob = GeometryJob<EdgeEdgeQueries, CrossEdgeEdgeQueries>;
-  using VvJob = GeometryJob<VertexVertexQueries, CrossVertexVertexQueries>;
+  using VtJob = VertexTriangleJob;
+  using EvJob = VertexEdgeJob;
+  using EeJob = EdgeEdgeJob;
+  using VvJob = VertexVertexJob;
 
  public:
   MeshStoreOn(typename X::Device device, std::vector<GeometryInput> inputs) : x_(device) {
@@ -366,8 +366,11 @@ class MeshStoreOn final : public MeshStore {
         fn(JobPass<decltype(shape), Job>{r.kind, where.data(), num_jobs, num_queries, first_bound, out});
       });
     };
-    if (kVertexQueries && !swept()) return with(std::true_type{}, request);
-    with(std::false_type{}, kVertexQueries ? swept_path(request) : request);
+    if constexpr (kVertexQueries) {
+      if (!swept()) return with(std::true_type{}, request);
+      return with(std::false_type{}, swept_path(request));
+    }
+    with(std::false_type{}, request);
   }
 
   X x_;  // first: holds its device while the members below are created and destroyed

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "backend.h"
+#include "cuda/job_passes.cuh"
 #include "cuda/passes.cuh"
 #include "cuda/runtime.cuh"
 #include "cuda/tree.cuh"
@@ -103,8 +104,9 @@ class CudaExecutor {
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                    const Pass&... passes) {
-    if constexpr (std::is_same<Work, NoWork>::value)  // asynchronous calls count no work
-      if ((passes.out.count || ...)) {                  // an asynchronous call's (all of its passes)
+    // Asynchronous calls count no work and run no job passes (job_passes.cuh compiles those).
+    if constexpr (std::is_same<Work, NoWork>::value && !(IsJobPass<Pass>::value || ...))
+      if ((passes.out.count || ...)) {  // an asynchronous call's (all of its passes)
         run_passes_async<Work>(async_ws_, passes...);
         return {};
       }

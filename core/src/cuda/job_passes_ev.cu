@@ -1,0 +1,6 @@
+// The EV job passes' CUDA runs (job_passes.cuh): compiled here, beside backend.cu.
+#include "cuda/job_passes.cuh"
+
+namespace minkq::cuda {
+MINKQ_JOB_PASS_RUNS_EV(MINKQ_JOB_PASS_RUN_SIGNATURE)
+}  // namespace minkq::cuda
