@@ -24,9 +24,7 @@
 namespace minkq::bench::suites {
 namespace {
 
-using Pairs = std::vector<uint64_t>;
-
-Pairs result_set(const minkq_result* r) { return pairs_of(r); }
+using Pairs = PairSet;
 
 // The two meshes of the cloth-on-body scene and the cloth's frames.
 struct ClothOnBody {
@@ -77,17 +75,17 @@ Scene create_geometries(minkq_device* device, const std::vector<minkq_geometry_d
   return Scene(scene);
 }
 
+// The boxes of a mesh's vertices (kind 0), triangles (1) or edges (2) at positions xyz, as the
+// library's trees box them (elements.h).
 std::vector<Box> element_boxes(const ref::Mesh& mesh, const std::vector<float>& xyz, int kind) {
-  auto at = [&](int32_t v) { return Vec3{xyz[3 * size_t(v)], xyz[3 * size_t(v) + 1], xyz[3 * size_t(v) + 2]}; };
-  std::vector<Box> boxes;
-  if (kind == 0)
-    for (size_t v = 0; v < xyz.size() / 3; ++v) boxes.push_back(Box::of_point(at(int32_t(v))));
-  if (kind == 1)
-    for (size_t t = 0; t < mesh.triangle_count(); ++t)
-      boxes.push_back(box_expand(box_expand(Box::of_point(at(mesh.tris[3 * t])), at(mesh.tris[3 * t + 1])), at(mesh.tris[3 * t + 2])));
-  if (kind == 2)
-    for (size_t e = 0; e < mesh.edge_count(); ++e)
-      boxes.push_back(box_expand(Box::of_point(at(mesh.edges[2 * e])), at(mesh.edges[2 * e + 1])));
+  const auto* v = reinterpret_cast<const Vec3*>(xyz.data());
+  const size_t n = kind == 0 ? xyz.size() / 3 : kind == 1 ? mesh.triangle_count() : mesh.edge_count();
+  std::vector<Box> boxes(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (kind == 0) boxes[i] = PointBoxes{v}(int32_t(i));
+    if (kind == 1) boxes[i] = TriangleBoxes{v, reinterpret_cast<const Triangle*>(mesh.tris.data())}(int32_t(i));
+    if (kind == 2) boxes[i] = EdgeBoxes{v, reinterpret_cast<const Edge*>(mesh.edges.data())}(int32_t(i));
+  }
   return boxes;
 }
 
@@ -128,8 +126,8 @@ std::string cloth_rows(const SuiteRun& run, int subdivisions, bool& ok) {
     check(minkq_scene_geometry_refit(two.get(), 0, host_buffer(s.frames[frame].data(), cv, 12)), "geometry_refit");
     query(two.get(), MINKQ_QUERY_VT, MINKQ_MODE_BOX, flags, s.r, vt.get());
     query(two.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, flags, s.r, ee.get());
-    got_vt = result_set(vt.get());
-    got_ee = result_set(ee.get());
+    got_vt = pairs_of(vt.get());
+    got_ee = pairs_of(ee.get());
   };
   Pairs cat_vt, cat_ee;
   auto concatenated_step = [&](uint32_t flags) {
@@ -236,9 +234,9 @@ std::string world_rows(const SuiteRun& run, int worlds, bool& ok) {
   auto batched_step = [&] {
     check(minkq_scene_refit(batched.get(), host_buffer(all[frame].data(), all[frame].size() / 3, 12)), "refit");
     query(batched.get(), MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, r, vt.get());
-    b_vt = result_set(vt.get());
+    b_vt = pairs_of(vt.get());
     query(batched.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, r, ee.get());
-    b_ee = result_set(ee.get());
+    b_ee = pairs_of(ee.get());
   };
   auto loop_step = [&] {
     l_vt.clear();
@@ -246,10 +244,10 @@ std::string world_rows(const SuiteRun& run, int worlds, bool& ok) {
     for (int w = 0; w < worlds; ++w) {
       check(minkq_scene_refit(loop[size_t(w)].get(), host_buffer(frame_sets[frame][size_t(w)].data(), nv, 12)), "refit");
       query(loop[size_t(w)].get(), MINKQ_QUERY_VT, MINKQ_MODE_BOX, 0, r, vt.get());
-      const Pairs v = shifted(result_set(vt.get()), size_t(w) * nv, size_t(w) * nt);
+      const Pairs v = shifted(pairs_of(vt.get()), size_t(w) * nv, size_t(w) * nt);
       l_vt.insert(l_vt.end(), v.begin(), v.end());
       query(loop[size_t(w)].get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, 0, r, ee.get());
-      const Pairs e = shifted(result_set(ee.get()), size_t(w) * ne, size_t(w) * ne);
+      const Pairs e = shifted(pairs_of(ee.get()), size_t(w) * ne, size_t(w) * ne);
       l_ee.insert(l_ee.end(), e.begin(), e.end());
     }
   };

@@ -28,6 +28,14 @@ MINKQ_HD float cross_radius(float r, const GeometrySide& a, const GeometrySide& 
   return reach(r, a.rho ? *a.rho : 0.0f, b.rho ? *b.rho : 0.0f);
 }
 
+// The leaf-exact test of vertex v of `vertices` against element e of `prims` at radius r: within
+// r plus both thicknesses (the cross and reversed VT and EV sources' test).
+template <class Prim>
+MINKQ_HD bool vertex_within(const GeometrySide& vertices, int32_t v, const GeometrySide& prims, const Prim& e, float r) {
+  return point_within(prims.vertices, vertices.vertices[v], e,
+                      reach(r, vertex_thickness(vertices.thickness, v), element_thickness(prims.thickness, e)));
+}
+
 // The vertices of `query` against the tree of `Prim`s (triangles: VT, edges: EV) of `tree`;
 // pairs (vertex, primitive), in the geometries' own ids. Queries run in `order` when given (the
 // vertices' Morton order).
@@ -50,9 +58,7 @@ struct CrossVertexPrimQueries {
   }
   template <class Shape>
   MINKQ_HD bool accept_rest(QueryTarget t, int32_t, int64_t p) const {
-    const Prim e = leaf_element(leaf_prims, p);
-    return point_within(tree.vertices, query.vertices[t.q], e,
-                        reach(radius(), vertex_thickness(query.thickness, t.q), element_thickness(tree.thickness, e)));
+    return vertex_within(query, t.q, tree, leaf_element(leaf_prims, p), radius());
   }
   MINKQ_HD Pair pair(int32_t v, int32_t prim) const { return {v, prim}; }
 };
@@ -111,8 +117,7 @@ struct ReversedVertexPrimQueries {
     if (!Forward::from(vertex_geometry(side.vertices, side.vertices1, v, reach(reach_r, tv))).overlaps(prim_box(t.q)))
       return false;
     if (!(q.filters & kLeafExact)) return true;
-    const Prim e = leaf_element(q.leaf_prims, t.q);
-    return point_within(q.prims.vertices, side.vertices[v], e, reach(reach_r, tv, element_thickness(q.prims.thickness, e)));
+    return vertex_within(side, v, q.prims, leaf_element(q.leaf_prims, t.q), reach_r);
   }
   MINKQ_HD Pair pair(int32_t position, int32_t v) const { return {v, q.sorted_prims[position]}; }
 };
