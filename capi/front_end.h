@@ -296,14 +296,6 @@ inline void run_and_report(minkq_device* device, minkq::Store& store, const mink
   if (!report(device, out, flags, count, work, info)) fail(Status::kCapacity, capacity_message(count, capacity));
 }
 
-// Stream-ordered calls serve a scene of one geometry that reports its own pairs (the mesh
-// store's asynchronous calls: backend.h).
-inline void require_one_mesh(const minkq_scene* scene, const std::string& call) {
-  require(scene->geometries.size() == 1 && (scene->geometries[0].flags & MINKQ_GEOMETRY_SELF), Status::kUnsupported,
-          call + ": stream-ordered calls serve scenes of one geometry with MINKQ_GEOMETRY_SELF; this scene has " +
-              std::to_string(scene->geometries.size()) + " geometries: use the blocking calls");
-}
-
 // The memory asynchronous calls read and write: device memory on a CUDA device, host memory on
 // the CPU.
 inline minkq_memory async_memory(const minkq_device* device) {

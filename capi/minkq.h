@@ -470,9 +470,17 @@ MINKQ_API minkq_status minkq_scene_query_vt_ee(minkq_scene* scene, const minkq_q
  * error, which minkq_scene_async_status returns and clears. Queries run on the positions the
  * scene holds.
  *
- * These calls serve scenes of one geometry that reports its own pairs (every minkq_scene_create
- * scene); on a scene of several geometries they return MINKQ_ERROR_UNSUPPORTED, and its steps run
- * through the blocking calls.
+ * Scenes of several geometries take them too: the whole-scene moves take the moving geometries'
+ * vertices one after another (of one precision, as minkq_scene_refit does), each geometry checks
+ * its own part on the device and keeps its positions as a whole when that holds a NaN or infinity
+ * (the others take theirs; minkq_scene_async_status names the buffer's vertex and its geometry).
+ * Their queries run from tables of jobs in device memory, one per query kind and arrangement of
+ * the geometries (which ones are swept): minkq_scene_reserve writes those of the arrangements its
+ * stream-ordered moves reach (every moving geometry at rest; with MINKQ_RESERVE_SWEPT, every one
+ * swept). After a blocking move of one geometry into another arrangement, the next stream-ordered
+ * query writes its table first (allocating and copying, so not while capturing: make one such
+ * query, or minkq_scene_reserve again, before capturing). Their VT and EE queries of one
+ * minkq_scene_query_vt_ee_async are two launches, one after the other.
  *
  * Flags: MINKQ_QUERY_LEAF_EXACT and MINKQ_QUERY_CANONICAL (pairs sorted when they all fit,
  * with scratch reserved for the capacity); MINKQ_QUERY_DIGEST and MINKQ_QUERY_STATS need a

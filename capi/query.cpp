@@ -165,7 +165,6 @@ minkq_status minkq_scene_query_async(minkq_scene* scene, const minkq_query_desc*
                                      size_t capacity, uint64_t* out_count, minkq_stream stream) {
   return guarded([&] {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-    require_one_mesh(scene, "minkq_scene_query_async");
     const minkq::QueryRequest request = checked_scene_request(scene, query, "query");
     const minkq::PairOutput out = checked_async_output(scene, query, out_pairs, capacity, out_count, "");
     scene->store->query_async(request, out, stream);
@@ -178,7 +177,6 @@ minkq_status minkq_scene_query_vt_ee_async(minkq_scene* scene, const minkq_query
                                            uint64_t* ee_count, minkq_stream stream) {
   return guarded([&] {
     const auto [vt, ee] = checked_vt_ee_requests(scene, vt_query, ee_query);  // checks scene first
-    require_one_mesh(scene, "minkq_scene_query_vt_ee_async");
     const minkq::PairOutput vt_out = checked_async_output(scene, vt_query, vt_pairs, vt_capacity, vt_count, "vt_");
     const minkq::PairOutput ee_out = checked_async_output(scene, ee_query, ee_pairs, ee_capacity, ee_count, "ee_");
     require(vt_count != ee_count, Status::kInvalidArgument, "vt_count and ee_count are the same pointer");

@@ -33,12 +33,17 @@ std::string moving_vertices(const minkq_scene* scene) {
   return scene->geometries.size() == 1 ? "the scene has " + n : "the scene's moving geometries have " + n;
 }
 
+// Whole-scene moves take one precision: refused where the moving geometries mix them.
+void require_one_precision(const minkq_scene* scene, const std::string& verb) {
+  require(!scene->mixed_precision, Status::kInvalidArgument,
+          verb + " of the whole scene, whose moving geometries mix float32 and float64 vertices: move "
+                 "each with minkq_scene_geometry_" + verb);
+}
+
 minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* verb,
                                 const char* what = "vertices") {
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-  require(!scene->mixed_precision, Status::kInvalidArgument,
-          std::string(verb) + " of the whole scene, whose moving geometries mix float32 and float64 vertices: move "
-                              "each with minkq_scene_geometry_" + verb);
+  require_one_precision(scene, verb);
   const minkq::Strided values = checked_vertex_buffer(scene->device, vertices, scene->flags, what);
   require(size_t(values.count) == scene->moving_vertex_count, Status::kInvalidArgument,
           std::string(verb) + " with " + std::to_string(values.count) + " " + vertices_named(what) + " but " +
@@ -53,7 +58,7 @@ minkq::Strided checked_vertices(const minkq_scene* scene, minkq_buffer vertices,
 minkq::Strided checked_async_vertices(const minkq_scene* scene, minkq_buffer vertices, const char* call,
                                       bool rebuild, bool swept = false, const char* what = "vertices") {
   require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-  require_one_mesh(scene, call);
+  require_one_precision(scene, std::string(rebuild ? "rebuild" : "refit") + (swept ? "_swept" : ""));
   const minkq::Reservation& reserved = scene->store->reservation();
   require((rebuild ? reserved.rebuild : reserved.refit) && (!swept || reserved.swept), Status::kInvalidArgument,
           std::string(call) + " needs scratch reserved first: minkq_scene_reserve(scene, " +
@@ -381,7 +386,6 @@ constexpr uint32_t kKnownReserveFlags = MINKQ_RESERVE_REFIT | MINKQ_RESERVE_REBU
 minkq_status minkq_scene_reserve(minkq_scene* scene, uint32_t flags, size_t canonical_capacity) {
   return guarded([&] {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-    require_one_mesh(scene, "minkq_scene_reserve");
     require((flags & ~kKnownReserveFlags) == 0, Status::kInvalidArgument, "flags has unknown bits");
     require(canonical_capacity <= SIZE_MAX / (2 * sizeof(uint64_t)), Status::kSizeOverflow,
             "canonical_capacity " + std::to_string(canonical_capacity) + " pairs overflows the address space");
@@ -430,16 +434,31 @@ minkq_status minkq_scene_rebuild_swept_async(minkq_scene* scene, minkq_buffer x0
 minkq_status minkq_scene_async_status(minkq_scene* scene, minkq_stream stream) {
   return guarded([&] {
     require(scene != nullptr, Status::kInvalidArgument, "scene is NULL");
-    require_one_mesh(scene, "minkq_scene_async_status");
     const minkq::PendingError pending = scene->store->take_pending_error(stream);
     if (pending.call == minkq::PendingError::kNone) return;
     using Call = minkq::PendingError::Call;
     const bool rebuild = pending.call == Call::kRebuild || pending.call == Call::kRebuildSwept;
     const bool swept = pending.call == Call::kRefitSwept || pending.call == Call::kRebuildSwept;
     const std::string call = std::string("minkq_scene_") + (rebuild ? "rebuild" : "refit") + (swept ? "_swept" : "") + "_async";
+    // Which geometry holds the buffer's vertex: the moving ones, one after another. Each
+    // geometry takes its positions or keeps them as a whole.
+    std::string kept = "the scene kept its positions";
+    if (scene->geometries.size() > 1) {
+      size_t first = 0;
+      for (size_t g = 0; g < scene->geometries.size(); ++g) {
+        const minkq_scene::Geometry& geometry = scene->geometries[g];
+        if (geometry.flags & MINKQ_GEOMETRY_STATIC) continue;
+        if (size_t(pending.vertex) < first + geometry.count[MINKQ_ELEMENT_VERTEX]) {
+          kept = "geometry " + std::to_string(g) + " (its vertex " + std::to_string(size_t(pending.vertex) - first) +
+                 ") kept its positions, as did any other geometry with one";
+          break;
+        }
+        first += geometry.count[MINKQ_ELEMENT_VERTEX];
+      }
+    }
     fail(Status::kNonFinite, call + ": vertex " + std::to_string(pending.vertex) +
-                                 (swept ? " has a non-finite coordinate (in x0 or x1); the scene kept its positions, at rest"
-                                        : " has a non-finite coordinate; the scene kept its positions") +
+                                 (swept ? " has a non-finite coordinate (in x0 or x1); " + kept + ", at rest"
+                                        : " has a non-finite coordinate; " + kept) +
                                  (rebuild ? " and built its trees for them" : ""));
   });
 }

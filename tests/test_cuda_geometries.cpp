@@ -1,14 +1,19 @@
 // Scenes of many geometries on CUDA against the CPU through the C API: self and cross pairs,
 // groups and masks, worlds, thickness, a float64 geometry, static and moving geometries, one
 // geometry refit, rebuilt and swept: the same pairs, digests and work counts on both backends in
-// every mode. The stream-ordered calls refuse such scenes on both. Skips (saying why) where no
-// CUDA device is usable.
+// every mode; their stream-ordered calls (geometry_async_checks.h, run on the CPU by
+// test_geometries_async.cpp) against the blocking ones, and captured into a CUDA graph. Skips
+// (saying why) where no CUDA device is usable.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "cuda_async_memory.h"
 #include "cuda_checks.h"
+#include "geometry_async_checks.h"
 
 namespace minkq {
 namespace {
@@ -101,11 +106,75 @@ TEST_F(Cuda, scenes_of_many_geometries_match_cpu_over_moves) {
               MINKQ_SUCCESS)
         << minkq_last_error_message();
   compare_kinds(a.get(), b.get(), r, true, "one geometry swept");
-  for (minkq_scene* scene : {a.get(), b.get()}) {
-    ASSERT_EQ(minkq_scene_reserve(scene, MINKQ_RESERVE_REFIT, 0), MINKQ_ERROR_UNSUPPORTED);
-    EXPECT_NE(std::string(minkq_last_error_message()).find("geometries"), std::string::npos) << minkq_last_error_message();
+}
+
+#if defined(MINKQ_TEST_HAVE_CUDART)
+class CudaGeometriesAsync : public CudaAsync {};
+
+TEST_F(CudaGeometriesAsync, queries_match_the_blocking_calls_over_every_move) {
+  test::check_geometry_async_matches_blocking(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaGeometriesAsync, a_non_finite_vertex_keeps_its_geometry_and_is_reported_once) {
+  test::check_geometry_async_non_finite(memory(), cuda->get(), cpu->get());
+}
+
+TEST_F(CudaGeometriesAsync, moves_without_reservation_or_of_mixed_precision_are_refused) {
+  test::check_geometry_async_refusals(memory(), cuda->get(), cpu->get());
+}
+
+// A simulator's captured step over a scene of many geometries: the moving geometries' refit (or
+// rebuild) + VT and EE + VV recorded once into a CUDA graph, replayed over new positions written
+// into the same device buffer; every replay gives the CPU twin's blocking pairs.
+TEST_F(CudaGeometriesAsync, captured_step_replays_over_moving_geometries) {
+  if (const char* blocking = std::getenv("CUDA_LAUNCH_BLOCKING"); blocking && std::string(blocking) == "1")
+    GTEST_SKIP() << "CUDA_LAUNCH_BLOCKING=1: stream capture is not tested with blocking launches";
+  test::Random rng(seed);
+  for (bool rebuild : {false, true}) {
+    SCOPED_TRACE(rebuild ? "rebuild" : "refit");
+    test::AsyncGeometryScenes s(memory(), cuda->get(), cpu->get(), rng);
+    const size_t capacity = 1 << 16;
+    ASSERT_EQ(minkq_scene_reserve(s.scene.get(), MINKQ_RESERVE_REBUILD, capacity), MINKQ_SUCCESS)
+        << minkq_last_error_message();
+    const float r = s.geometries.radius();
+    const std::vector<float> start = s.geometries.moved(0);
+    float* positions = memory().copy_of(start);
+    int32_t* pairs = static_cast<int32_t*>(memory().allocate(3 * 2 * capacity * sizeof(int32_t)));
+    uint64_t* counts = static_cast<uint64_t*>(memory().allocate(3 * sizeof(uint64_t)));
+    const minkq_buffer vertices{positions, 0, start.size() / 3, MINKQ_MEMORY_DEVICE};
+    const uint32_t flags = MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL;
+    const minkq_query_desc vt{MINKQ_QUERY_VT, MINKQ_MODE_BOX, flags, r}, ee{MINKQ_QUERY_EE, MINKQ_MODE_BOX, flags, r};
+    const minkq_query_desc vv{MINKQ_QUERY_VV, MINKQ_MODE_SPHERE, flags, r};
+    cudaStream_t stream = static_cast<cudaStream_t>(memory().stream());
+    const CapturedGraph graph(stream, [&](auto check) {
+      check(rebuild ? minkq_scene_rebuild_async(s.scene.get(), vertices, stream)
+                    : minkq_scene_refit_async(s.scene.get(), vertices, stream));
+      check(minkq_scene_query_vt_ee_async(s.scene.get(), &vt, &ee, pairs, capacity, counts, pairs + 2 * capacity,
+                                          capacity, counts + 1, stream));
+      check(minkq_scene_query_async(s.scene.get(), &vv, pairs + 4 * capacity, capacity, counts + 2, stream));
+    });
+    ASSERT_TRUE(graph.ok());
+    for (int step = 1; step <= 4; ++step) {
+      const std::vector<float> next = s.geometries.moved(step);
+      memory().write(positions, next.data(), next.size() * sizeof(float));
+      ASSERT_EQ(graph.launch(), cudaSuccess);
+      const std::vector<uint64_t> count = memory().read_back(counts, 3);
+      const minkq_buffer host = host_buffer(next.data(), next.size() / 3);
+      ASSERT_EQ(rebuild ? minkq_scene_rebuild(s.twin.get(), host) : minkq_scene_refit(s.twin.get(), host), MINKQ_SUCCESS);
+      const minkq_query_desc* descs[] = {&vt, &ee, &vv};
+      for (int k = 0; k < 3; ++k) {
+        const test::Pairs expected = test::Scene::query_pairs(s.twin.get(), descs[k]->kind, descs[k]->mode, r,
+                                                              MINKQ_QUERY_LEAF_EXACT);
+        ASSERT_EQ(count[size_t(k)], expected.size()) << "replay " << step << " query " << k;
+        EXPECT_EQ(test::pairs_of(memory().read_back(pairs + 2 * capacity * size_t(k), 2 * count[size_t(k)]), count[size_t(k)]),
+                  expected)
+            << "replay " << step << " query " << k;
+      }
+    }
+    EXPECT_EQ(minkq_scene_async_status(s.scene.get(), stream), MINKQ_SUCCESS) << minkq_last_error_message();
   }
 }
+#endif  // MINKQ_TEST_HAVE_CUDART
 
 }  // namespace
 }  // namespace minkq

@@ -44,11 +44,12 @@
 //                                  never moved after (CUDA: captured graphs keep its address).
 //   reserve_scratch(Array<T>&, n)  room for n elements kept in the array, so that filling it
 //                                  with up to n allocates nothing (a rebuild's elements by id).
-//   commit_finite(values, staging, dst, rho, call)
+//   commit_finite(values, staging, dst, rho, call, first)
 //                                  dst = values (executor memory) unless a coordinate is not
-//                                  finite; then dst is kept and the pending error recorded.
+//                                  finite; then dst is kept and the pending error recorded,
+//                                  naming vertex first + i (values: a slice of the caller's).
 //                                  Float64 values also set *rho (rho: nullptr for float).
-//   commit_finite_swept(x0, x1, staging0, staging1, dst0, dst1, rho, call)
+//   commit_finite_swept(x0, x1, staging0, staging1, dst0, dst1, rho, call, first)
 //                                  the same for a swept step's two positions, checked
 //                                  together: on a bad coordinate in either, dst0 is kept and
 //                                  dst1 = dst0 (the scene at rest).
@@ -147,12 +148,12 @@ using Reserve = decltype(std::declval<X&>().reserve_staging(std::declval<Array<X
 template <class X>
 using CommitFinite = decltype(std::declval<X&>().commit_finite(
     std::declval<const Strided&>(), std::declval<Array<X, Vec3>&>(), std::declval<Array<X, Vec3>&>(),
-    std::declval<float*>(), PendingError::kRefit));
+    std::declval<float*>(), PendingError::kRefit, int64_t()));
 template <class X>
 using CommitFiniteSwept = decltype(std::declval<X&>().commit_finite_swept(
     std::declval<const Strided&>(), std::declval<const Strided&>(), std::declval<Array<X, Vec3>&>(),
     std::declval<Array<X, Vec3>&>(), std::declval<Array<X, Vec3>&>(), std::declval<Array<X, Vec3>&>(),
-    std::declval<float*>(), PendingError::kRefit));
+    std::declval<float*>(), PendingError::kRefit, int64_t()));
 template <class X>
 using TakePending = decltype(std::declval<X&>().take_pending());
 }  // namespace executor_contract

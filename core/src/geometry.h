@@ -117,14 +117,15 @@ class GeometryOn {
   }
   const Reservation& reservation() const { return reserved_; }
 
-  // New positions in executor memory, checked on the device (executor.h's commit_finite).
-  void move_async(X& x, const Strided& x0, const Strided* x1, bool rebuild) {
+  // New positions in executor memory, checked on the device (executor.h's commit_finite; a
+  // pending error names vertex `first` + i: where x0 starts in the caller's buffer).
+  void move_async(X& x, const Strided& x0, const Strided* x1, bool rebuild, int64_t first = 0) {
     fix_nodes(x);
     swept_ = x1 != nullptr;
     const PendingError::Call call = x1 ? (rebuild ? PendingError::kRebuildSwept : PendingError::kRefitSwept)
                                        : (rebuild ? PendingError::kRebuild : PendingError::kRefit);
-    if (x1) x.commit_finite_swept(x0, *x1, staging_, staging1_, vertices_, vertices1_, rho(), call);
-    else x.commit_finite(x0, staging_, vertices_, rho(), call);
+    if (x1) x.commit_finite_swept(x0, *x1, staging_, staging1_, vertices_, vertices1_, rho(), call, first);
+    else x.commit_finite(x0, staging_, vertices_, rho(), call, first);
     if (rebuild) rebuild_trees(x); else refit_trees();
   }
 
@@ -142,6 +143,19 @@ class GeometryOn {
   }
 
   // ---- What queries read ----------------------------------------------------------------------
+  // The addresses of everything the query sources and trees below hand out, and whether the
+  // geometry is swept: while these stay, sources built from it stay valid (the store's job
+  // tables are keyed by them).
+  void layout(std::vector<const void*>& key) const {
+    const BvhView trees[3] = {triangle_tree(), edge_tree(), vertex_tree()};
+    key.insert(key.end(), {vertices_.data(), vertices1(), thickness(), rho_.data(), leaf_triangles_.data(),
+                           leaf_edges_.data(), vertex_order_.data()});
+    for (const BvhView& tree : trees) key.insert(key.end(), {tree.nodes, tree.leaf_groups, tree.sorted_prims});
+  }
+  // Whether the geometry's queries read end positions: set by its moves, and by the store only
+  // while it plans job tables for the arrangements a stream-ordered move reaches.
+  void set_swept(bool swept) { swept_ = swept; }
+
   // The one-mesh sources of a self query (query_sources.h) with r and the filters.
   VertexTriangleQueries vt_queries(float r, uint32_t filters) {
     return {vertices_.data(), leaf_triangles_.data(), vertex_order_.data(), r, filters, rho(), vertices1(), thickness()};

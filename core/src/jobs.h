@@ -37,6 +37,9 @@ struct NoReversed {};
 // One job: queries first_query .. first_query + num_queries - 1 of its pass, against bvh, by the
 // self source, the cross source or the reversed cross source (VT, EV: cross_queries.h's
 // CrossPrimVertexQueries, run with the box as its node test and the pass's shape at its leaves).
+// Its sources hold no radius and only the geometry's own filters (a self job's incidence rule):
+// the pass supplies the query's (with_request), so that a table of jobs serves every query of its
+// kind while the geometries keep their arrays (MeshStoreOn's job tables).
 template <class SelfQueries, class CrossQueries, class ReversedQueries = NoReversed>
 struct GeometryJob {
   using Reversed = ReversedQueries;
@@ -50,6 +53,14 @@ struct GeometryJob {
   CrossQueries cross_queries;
   ReversedQueries reversed_queries;
 };
+
+// A job's source with the query's radius and filters.
+template <class Source>
+MINKQ_HD Source with_request(Source source, float r, uint32_t filters) {
+  source.r = r;
+  source.filters |= filters;
+  return source;
+}
 
 // The source a reversed job runs with the pass's shape.
 template <class Shape, class Prim>
@@ -74,6 +85,8 @@ struct JobPass {
   int32_t num_queries;  // all the jobs' together
   int32_t first_bound;  // the pairs' first ids lie below it
   PairOutput out;
+  float r;           // the query's radius and filters (kLeafExact), given to each job's source
+  uint32_t filters;
   template <class Emit, class Work>
   MINKQ_HD void run(int32_t i, Emit& emit, Work& work) const {
     int32_t lo = 0, hi = num_jobs - 1;
@@ -85,20 +98,15 @@ struct JobPass {
     OffsetEmit<Emit> offset_emit{emit, job.first_offset, job.second_offset, job.swap};
     const int32_t q = i - job.first_query;
     if constexpr (!std::is_same<typename Job::Reversed, NoReversed>::value) {
-      if (job.reversed) return run_query<BoxShape>(job.bvh, reversed_source<Shape>(job.reversed_queries), q, offset_emit, work);
+      if (job.reversed)
+        return run_query<BoxShape>(job.bvh, reversed_source<Shape>(with_request(job.reversed_queries, r, filters)), q,
+                                   offset_emit, work);
     }
-    if (job.self) run_query<Shape>(job.bvh, job.self_queries, q, offset_emit, work);
-    else run_query<Shape>(job.bvh, job.cross_queries, q, offset_emit, work);
+    if (job.self) run_query<Shape>(job.bvh, with_request(job.self_queries, r, filters), q, offset_emit, work);
+    else run_query<Shape>(job.bvh, with_request(job.cross_queries, r, filters), q, offset_emit, work);
   }
   MINKQ_HD int32_t first_ids() const { return first_bound; }
 };
-
-// Whether a pass is a JobPass (a blocking call's only: scenes of several geometries take no
-// stream-ordered calls).
-template <class Pass>
-struct IsJobPass : std::false_type {};
-template <class Shape, class Job>
-struct IsJobPass<JobPass<Shape, Job>> : std::true_type {};
 
 // What a geometry brings to the planning of jobs: its role and element counts.
 struct GeometryShape {

@@ -8,6 +8,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
+#include <memory>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -153,14 +156,36 @@ class MeshStoreOn final : public MeshStore {
     return totals;
   }
 
-  // ---- Asynchronous calls: a scene of one geometry (the caller refuses the others) -----------
-
+  // ---- Asynchronous calls ----------------------------------------------------------------------
+  // Each geometry that moves reserves what its moves need; static ones fix their trees' nodes.
+  // A scene of several geometries then writes the job tables of each kind for every arrangement
+  // a stream-ordered move can reach (its moving geometries all at rest, or all swept where
+  // reserved), so that its stream-ordered queries find theirs without an upload.
   void reserve(const Reservation& wanted) override {
     [[maybe_unused]] const auto scope = x_.scope();
-    mesh().reserve(x_, wanted);
+    Reservation only_sort;
+    only_sort.canonical_capacity = wanted.canonical_capacity;
+    if ((wanted.refit || wanted.rebuild) && !reserved_.refit) x_.reserve_pending();  // also with no moving geometry
+    for (size_t g = 0; g < geometries_.size(); ++g) geometries_[g]->reserve(x_, shapes_[g].role.is_static ? only_sort : wanted);
+    reserved_.refit = reserved_.refit || wanted.refit || wanted.rebuild;
+    reserved_.rebuild = reserved_.rebuild || wanted.rebuild;
+    reserved_.swept = reserved_.swept || wanted.swept;
+    reserved_.canonical_capacity = std::max(reserved_.canonical_capacity, wanted.canonical_capacity);
+    if (!one_mesh()) {
+      write_tables();
+      std::vector<bool> swept(geometries_.size());
+      for (size_t g = 0; g < geometries_.size(); ++g) swept[g] = geometries_[g]->swept();
+      for (const bool moved_swept : {false, true}) {
+        if (moved_swept && !reserved_.swept) continue;
+        for (size_t g = 0; g < geometries_.size(); ++g)
+          if (!shapes_[g].role.is_static) geometries_[g]->set_swept(moved_swept);
+        write_tables();
+      }
+      for (size_t g = 0; g < geometries_.size(); ++g) geometries_[g]->set_swept(swept[g]);
+    }
     x_.finish();
   }
-  const Reservation& reservation() const override { return geometries_[0]->reservation(); }
+  const Reservation& reservation() const override { return reserved_; }
 
   void refit_async(const Strided& vertices, Stream stream) override { move_async(vertices, nullptr, false, stream); }
   void rebuild_async(const Strided& vertices, Stream stream) override { move_async(vertices, nullptr, true, stream); }
@@ -172,6 +197,12 @@ class MeshStoreOn final : public MeshStore {
   }
 
   void query_async(const QueryRequest& request, const PairOutput& out, Stream stream) override {
+    if (!one_mesh()) {
+      prepare_async_tables({request.kind});
+      [[maybe_unused]] const auto scope = x_.scope_on(stream);
+      with_job_pass(request, out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
+      return;
+    }
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
     mesh().fix_nodes(x_);
     with_mesh_pass(request, out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
@@ -179,6 +210,13 @@ class MeshStoreOn final : public MeshStore {
 
   void query_vt_ee_async(const QueryRequest& vt, const PairOutput& vt_out, const QueryRequest& ee,
                          const PairOutput& ee_out, Stream stream) override {
+    if (!one_mesh()) {
+      prepare_async_tables({vt.kind, ee.kind});
+      [[maybe_unused]] const auto scope = x_.scope_on(stream);
+      with_job_pass(vt, vt_out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
+      with_job_pass(ee, ee_out, [&](const auto& pass) { run_counted(x_, {nullptr}, pass); });
+      return;
+    }
     [[maybe_unused]] const auto scope = x_.scope_on(stream);
     mesh().fix_nodes(x_);
     with_vt_pass(vt, vt_out, [&](const auto& vt_pass) {
@@ -189,7 +227,7 @@ class MeshStoreOn final : public MeshStore {
   PendingError take_pending_error(Stream stream) override {
     [[maybe_unused]] const auto scope = x_.scope();
     x_.wait(stream);
-    return mesh().reservation().refit ? x_.take_pending() : PendingError{};
+    return reserved_.refit ? x_.take_pending() : PendingError{};
   }
 
  private:
@@ -205,20 +243,33 @@ class MeshStoreOn final : public MeshStore {
   // another, in geometry order.
   void move_all(const Strided& x0, const Strided* x1, bool rebuild) {
     [[maybe_unused]] const auto scope = x_.scope();
-    int64_t offset = 0;
+    for_each_moving(x0, x1, [&](Geometry& g, const Strided& part0, const Strided* part1, int64_t) {
+      g.move(x_, part0, part1, rebuild);
+    });
+    x_.finish();
+  }
+  // The stream-ordered form of move_all: each geometry checks its own vertices, so one with a
+  // non-finite coordinate keeps its positions while the others take theirs; the pending error
+  // names the vertex in the caller's buffer.
+  void move_async(const Strided& x0, const Strided* x1, bool rebuild, Stream stream) {
+    [[maybe_unused]] const auto scope = x_.scope_on(stream);
+    for_each_moving(x0, x1, [&](Geometry& g, const Strided& part0, const Strided* part1, int64_t first) {
+      g.move_async(x_, part0, part1, rebuild, first);
+    });
+  }
+  // Calls fn(geometry, its part of x0, of x1 (or nullptr), where its part starts) for each
+  // geometry that moves, in order.
+  template <class Fn>
+  void for_each_moving(const Strided& x0, const Strided* x1, Fn&& fn) {
+    int64_t first = 0;
     for (size_t g = 0; g < geometries_.size(); ++g) {
       if (shapes_[g].role.is_static) continue;
       const int64_t n = shapes_[g].vertices;
-      const Strided part0 = slice(x0, offset, n);
-      if (x1) {
-        const Strided part1 = slice(*x1, offset, n);
-        geometries_[g]->move(x_, part0, &part1, rebuild);
-      } else {
-        geometries_[g]->move(x_, part0, nullptr, rebuild);
-      }
-      offset += n;
+      const Strided part0 = slice(x0, first, n);
+      const Strided part1 = x1 ? slice(*x1, first, n) : Strided{};
+      fn(*geometries_[g], part0, x1 ? &part1 : nullptr, first);
+      first += n;
     }
-    x_.finish();
   }
   static Strided slice(const Strided& values, int64_t first, int64_t count) {
     Strided part = values;
@@ -226,13 +277,11 @@ class MeshStoreOn final : public MeshStore {
     part.count = count;
     return part;
   }
-  void move_async(const Strided& x0, const Strided* x1, bool rebuild, Stream stream) {
-    [[maybe_unused]] const auto scope = x_.scope_on(stream);
-    mesh().move_async(x_, x0, x1, rebuild);
-  }
-  // The filters of geometry g's self pairs: its own incidence rule and the query's leaf test.
+  // The filters of geometry g's self pairs: its own incidence rule, and with a request, the
+  // query's leaf test.
+  uint32_t own_filters(size_t g) const { return shapes_[g].role.drop_incident ? kDropIncident : 0u; }
   uint32_t self_filters(size_t g, const QueryRequest& request) const {
-    return (request.filters & kLeafExact) | (shapes_[g].role.drop_incident ? kDropIncident : 0u);
+    return (request.filters & kLeafExact) | own_filters(g);
   }
 
   // ---- One geometry: the one-mesh passes ----------------------------------------------------
@@ -276,61 +325,147 @@ class MeshStoreOn final : public MeshStore {
   }
 
   // ---- Many geometries: jobs (jobs.h) -------------------------------------------------------
-  // Calls fn with the JobPass of a request: its kind's jobs, written to executor memory.
+  // A kind's jobs in executor memory, written for one layout of the geometries (the addresses
+  // their sources read, and which are swept: GeometryOn::layout). The sources hold no radius
+  // (JobPass gives it), so a table serves every query of its kind while that layout lasts.
+  template <class Job>
+  struct JobTable {
+    std::vector<const void*> layout;
+    Array<Job> jobs;
+    int32_t num_jobs = 0, num_queries = 0;
+  };
+  // A kind's tables: those kept for stream-ordered queries (written by blocking calls only,
+  // never rewritten: a captured graph reads them), and the last blocking query's.
+  template <class Job>
+  struct JobTables {
+    using Type = Job;
+    std::vector<std::unique_ptr<JobTable<Job>>> kept;
+    JobTable<Job> last;
+  };
+
+  std::vector<const void*> layout() const {
+    std::vector<const void*> key;
+    for (const auto& g : geometries_) g->layout(key);
+    return key;
+  }
+  // The table of Job's kind for the geometries' layout now: a kept one, else the last one
+  // (rewritten when the layout changed) or, with keep, a new kept one.
+  template <class Job>
+  const JobTable<Job>& table(JobTables<Job>& tables, bool keep) {
+    const std::vector<const void*> key = layout();
+    for (const auto& kept : tables.kept)
+      if (kept->layout == key) return *kept;
+    if (!keep && tables.last.layout == key) return tables.last;
+    if (keep) tables.kept.push_back(std::make_unique<JobTable<Job>>());
+    JobTable<Job>& t = keep ? *tables.kept.back() : tables.last;
+    std::vector<Job> jobs = kind_jobs<Job>();
+    t.num_jobs = int32_t(jobs.size());
+    t.num_queries = 0;
+    for (const Job& job : jobs) t.num_queries += job.num_queries;
+    x_.upload(t.jobs, std::move(jobs));
+    t.layout = key;
+    return t;
+  }
+  // Every kind's kept table for the layout now (a blocking call's work).
+  void write_tables() {
+    table(vt_tables_, true);
+    table(ev_tables_, true);
+    table(vv_tables_, true);
+    table(ee_tables_, true);
+  }
+  // Before a stream-ordered query: the kept tables of its kinds for the layout now, written
+  // here (allocating, outside the stream's order) unless a reservation or an earlier call did.
+  void prepare_async_tables(std::initializer_list<QueryKind> kinds) {
+    [[maybe_unused]] const auto scope = x_.scope();
+    for (const auto& g : geometries_) g->fix_nodes(x_);
+    for (const QueryKind kind : kinds) with_tables(kind, [&](auto& tables) { table(tables, true); });
+    x_.finish();
+  }
+  // Calls fn with the tables of a mesh kind.
+  template <class Fn>
+  void with_tables(QueryKind kind, Fn&& fn) {
+    switch (kind) {
+      case QueryKind::kVertexTriangle: return fn(vt_tables_);
+      case QueryKind::kVertexEdge: return fn(ev_tables_);
+      case QueryKind::kVertexVertex: return fn(vv_tables_);
+      case QueryKind::kEdgeEdge: return fn(ee_tables_);
+      default: fail(Status::kInternal, "not a mesh query kind");
+    }
+  }
+
+  // Calls fn with the JobPass of a request: its kind's table for the layout now, the query's
+  // radius and leaf test, point shapes for vertex queries unless a geometry is swept (then each
+  // vertex's path: segment shapes).
   template <class Fn>
   void with_job_pass(const QueryRequest& request, const PairOutput& out, Fn&& fn) {
-    const auto& plans = plans_[int(request.kind)];
-    switch (request.kind) {
-      case QueryKind::kVertexTriangle:
-        return run_jobs<true>(request, out, make_jobs<VtJob>(plans, [&](VtJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
-          return fill_vertex_job(job, q, t, first_[qi].vertices, first_[ti].triangles, self_filters(qi, request), request);
-        }), vt_jobs_, totals_.vertices, fn);
-      case QueryKind::kVertexEdge:
-        return run_jobs<true>(request, out, make_jobs<EvJob>(plans, [&](EvJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
-          return fill_vertex_job(job, q, t, first_[qi].vertices, first_[ti].edges, self_filters(qi, request), request);
-        }), ev_jobs_, totals_.vertices, fn);
-      case QueryKind::kVertexVertex:
-        return run_jobs<true>(request, out, make_jobs<VvJob>(plans, [&](VvJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
-          job.bvh = t.vertex_tree();
-          job.first_offset = first_[qi].vertices;
-          job.second_offset = first_[ti].vertices;
-          job.swap = first_[qi].vertices > first_[ti].vertices;
-          if (job.self) job.self_queries = q.vv_queries(request.r, self_filters(qi, request));
-          else job.cross_queries = {q.side(), t.side(), request.r, request.filters & kLeafExact, !job.swap};
-          return q.num_vertices();
-        }), vv_jobs_, totals_.vertices, fn);
-      case QueryKind::kEdgeEdge:
-        return run_jobs<false>(request, out, make_jobs<EeJob>(plans, [&](EeJob& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
-          job.bvh = t.edge_tree();
-          job.first_offset = first_[qi].edges;
-          job.second_offset = first_[ti].edges;
-          job.swap = first_[qi].edges > first_[ti].edges;
-          if (job.self) job.self_queries = q.ee_queries(request.r, self_filters(qi, request));
-          else job.cross_queries = {q.side(), t.side(), q.leaf_edges(), q.edge_tree().sorted_prims, t.leaf_edges(),
-                                    request.r, request.filters & kLeafExact, !job.swap};
-          return q.num_edges();
-        }), ee_jobs_, totals_.edges, fn);
-      default: fail(Status::kInternal, "not a mesh query kind");
+    with_tables(request.kind, [&](auto& tables) {
+      using Job = typename std::decay_t<decltype(tables)>::Type;
+      const JobTable<Job>& t = table(tables, false);
+      const bool vertex_queries = request.kind != QueryKind::kEdgeEdge;
+      const int32_t first_bound = vertex_queries ? totals_.vertices : totals_.edges;
+      auto with = [&](auto points, const QueryRequest& r) {
+        with_shape<decltype(points)::value>(r.mode, [&](auto shape) {
+          fn(JobPass<decltype(shape), Job>{r.kind, t.jobs.data(), t.num_jobs, t.num_queries, first_bound, out, r.r,
+                                           r.filters & kLeafExact});
+        });
+      };
+      if (!vertex_queries) return with(std::false_type{}, request);
+      if (!swept()) return with(std::true_type{}, request);
+      with(std::false_type{}, swept_path(request));
+    });
+  }
+  // A kind's jobs on the host (Job names the kind), in plan order, without the query's radius
+  // and leaf test.
+  template <class Job>
+  std::vector<Job> kind_jobs() {
+    if constexpr (std::is_same<Job, VtJob>::value || std::is_same<Job, EvJob>::value) {
+      using Prim = typename Job::Reversed::Prim;
+      constexpr bool kTriangles = std::is_same<Prim, Triangle>::value;
+      const auto kind = kTriangles ? QueryKind::kVertexTriangle : QueryKind::kVertexEdge;
+      return make_jobs<Job>(plans_[size_t(kind)], [&](Job& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+        return fill_vertex_job(job, q, t, first_[qi].vertices, kTriangles ? first_[ti].triangles : first_[ti].edges,
+                               own_filters(qi));
+      });
+    } else if constexpr (std::is_same<Job, VvJob>::value) {
+      return make_jobs<Job>(plans_[size_t(QueryKind::kVertexVertex)], [&](Job& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+        job.bvh = t.vertex_tree();
+        job.first_offset = first_[qi].vertices;
+        job.second_offset = first_[ti].vertices;
+        job.swap = first_[qi].vertices > first_[ti].vertices;
+        if (job.self) job.self_queries = q.vv_queries(0.0f, own_filters(qi));
+        else job.cross_queries = {q.side(), t.side(), 0.0f, 0u, !job.swap};
+        return q.num_vertices();
+      });
+    } else {
+      return make_jobs<Job>(plans_[size_t(QueryKind::kEdgeEdge)], [&](Job& job, Geometry& q, Geometry& t, size_t qi, size_t ti) {
+        job.bvh = t.edge_tree();
+        job.first_offset = first_[qi].edges;
+        job.second_offset = first_[ti].edges;
+        job.swap = first_[qi].edges > first_[ti].edges;
+        if (job.self) job.self_queries = q.ee_queries(0.0f, own_filters(qi));
+        else job.cross_queries = {q.side(), t.side(), q.leaf_edges(), q.edge_tree().sorted_prims, t.leaf_edges(),
+                                  0.0f, 0u, !job.swap};
+        return q.num_edges();
+      });
     }
   }
   // A VT or EV job (Job's cross source names the primitive): q's vertices against t's
   // triangles or edges, or reversed, those against q's vertex tree; returns its query count.
   template <class Job>
   int32_t fill_vertex_job(Job& job, Geometry& q, Geometry& t, int32_t first_vertex, int32_t first_prim,
-                          uint32_t self_filters, const QueryRequest& request) {
+                          uint32_t self_filters) {
     using Prim = typename Job::Reversed::Prim;
     job.first_offset = first_vertex;
     job.second_offset = first_prim;
     if (job.reversed) {
       job.bvh = q.vertex_tree();
       job.reversed_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), t.template prim_tree<Prim>().sorted_prims,
-                              request.r, request.filters & kLeafExact, q.max_thickness()};
+                              0.0f, 0u, q.max_thickness()};
       return t.template num_prims<Prim>();
     }
     job.bvh = t.template prim_tree<Prim>();
-    if (job.self) job.self_queries = q.template vertex_prim_queries<Prim>(request.r, self_filters);
-    else job.cross_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), q.vertex_order(), request.r,
-                              request.filters & kLeafExact};
+    if (job.self) job.self_queries = q.template vertex_prim_queries<Prim>(0.0f, self_filters);
+    else job.cross_queries = {q.side(), t.side(), t.template leaf_prims<Prim>(), q.vertex_order(), 0.0f, 0u};
     return q.num_vertices();
   }
   // A kind's jobs on the host, in plan order: fill(job, query geometry, tree geometry, their
@@ -352,26 +487,6 @@ class MeshStoreOn final : public MeshStore {
     }
     return jobs;
   }
-  // Writes the jobs to `where` (executor memory) and calls fn with their pass: point shapes for
-  // vertex queries unless a geometry is swept (then each vertex's path: segment shapes).
-  template <bool kVertexQueries, class Job, class Fn>
-  void run_jobs(const QueryRequest& request, const PairOutput& out, std::vector<Job> jobs, Array<Job>& where,
-                int32_t first_bound, Fn&& fn) {
-    int32_t num_queries = 0;
-    for (const Job& job : jobs) num_queries += job.num_queries;
-    const int32_t num_jobs = int32_t(jobs.size());
-    x_.upload(where, std::move(jobs));
-    auto with = [&](auto points, const QueryRequest& r) {
-      with_shape<decltype(points)::value>(r.mode, [&](auto shape) {
-        fn(JobPass<decltype(shape), Job>{r.kind, where.data(), num_jobs, num_queries, first_bound, out});
-      });
-    };
-    if constexpr (kVertexQueries) {
-      if (!swept()) return with(std::true_type{}, request);
-      return with(std::false_type{}, swept_path(request));
-    }
-    with(std::false_type{}, request);
-  }
 
   X x_;  // first: holds its device while the members below are created and destroyed
   std::vector<std::unique_ptr<Geometry>> geometries_;
@@ -379,10 +494,11 @@ class MeshStoreOn final : public MeshStore {
   std::vector<FirstIds> first_;  // each geometry's first global ids
   FirstIds totals_;              // the scene's counts
   std::array<std::vector<JobPlan>, kQueryKinds> plans_;  // each mesh kind's jobs
-  Array<VtJob> vt_jobs_;  // the last query's jobs of each kind, in executor memory
-  Array<EvJob> ev_jobs_;
-  Array<EeJob> ee_jobs_;
-  Array<VvJob> vv_jobs_;
+  JobTables<VtJob> vt_tables_;
+  JobTables<EvJob> ev_tables_;
+  JobTables<EeJob> ee_tables_;
+  JobTables<VvJob> vv_tables_;
+  Reservation reserved_;  // what reserve() has reserved, for the scene
 };
 
 template <class X>

@@ -400,14 +400,33 @@ def test_static_geometries_are_refused_and_skipped(device):
         scene.refit_geometry(1, bad)
 
 
-def test_stream_ordered_calls_serve_one_geometry_scenes(device):
-    """The library's stream-ordered calls take one-geometry scenes: a scene of two refuses
-    them with its message; the constructor's scene is one geometry and keeps them."""
-    scene = minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, static=True), minkq.Geometry(*CLOTH)])
-    with pytest.raises(minkq.UnsupportedError, match="stream-ordered calls serve scenes of one geometry"):
-        scene.reserve(refit=True)
-    with pytest.raises(minkq.UnsupportedError, match="this scene has 2 geometries"):
-        scene.refit_async(CLOTH[0])
+def test_stream_ordered_calls_serve_scenes_of_many_geometries(device):
+    """The stream-ordered calls take scenes of several geometries: a whole-scene refit moves the
+    moving ones (the body is static), its queries give the blocking scene's pairs, and a bad
+    vertex is reported naming its geometry; the constructor's scene is one geometry and keeps
+    them too."""
+    def make():
+        return minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, static=True), minkq.Geometry(*CLOTH)])
+
+    scene, twin = make(), make()
+    scene.reserve(refit=True, canonical_capacity=1 << 14)
+    moved = CLOTH[0] + np.float32(0.01) * np.sin(np.arange(CLOTH[0].size, dtype=np.float32)).reshape(-1, 3)
+    scene.refit_async(moved)
+    twin.refit(moved)
+    scene.async_status()
+    for kind in ("vt", "ee"):
+        expected = twin.query(kind, "box", R, leaf_exact=True)
+        pairs = np.zeros((len(expected) + 4, 2), np.int32)
+        count = np.zeros(1, np.uint64)
+        scene.query_async(pairs, count, kind, "box", R, leaf_exact=True, canonical=True)
+        assert int(count[0]) == len(expected) > 0
+        expected = expected[np.lexsort((expected[:, 1], expected[:, 0]))]
+        assert np.array_equal(pairs[: len(expected)], expected), kind
+    bad = moved.copy()
+    bad[4, 1] = np.nan
+    scene.refit_async(bad)
+    with pytest.raises(minkq.NonFiniteError, match=r"vertex 4 .*geometry 1 \(its vertex 4\) kept its positions"):
+        scene.async_status()
     one = minkq.Scene(device, *CLOTH)
     assert one.geometry_count == 1 and one.geometry_range(0, "triangle") == (0, len(CLOTH[1]))
     one.reserve(refit=True)

@@ -148,18 +148,20 @@ class CpuExecutor {
     sort_reserved_ = true;
   }
   void commit_finite(const Strided& values, HostVector<Vec3>&, HostVector<Vec3>& dst, float* rho,
-                     PendingError::Call call) {
+                     PendingError::Call call, int64_t first) {
     if (const int64_t bad = minkq::first_non_finite(values, 3); bad >= 0) {
-      if (pending_.call == PendingError::kNone) pending_ = {call, bad};
+      if (pending_.call == PendingError::kNone) pending_ = {call, first + bad};
       return;
     }
     if (values.scalar == Scalar::kFloat64) *rho = gather_float64_to(values, dst); else gather(values, dst);
   }
   void commit_finite_swept(const Strided& x0, const Strided& x1, HostVector<Vec3>&, HostVector<Vec3>&,
-                           HostVector<Vec3>& dst0, HostVector<Vec3>& dst1, float* rho, PendingError::Call call) {
+                           HostVector<Vec3>& dst0, HostVector<Vec3>& dst1, float* rho, PendingError::Call call,
+                           int64_t first) {
     const int64_t bad0 = minkq::first_non_finite(x0, 3), bad1 = minkq::first_non_finite(x1, 3);
     if (bad0 >= 0 || bad1 >= 0) {
-      if (pending_.call == PendingError::kNone) pending_ = {call, bad0 >= 0 && (bad1 < 0 || bad0 < bad1) ? bad0 : bad1};
+      if (pending_.call == PendingError::kNone)
+        pending_ = {call, first + (bad0 >= 0 && (bad1 < 0 || bad0 < bad1) ? bad0 : bad1)};
       dst1 = dst0;  // at rest where it was
       return;
     }

@@ -104,8 +104,8 @@ class CudaExecutor {
   template <class Work, class... Pass>
   std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, sizeof...(Pass)>& works,
                                                    const Pass&... passes) {
-    // Asynchronous calls count no work and run no job passes (job_passes.cuh compiles those).
-    if constexpr (std::is_same<Work, NoWork>::value && !(IsJobPass<Pass>::value || ...))
+    // Asynchronous calls count no work (job passes: compiled in job_passes_*.cu).
+    if constexpr (std::is_same<Work, NoWork>::value)
       if ((passes.out.count || ...)) {  // an asynchronous call's (all of its passes)
         run_passes_async<Work>(async_ws_, passes...);
         return {};
@@ -138,22 +138,22 @@ class CudaExecutor {
   // two kernels): pending_[0] is this call's first bad vertex, pending_[1] the recorded error,
   // pending_[2] float64 input's rho until it is taken.
   void commit_finite(const Strided& values, DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst, float* rho,
-                     PendingError::Call call) {
+                     PendingError::Call call, int64_t first) {
     if (values.count == 0) return;
     begin_check(values);
     stage(values, staging);
-    commit(staging, dst, values, rho, nullptr, call);
+    commit(staging, dst, values, rho, nullptr, call, first);
   }
   // Both positions of a swept step checked together; on a bad one dst1 = dst0 (kept).
   void commit_finite_swept(const Strided& x0, const Strided& x1, DeviceBuffer<Vec3>& staging0,
                            DeviceBuffer<Vec3>& staging1, DeviceBuffer<Vec3>& dst0, DeviceBuffer<Vec3>& dst1, float* rho,
-                           PendingError::Call call) {
+                           PendingError::Call call, int64_t first) {
     if (x0.count == 0) return;
     begin_check(x0);
     stage(x0, staging0);
     stage(x1, staging1);
-    commit(staging0, dst0, x0, rho, nullptr, call);
-    commit(staging1, dst1, x1, rho, dst0.data(), call);
+    commit(staging0, dst0, x0, rho, nullptr, call, first);
+    commit(staging1, dst1, x1, rho, dst0.data(), call, first);
   }
   PendingError take_pending() {
     unsigned long long recorded = 0;
@@ -177,10 +177,10 @@ class CudaExecutor {
            is_aligned(values), staging.data(), pending_.data());
   }
   void commit(const DeviceBuffer<Vec3>& staging, DeviceBuffer<Vec3>& dst, const Strided& values, float* rho,
-              const Vec3* keep, PendingError::Call call) {
+              const Vec3* keep, PendingError::Call call, int64_t first) {
     launch("commit_checked_kernel launch", commit_checked_kernel, values.count, kThreads, staging.data(), values.count,
-           static_cast<unsigned long long>(call), dst.data(), values.scalar == Scalar::kFloat64 ? rho : nullptr, keep,
-           pending_.data());
+           static_cast<unsigned long long>(call), static_cast<unsigned long long>(first), dst.data(),
+           values.scalar == Scalar::kFloat64 ? rho : nullptr, keep, pending_.data());
   }
 
   int ordinal_;

@@ -20,11 +20,17 @@
 #define MINKQ_JOB_PASS_RUNS_VV(X) MINKQ_JOB_PASS_RUNS_OF(X, MINKQ_JOB_PASS_VERTEX_SHAPES, VertexVertexJob)
 #define MINKQ_JOB_PASS_RUNS_EE(X) MINKQ_JOB_PASS_RUNS_OF(X, MINKQ_JOB_PASS_SEGMENT_SHAPES, EdgeEdgeJob)
 
-// One run: cuda::run_passes of one job pass, declared (extern) or defined (instantiated).
-#define MINKQ_JOB_PASS_RUN_SIGNATURE(Work, Shape, Job)                                        \
-  template std::array<uint64_t, 1> run_passes<Work, JobPass<Shape, Job>>(                     \
-      QueryWorkspace&, const std::array<WorkCounts*, 1>&, const JobPass<Shape, Job>&);
-#define MINKQ_JOB_PASS_RUN_EXTERN(Work, Shape, Job) extern MINKQ_JOB_PASS_RUN_SIGNATURE(Work, Shape, Job)
+// One run: cuda::run_passes of one job pass and, without work counts, its stream-ordered form
+// run_passes_async, declared (extern) or defined (instantiated).
+#define MINKQ_JOB_PASS_RUN_OF(prefix, Work, Shape, Job)                                              \
+  prefix template std::array<uint64_t, 1> run_passes<Work, JobPass<Shape, Job>>(                     \
+      QueryWorkspace&, const std::array<WorkCounts*, 1>&, const JobPass<Shape, Job>&);               \
+  MINKQ_JOB_PASS_ASYNC_##Work(prefix, Shape, Job)
+#define MINKQ_JOB_PASS_ASYNC_NoWork(prefix, Shape, Job) \
+  prefix template void run_passes_async<NoWork, JobPass<Shape, Job>>(QueryWorkspace&, const JobPass<Shape, Job>&);
+#define MINKQ_JOB_PASS_ASYNC_WorkCounts(prefix, Shape, Job)
+#define MINKQ_JOB_PASS_RUN_SIGNATURE(Work, Shape, Job) MINKQ_JOB_PASS_RUN_OF(, Work, Shape, Job)
+#define MINKQ_JOB_PASS_RUN_EXTERN(Work, Shape, Job) MINKQ_JOB_PASS_RUN_OF(extern, Work, Shape, Job)
 
 namespace minkq::cuda {
 MINKQ_JOB_PASS_RUNS_VT(MINKQ_JOB_PASS_RUN_EXTERN)

@@ -290,10 +290,11 @@ static __global__ void gather_checked_kernel(const char* base, size_t stride, in
 
 // Then the staged vertices become the scene's if all were finite (and thread 0 sets *rho, for
 // float64 input); otherwise they become `keep` where given (a swept step's end: its kept
-// start), and thread 0 records (call, vertex) in words[1] unless an error is pending there
-// (0: none).
-static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, unsigned long long call, Vec3* vertices,
-                                             float* rho, const Vec3* keep, unsigned long long* words) {
+// start), and thread 0 records (call, first + vertex) in words[1] unless an error is pending
+// there (0: none).
+static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, unsigned long long call,
+                                             unsigned long long first, Vec3* vertices, float* rho, const Vec3* keep,
+                                             unsigned long long* words) {
   const int64_t i = global_index();
   if (i >= n) return;
   const unsigned long long bad = words[0];
@@ -304,7 +305,7 @@ static __global__ void commit_checked_kernel(const Vec3* staging, int64_t n, uns
   }
   if (keep) vertices[i] = keep[i];
   if (i == 0 && words[1] == 0) {
-    words[1] = (call << 32) | bad;  // vertex indices are below 2^31
+    words[1] = (call << 32) | (first + bad);  // vertex indices are below 2^31
   }
 }
 

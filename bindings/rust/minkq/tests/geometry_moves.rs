@@ -12,7 +12,7 @@ use common::draped::{
 
 use minkq::{
     Buffer, Device, Element, Error, GeometryDesc, GeometryFlags, Kinds, Memory, Mode, PairBuffer, Query, QueryFlags,
-    QueryKind, Reserve, Scene,
+    QueryKind, Reserve, Scene, Stream,
 };
 
 /// The vertices moved by `d`.
@@ -224,9 +224,14 @@ fn bad_input_comes_back_with_the_library_messages() {
     assert_eq!(scene.rebuild_geometry_swept(2, &tri, &tri), Err(out_of_range));
     let err = scene.query(&Query::vv(Mode::Box, 0.1), &mut PairBuffer::new().unwrap()).unwrap_err();
     assert_eq!(err, Error::InvalidArgument("VV query on a scene created without MINKQ_SCENE_VV".into()));
-    // Stream-ordered calls serve one geometry with self pairs.
-    let err = scene.reserve(Reserve::REFIT, 0).unwrap_err();
-    assert!(matches!(&err, Error::Unsupported(m) if m.contains("this scene has 2 geometries")), "{err:?}");
+    // Stream-ordered calls serve scenes of many geometries too: a whole-scene refit takes
+    // every moving geometry's vertices, one after another.
+    scene.reserve(Reserve::REFIT, 0).unwrap();
+    let err = scene.refit_async(Buffer::from_slice(&tri), Stream::default()).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidArgument(m) if m.contains("the scene's moving geometries have 6")),
+        "{err:?}"
+    );
 }
 
 #[test]
