@@ -363,7 +363,6 @@ int query(const Args& args) {
   Result result = new_result();
   // The summary lines go to stderr when stdout carries the pairs.
   FILE* summary = to_stdout ? stderr : stdout;
-  std::string stream = format == Format::csv && to_stdout ? csv_header() : "";
   for (const Kind& k : kinds) {
     progress.step(std::string(k.name) + " query");
     const minkq_query_desc q{k.kind, modes.of(k.kind), flags, radius};
@@ -378,17 +377,13 @@ int query(const Args& args) {
     }
     std::fflush(summary);
     if (!out) continue;
-    if (!to_stdout) {
-      progress.step(std::string("writing ") + k.name + " pairs");
-      std::string bytes = format == Format::csv ? csv_header() : "";
-      append_pairs(bytes, format, k, minkq_result_pairs(result.get()), minkq_result_count(result.get()));
-      write_bytes(*out + "." + k.name + "." + extension(format), bytes);
-      progress.done();
-    } else {
-      append_pairs(stream, format, k, minkq_result_pairs(result.get()), minkq_result_count(result.get()));
-    }
+    // A file per kind, each csv file with its header; on stdout one header before the first kind.
+    if (!to_stdout) progress.step(std::string("writing ") + k.name + " pairs");  // not amid the pairs on a terminal
+    std::string bytes = format == Format::csv && (!to_stdout || &k == &kinds.front()) ? csv_header() : "";
+    append_pairs(bytes, format, k, minkq_result_pairs(result.get()), minkq_result_count(result.get()));
+    write_bytes(to_stdout ? "-" : *out + "." + k.name + "." + extension(format), bytes);
+    progress.done();
   }
-  if (to_stdout) write_bytes("-", stream);
   return 0;
 }
 
