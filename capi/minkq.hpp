@@ -246,6 +246,7 @@ struct VtEePairs {
 };
 
 // A scene (minkq_scene): one mesh, or many geometries. Move-only; releases the scene when it goes.
+// One scene must not be used by two threads at once (minkq.h), so its queries are not const.
 class Scene {
  public:
   static constexpr uint32_t kMeshFlags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT;
@@ -320,7 +321,7 @@ class Scene {
   }
 
   // The pairs of a query (minkq_scene_query; CANONICAL in q.flags sorts them).
-  std::vector<Pair> query(const Query& q) const {
+  std::vector<Pair> query(const Query& q) {
     cxx::Result r = cxx::new_result();
     const minkq_query_desc d = q.desc();
     cxx::check(minkq_scene_query_result(get(), &d, r.get()), "minkq_scene_query_result");
@@ -328,14 +329,14 @@ class Scene {
   }
   // The pairs of a query into `out`, whose storage is reused and grown as needed; returns the
   // count and the digest and stats q.flags ask for (MINKQ_QUERY_DIGEST, MINKQ_QUERY_STATS).
-  minkq_query_info query(const Query& q, std::vector<Pair>& out) const {
+  minkq_query_info query(const Query& q, std::vector<Pair>& out) {
     const minkq_query_desc d = q.desc();
     return detail::into(out, "minkq_scene_query", [&](int32_t* p, size_t capacity, minkq_query_info* info) {
       return minkq_scene_query(get(), &d, p, capacity, MINKQ_MEMORY_HOST, info);
     });
   }
   // The number of pairs only (MINKQ_QUERY_COUNT), with the stats when q.flags ask for them.
-  uint64_t count(const Query& q, minkq_query_stats* stats = nullptr) const {
+  uint64_t count(const Query& q, minkq_query_stats* stats = nullptr) {
     minkq_query_desc d = q.desc();
     d.flags |= MINKQ_QUERY_COUNT;
     minkq_query_info info{};
@@ -344,7 +345,7 @@ class Scene {
     return info.count;
   }
   // A VT and an EE query in one pass (minkq_scene_query_vt_ee).
-  VtEePairs query_vt_ee(const Query& vt, const Query& ee) const {
+  VtEePairs query_vt_ee(const Query& vt, const Query& ee) {
     cxx::Result rv = cxx::new_result(), re = cxx::new_result();
     const minkq_query_desc dv = vt.desc(), de = ee.desc();
     cxx::check(minkq_scene_query_vt_ee_result(get(), &dv, &de, rv.get(), re.get()), "minkq_scene_query_vt_ee_result");

@@ -43,7 +43,7 @@ class CppApi : public ::testing::Test {
 };
 
 TEST_F(CppApi, MeshSceneQueriesEqualTheCCalls) {
-  const api::Scene scene(device, mesh.xyz, mesh.tris);
+  api::Scene scene(device, mesh.xyz, mesh.tris);
   Scene c(device.get(), mesh, api::Scene::kMeshFlags);
   EXPECT_EQ(scene.vertex_count(), mesh.vertex_count());
   EXPECT_EQ(scene.triangle_count(), mesh.triangle_count());
@@ -99,7 +99,7 @@ TEST_F(CppApi, RefitsFloat64AndViewsOfEveryKind) {
   // std::array and C arrays: two parallel triangles 0.01 apart, each vertex within 0.02 of the other.
   const std::array<float, 18> xyz{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.01f, 1, 0, 0.01f, 0, 1, 0.01f};
   const int32_t tris[] = {0, 1, 2, 3, 4, 5};
-  const api::Scene two(device, xyz, tris);
+  api::Scene two(device, xyz, tris);
   EXPECT_EQ(two.query({MINKQ_QUERY_VT, 0.02f, MINKQ_MODE_BOX, MINKQ_QUERY_LEAF_EXACT}).size(), 6u);
 }
 
@@ -109,7 +109,7 @@ TEST_F(CppApi, GeometriesEqualTheCCalls) {
   std::vector<api::GeometryDesc> geometries(2);
   geometries[0].vertices(mesh.xyz).triangles(mesh.tris);
   geometries[1].vertices(other.xyz).triangles(other.tris).thickness(thickness).self(false).is_static(true);
-  const api::Scene scene(device, geometries);
+  api::Scene scene(device, geometries);
   std::vector<minkq_geometry_desc> descs{geometries[0].desc(), geometries[1].desc()};
   cxx::Scene c = created<cxx::Scene>(
       [&](minkq_scene** out) { return minkq_scene_create_geometries(device.get(), descs.data(), descs.size(), out); });
@@ -202,7 +202,7 @@ TEST_F(CppApi, ErrorsCarryTheStatusAndTheMessage) {
   const std::vector<float> xyz(9, 0.0f);
   expect_error([&] { const api::Scene s(device, xyz, tris); }, MINKQ_ERROR_INDEX_OUT_OF_RANGE,
                "triangle 0 references vertex 9");
-  const api::Scene scene(device, mesh.xyz, mesh.tris, MINKQ_SCENE_VT);
+  api::Scene scene(device, mesh.xyz, mesh.tris, MINKQ_SCENE_VT);
   expect_error([&] { scene.query({MINKQ_QUERY_VT, -1.0f}); }, MINKQ_ERROR_INVALID_ARGUMENT, "minkq_scene_query_result");
   std::vector<api::Pair> out;
   expect_error([&] { scene.query({MINKQ_QUERY_EE, r}, out); }, MINKQ_ERROR_INVALID_ARGUMENT, "minkq_scene_query");

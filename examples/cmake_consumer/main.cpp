@@ -30,7 +30,7 @@ int main() {
     const float xyz[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.01f, 1, 0, 0.01f, 0, 1, 0.01f};
     const int32_t tris[] = {0, 1, 2, 3, 4, 5};
     const minkq::api::Device device("cpu");
-    const minkq::api::Scene scene(device, xyz, tris);
+    minkq::api::Scene scene(device, xyz, tris);
     const std::vector<minkq::api::Pair> pairs =
         scene.query({MINKQ_QUERY_VT, 0.02f, MINKQ_MODE_SPHERE, MINKQ_QUERY_LEAF_EXACT | MINKQ_QUERY_CANONICAL});
     // Each vertex of one triangle against the other: (0, 1), (1, 1), (2, 1), (3, 0), (4, 0), (5, 0).
