@@ -240,6 +240,13 @@ struct Range {
   size_t first = 0, count = 0;
 };
 
+// An element of a scene of many geometries as its geometry sees it: the geometry and the
+// element's id within it (Scene::locate).
+struct Local {
+  uint32_t geometry = 0;
+  size_t id = 0;
+};
+
 // The pairs of a VT and an EE query run together (Scene::query_vt_ee).
 struct VtEePairs {
   std::vector<Pair> vt, ee;
@@ -284,6 +291,22 @@ class Scene {
     Range r;
     cxx::check(minkq_scene_geometry_range(get(), geometry, element, &r.first, &r.count), "minkq_scene_geometry_range");
     return r;
+  }
+  // Which geometry a vertex, triangle or edge id of the scene's numbering (a pair's first or
+  // second) belongs to, and its id there: a binary search over the geometries' ranges, which
+  // follow one another in geometry order. An id past the scene's elements is INVALID_ARGUMENT.
+  Local locate(minkq_element element, int64_t id) const {
+    uint32_t lo = 0, hi = geometry_count();  // the answer is the last geometry starting at or before id
+    while (hi - lo > 1) {
+      const uint32_t mid = lo + (hi - lo) / 2;
+      (int64_t(geometry_range(mid, element).first) <= id ? lo : hi) = mid;
+    }
+    const Range r = geometry_range(lo, element);
+    if (id < int64_t(r.first) || id - int64_t(r.first) >= int64_t(r.count))
+      throw Error(MINKQ_ERROR_INVALID_ARGUMENT, "minkq::api::Scene::locate",
+                  "id " + std::to_string(id) + " is not an element of the scene (" +
+                      std::to_string(r.first + r.count) + " of this kind)");
+    return Local{lo, size_t(id - int64_t(r.first))};
   }
   bool is_swept() const { return minkq_scene_is_swept(get()) != 0; }
   double tree_growth() const {

@@ -122,6 +122,26 @@ TEST_F(CppApi, GeometriesEqualTheCCalls) {
     EXPECT_FALSE(want.empty());
     EXPECT_EQ(as_pairs(scene.query({kind, r, MINKQ_MODE_BOX, MINKQ_QUERY_CANONICAL})), want);
   }
+  // Each pair's elements located: VT and EE pairs join the two geometries or lie within the
+  // cloth (geometry 1 reports no pairs of its own).
+  const std::vector<api::Pair> vt = scene.query({MINKQ_QUERY_VT, r});
+  size_t cross = 0;
+  for (const api::Pair& p : vt) {
+    const api::Local v = scene.locate(MINKQ_ELEMENT_VERTEX, p.first), t = scene.locate(MINKQ_ELEMENT_TRIANGLE, p.second);
+    EXPECT_FALSE(v.geometry == 1 && t.geometry == 1);
+    EXPECT_LT(v.id, v.geometry ? other.vertex_count() : mesh.vertex_count());
+    EXPECT_LT(t.id, t.geometry ? other.triangle_count() : mesh.triangle_count());
+    cross += v.geometry != t.geometry;
+  }
+  EXPECT_GT(cross, 0u);
+  const api::Local last = scene.locate(MINKQ_ELEMENT_TRIANGLE, int64_t(scene.triangle_count()) - 1);
+  EXPECT_EQ(last.geometry, 1u);
+  EXPECT_EQ(last.id, other.triangle_count() - 1);
+  EXPECT_EQ(scene.locate(MINKQ_ELEMENT_VERTEX, int64_t(mesh.vertex_count())).geometry, 1u);
+  EXPECT_EQ(scene.locate(MINKQ_ELEMENT_VERTEX, int64_t(mesh.vertex_count()) - 1).id, mesh.vertex_count() - 1);
+  expect_error([&] { scene.locate(MINKQ_ELEMENT_EDGE, int64_t(scene.edge_count())); }, MINKQ_ERROR_INVALID_ARGUMENT,
+               "is not an element of the scene");
+  expect_error([&] { scene.locate(MINKQ_ELEMENT_EDGE, -1); }, MINKQ_ERROR_INVALID_ARGUMENT, "id -1");
   // One geometry moved; the static one refuses to move, naming itself.
   api::Scene moving(device, geometries);
   std::vector<float> shifted = mesh.xyz;
