@@ -1,6 +1,6 @@
 # `mpirun -n 3 minkq-mpi query MESH ...` prints the digests `minkq query MESH ...` prints, for
-# one partition kind and every mode.
-foreach(mode box sphere capsule_ray capsule_exact leaf_exact)
+# one partition kind and every mode, with and without --leaf-exact.
+foreach(mode box sphere capsule_ray capsule_exact "box;--leaf-exact" "capsule_exact;--leaf-exact")
   execute_process(COMMAND ${MINKQ} query ${MESH} --radius 0.3 --mode ${mode} --backend cpu
                   OUTPUT_VARIABLE single RESULT_VARIABLE single_code)
   execute_process(COMMAND ${MPIEXEC} -n 3 ${MINKQ_MPI} query ${MESH} --radius 0.3 --mode ${mode}

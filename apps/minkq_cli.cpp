@@ -4,6 +4,7 @@
 #include "minkq.h"
 #include "minkq.hpp"
 #include "cli_common.h"
+#include "cli_output.h"
 #include "mesh_io.h"
 #include "minkq_reference.h"
 
@@ -17,7 +18,6 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 #include <vector>
 
 namespace meshio = minkq::meshio;
@@ -27,30 +27,38 @@ namespace {
 
 constexpr int kExitFalseNegatives = 1, kExitUsage = 2, kExitFailure = 3;
 
-const char* const kUsage = R"(usage: minkq <command> [options]
-
-commands:
-  demo [--backend B] [--size N] [--radius-factor F]
+const char* const kDemoUsage = R"usage(  demo [--backend B] [--size N] [--radius-factor F]
       Twisted sheet of N x N vertices (default 388: 299,538 triangles), 3 turns, radius
       F x mean edge length (default 0.25). Runs VT and EE queries in every mode, compares them
       with the double-precision reference oracle and prints candidates, true contacts,
       false-positive ratio, false negatives, query time (median of 3) and speedup over box
       (the box query of the same kind).
-  query MESH [--against MESH_B [--self]] [--thickness FILE] [--to MESH1]
-        --radius R | --radius-factor F [--mode M] [--backend B] [--out PREFIX] [--stats]
-      Loads an OBJ or PLY mesh and runs VT and EE queries (incident pairs dropped) within R
-      (or F x the mesh's mean edge length) in mode M:
-        box            r-padded boxes
-        sphere         VT sphere, EE capsule_exact (the exact Minkowski node test of each)
-        capsule_ray    VT box (a point's ray test), EE capsule slab test
-        capsule_exact  VT sphere, EE segment-box distance
-        leaf_exact     box nodes plus the primitive distance at the leaves: the contacts
-                       (default; faster than behind the finer node tests)
-      Prints "vt candidates N digest HEX" and "ee candidates N digest HEX" (xxHash64 of the
-      canonical pairs). --out writes PREFIX.vt.bin and PREFIX.ee.bin: little-endian int32
-      (a, b) pairs in canonical order. --stats adds a line of work counts per kind: internal
-      nodes visited, node-shape tests, primitive tests and candidates (MINKQ_QUERY_STATS;
-      the same on every backend).
+)usage";
+
+const char* const kQueryUsage = R"usage(  query MESH [--against MESH_B [--self]] [--thickness FILE] [--to MESH1]
+        --radius R | --radius-factor F [--kind K] [--mode M] [--leaf-exact] [--backend B]
+        [--out PREFIX | --out -] [--format F] [--stats]
+      Loads an OBJ or PLY mesh and runs the queries of each kind K (incident pairs dropped)
+      within R (or F x the mesh's mean edge length).
+      --kind K: a comma-separated list of vt (vertex, triangle), ee (edge, edge), vv (vertex,
+        vertex) and ev (vertex, edge); default vt,ee. Each runs in the order given.
+      --mode M: the node test, as the library names it: box (default: r-padded boxes), sphere
+        (point queries: vt, vv, ev), capsule_ray (segment slab test; for points the box test)
+        or capsule_exact (segment-box distance; for points the sphere test).
+      --leaf-exact: the primitive distance at the leaves as well: the contacts (up to the
+        slack minkq.h states). Fastest with --mode box.
+        Old words, kept for one release with a warning: --mode leaf_exact (= --mode box
+        --leaf-exact) and --mode sphere for ee (runs ee as capsule_exact).
+      Prints "KIND candidates N digest HEX" per kind (xxHash64 of the canonical pairs) on stdout,
+      or on stderr with --out -.
+      --out PREFIX writes PREFIX.KIND.EXT per kind; --out - writes the pairs to stdout. Pairs
+      are in canonical (sorted) order, in --format F:
+        text  "a b" per line, after a line "# KIND: N pairs (...)" (default with --out -)
+        csv   a header "kind,first,second", then "KIND,a,b" per line
+        npy   a NumPy .npy file of int32, shape (N, 2); to stdout, one kind only
+        bin   little-endian int32 (a, b) pairs (default with --out PREFIX); to stdout, one kind
+      --stats adds a line of work counts per kind: internal nodes visited, node-shape tests,
+      primitive tests and candidates (MINKQ_QUERY_STATS; the same on every backend).
       --against MESH_B: MESH and MESH_B are geometries 0 and 1 of one scene, and only the pairs
       between them are reported: MESH's vertices against MESH_B's triangles and MESH_B's against
       MESH's, and edge pairs across the two (--self adds each mesh's own pairs). Pairs are
@@ -65,27 +73,47 @@ commands:
       --to MESH1: swept queries from MESH to MESH1 (same vertices and triangles, read in
       double precision): every pair whose elements come within r while each vertex moves
       linearly from its first to its second position, the candidates of a CCD narrow phase.
-      Modes: box (default), sphere or capsule_exact (VT: the capsule around each vertex's
-      path), capsule_ray (VT: its slab test); EE runs box in every mode; no leaf_exact. The
-      same output lines and files. R = 0 reports elements that touch. Not with --against or
-      --thickness.
-  version
+      Kinds vt and ee. Modes: box (default), sphere or capsule_exact (VT: the capsule around
+      each vertex's path), capsule_ray (VT: its slab test); EE runs box in every mode; no
+      --leaf-exact. R = 0 reports elements that touch. Not with --against or --thickness.
+      On a terminal, a progress line on stderr names the step under way.
+)usage";
+
+const char* const kUsageHead = R"usage(usage: minkq <command> [options]   (minkq <command> --help: that command's usage)
+
+commands:
+)usage";
+
+const char* const kUsageTail = R"usage(  version
       Library, ABI and header versions, and the number of CUDA devices.
 
 options:
   --backend B   cpu, cuda, cuda:N or auto (default: auto, CUDA when a GPU is usable)
 
 exit status: 0 success, 1 false negatives found (demo), 2 bad arguments, 3 failure (file, API)
-)";
+)usage";
 
-using namespace minkq::cli;  // Args, UsageError, parse_number, query_radius, query_modes
+// The usage of one command ("" for all), on stdout.
+int print_usage(const std::string& command) {
+  if (command == "demo" || command == "query") {
+    std::printf("usage: minkq %s\n\n%s\n  --backend B   cpu, cuda, cuda:N or auto (default: auto, CUDA when a GPU is usable)\n",
+                command == "demo" ? "demo [options]" : "query MESH [options]", command == "demo" ? kDemoUsage : kQueryUsage);
+    return 0;
+  }
+  std::printf("%s%s%s%s", kUsageHead, kDemoUsage, kQueryUsage, kUsageTail);
+  return 0;
+}
+
+using namespace minkq::cli;  // Args, UsageError, parse_number, query_radius, query_modes, Kind, Format, Progress
 
 // Owning handles, check(), open_device(), new_result() and new_mesh_scene() (capi/minkq.hpp).
 using namespace minkq::cxx;
 
-// A VT + EE scene with incident pairs dropped; edges are derived by the library.
-Scene make_scene(minkq_device* device, const meshio::Mesh& m) {
-  return new_mesh_scene(device, m.xyz.data(), m.vertex_count(), m.tris.data(), m.triangle_count());
+// A scene of `kinds` (minkq_scene_flags; VT + EE by default) with incident pairs dropped; edges
+// are derived by the library.
+Scene make_scene(minkq_device* device, const meshio::Mesh& m, uint32_t kinds = MINKQ_SCENE_VT | MINKQ_SCENE_EE) {
+  return new_mesh_scene(device, m.xyz.data(), m.vertex_count(), m.tris.data(), m.triangle_count(),
+                        kinds | MINKQ_SCENE_DROP_INCIDENT);
 }
 
 ref::Pairs result_pairs(const minkq_result* r) {
@@ -195,21 +223,10 @@ int demo(const Args& args) {
 }
 
 // ---- query ---------------------------------------------------------------------------------
-void write_pairs(const std::string& path, const minkq_result* r) {
-  const int32_t* p = minkq_result_pairs(r);
-  const size_t n = 2 * size_t(minkq_result_count(r));
-  std::vector<unsigned char> bytes(4 * n);
-  for (size_t i = 0; i < n; ++i)  // little-endian whatever the host
-    for (int b = 0; b < 4; ++b) bytes[4 * i + b] = uint8_t(uint32_t(p[i]) >> (8 * b));
-  std::ofstream f(path, std::ios::binary);
-  f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-  if (!f) throw std::runtime_error("cannot write " + path);
-}
-
-// The scene of `query`: static on `first` (float, as loaded), or swept from `first` to `*to`
-// (float64 input, read in double; the same topology).
-Scene query_scene(minkq_device* device, const std::string& first, const std::string* to) {
-  if (!to) return make_scene(device, meshio::load_mesh(first));
+// The scene of `query` for `kinds` (minkq_scene_flags): static on `first` (float, as loaded), or
+// swept from `first` to `*to` (float64 input, read in double; the same topology).
+Scene query_scene(minkq_device* device, const std::string& first, const std::string* to, uint32_t kinds) {
+  if (!to) return make_scene(device, meshio::load_mesh(first), kinds);
   const meshio::Mesh a = meshio::load_mesh(first, true), b = meshio::load_mesh(*to, true);
   if (a.vertex_count() != b.vertex_count() || a.tris != b.tris)
     throw std::runtime_error("--to " + *to + ": not the same mesh as " + first + " (" + std::to_string(b.vertex_count()) +
@@ -217,7 +234,7 @@ Scene query_scene(minkq_device* device, const std::string& first, const std::str
                              std::to_string(a.vertex_count()) + " and " + std::to_string(a.triangle_count()) +
                              ", or other triangles)");
   minkq_scene_desc desc{};
-  desc.flags = MINKQ_SCENE_VT | MINKQ_SCENE_EE | MINKQ_SCENE_DROP_INCIDENT | MINKQ_SCENE_FLOAT64;
+  desc.flags = kinds | MINKQ_SCENE_DROP_INCIDENT | MINKQ_SCENE_FLOAT64;
   desc.vertices = host_buffer(a.xyz64.data(), a.vertex_count());
   desc.triangles = host_buffer(a.tris.data(), a.triangle_count());
   Scene scene = new_scene(device, desc);
@@ -269,19 +286,19 @@ std::vector<float> read_thickness(const std::string& path, const std::vector<mes
   return t;
 }
 
-// The scene of `query --against` or `--thickness`: each mesh one geometry (VT + EE, incident
+// The scene of `query --against` or `--thickness`: each mesh one geometry (`kinds`, incident
 // pairs dropped, edges derived), in order, so that the pairs come in the numbering of the meshes
 // concatenated. With one mesh it reports its own pairs; with two only those across them unless
 // `self` (MINKQ_GEOMETRY_SELF on both). `thickness`: empty, or one value per vertex of all.
 Scene geometry_scene(minkq_device* device, const std::vector<meshio::Mesh>& meshes, const std::vector<float>& thickness,
-                     bool self) {
+                     bool self, uint32_t kinds) {
   std::vector<minkq_geometry_desc> descs(meshes.size());
   size_t first_vertex = 0;
   for (size_t g = 0; g < meshes.size(); ++g) {
     const meshio::Mesh& m = meshes[g];
     minkq_geometry_desc& d = descs[g];
     minkq_geometry_desc_init(&d);
-    d.kinds = MINKQ_SCENE_VT | MINKQ_SCENE_EE;
+    d.kinds = kinds;
     d.flags = MINKQ_GEOMETRY_DROP_INCIDENT | (self || meshes.size() == 1 ? uint32_t(MINKQ_GEOMETRY_SELF) : 0u);
     d.vertices = host_buffer(m.xyz.data(), m.vertex_count(), 3 * sizeof(float));
     d.triangles = host_buffer(m.tris.data(), m.triangle_count(), 3 * sizeof(int32_t));
@@ -295,15 +312,15 @@ Scene geometry_scene(minkq_device* device, const std::vector<meshio::Mesh>& mesh
 
 // The scene `query` runs on, from its arguments (see the usage text; check_query_options has
 // checked them).
-Scene scene_for_query(minkq_device* device, const Args& args) {
+Scene scene_for_query(minkq_device* device, const Args& args, uint32_t kinds) {
   const std::string& path = args.positional[0];
   const std::string *to = args.get("--to"), *against = args.get("--against"), *thickness = args.get("--thickness");
-  if (!against && !thickness) return query_scene(device, path, to);
+  if (!against && !thickness) return query_scene(device, path, to, kinds);
   std::vector<meshio::Mesh> meshes{meshio::load_mesh(path)};
   std::vector<std::string> names{path};
   if (against) meshes.push_back(meshio::load_mesh(*against)), names.push_back(*against);
   const std::vector<float> t = thickness ? read_thickness(*thickness, meshes, names) : std::vector<float>{};
-  return geometry_scene(device, meshes, t, args.has("--self"));
+  return geometry_scene(device, meshes, t, args.has("--self"), kinds);
 }
 
 // The usage errors of `query`'s options, before any file is read.
@@ -313,33 +330,59 @@ void check_query_options(const Args& args) {
     throw UsageError("--self needs --against (a single mesh's own pairs are always reported)");
   if (args.get("--to") && (args.get("--against") || args.get("--thickness")))
     throw UsageError("--to: swept queries take no --against or --thickness");
+  if (args.get("--format") && !args.get("--out")) throw UsageError("--format needs --out PREFIX or --out -");
 }
+
+void warn(const std::string& message) { std::fprintf(stderr, "minkq: warning: %s\n", message.c_str()); }
 
 int query(const Args& args) {
   check_query_options(args);
-  const float radius = query_radius(args, [&] { return meshio::mean_edge_length(meshio::load_mesh(args.positional[0])); });
   const std::string* to = args.get("--to");
-  const std::string mode = args.get("--mode") ? *args.get("--mode") : (to ? "box" : "leaf_exact");
+  const std::vector<Kind> kinds = parse_kinds(args.get("--kind") ? *args.get("--kind") : "vt,ee", to != nullptr);
+  uint32_t scene_kinds = 0;
+  bool has_ee = false;
+  for (const Kind& k : kinds) scene_kinds |= k.scene_flag, has_ee |= k.kind == MINKQ_QUERY_EE;
+  const QueryModes modes =
+      query_modes(args.get("--mode") ? *args.get("--mode") : "box", args.has("--leaf-exact"), to != nullptr, has_ee, warn);
+  const std::string* out = args.get("--out");
+  const bool to_stdout = out && *out == "-";
+  const Format format =
+      args.get("--format") ? parse_format(*args.get("--format")) : to_stdout ? Format::text : Format::bin;
+  if (to_stdout && one_array_per_stream(format) && kinds.size() > 1)
+    throw UsageError("--out - --format " + std::string(extension(format)) +
+                     ": stdout holds one array, so one kind (--kind vt, ee, vv or ev)");
+  Progress progress;
+  progress.step("reading " + args.positional[0]);
+  const float radius = query_radius(args, [&] { return meshio::mean_edge_length(meshio::load_mesh(args.positional[0])); });
   const std::string backend = args.get("--backend") ? *args.get("--backend") : "auto";
-  const QueryModes modes = query_modes(mode, to != nullptr);
-  const minkq_mode vt_mode = modes.vt, ee_mode = modes.ee;
   const uint32_t flags = modes.flags | MINKQ_QUERY_DIGEST | (args.has("--stats") ? uint32_t(MINKQ_QUERY_STATS) : 0u);
 
   Device device = open_device(backend);
-  Scene scene = scene_for_query(device.get(), args);
+  progress.step("building the scene");
+  Scene scene = scene_for_query(device.get(), args, scene_kinds);
   Result result = new_result();
-  const std::string* out = args.get("--out");
-  for (const auto& [kind, name, m] : {std::tuple{MINKQ_QUERY_VT, "vt", vt_mode}, std::tuple{MINKQ_QUERY_EE, "ee", ee_mode}}) {
-    const minkq_query_desc q{kind, m, flags, radius};
+  // The summary lines go to stderr when stdout carries the pairs.
+  FILE* summary = to_stdout ? stderr : stdout;
+  for (const Kind& k : kinds) {
+    progress.step(std::string(k.name) + " query");
+    const minkq_query_desc q{k.kind, modes.of(k.kind), flags, radius};
     check(minkq_scene_query_result(scene.get(), &q, result.get()), "minkq_scene_query_result");
-    std::printf("%s candidates %" PRIu64 " digest %016" PRIx64 "\n", name, minkq_result_count(result.get()),
-                minkq_result_digest(result.get()));
+    progress.done();
+    std::fprintf(summary, "%s candidates %" PRIu64 " digest %016" PRIx64 "\n", k.name, minkq_result_count(result.get()),
+                 minkq_result_digest(result.get()));
     if (flags & MINKQ_QUERY_STATS) {
       const minkq_query_stats w = minkq_result_stats(result.get());
-      std::printf("%s work nodes_visited %" PRIu64 " node_tests %" PRIu64 " primitive_tests %" PRIu64
-                  " candidates %" PRIu64 "\n", name, w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates);
+      std::fprintf(summary, "%s work nodes_visited %" PRIu64 " node_tests %" PRIu64 " primitive_tests %" PRIu64
+                   " candidates %" PRIu64 "\n", k.name, w.nodes_visited, w.node_tests, w.primitive_tests, w.candidates);
     }
-    if (out) write_pairs(*out + "." + name + ".bin", result.get());
+    std::fflush(summary);
+    if (!out) continue;
+    // A file per kind, each csv file with its header; on stdout one header before the first kind.
+    if (!to_stdout) progress.step(std::string("writing ") + k.name + " pairs");  // not amid the pairs on a terminal
+    std::string bytes = format == Format::csv && (!to_stdout || &k == &kinds.front()) ? csv_header() : "";
+    append_pairs(bytes, format, k, minkq_result_pairs(result.get()), minkq_result_count(result.get()));
+    write_bytes(to_stdout ? "-" : *out + "." + k.name + "." + extension(format), bytes);
+    progress.done();
   }
   return 0;
 }
@@ -357,18 +400,22 @@ int version() {
 int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
   try {
-    if (command == "--help" || command == "-h" || command == "help") {
-      std::fputs(kUsage, stdout);
-      return 0;
+    if (command == "--help" || command == "-h" || command == "help") return print_usage("");
+    if ((command == "demo" || command == "query") && wants_help(argc, argv, 2)) return print_usage(command);
+    if (command == "version" || command == "--version") {
+      if (argc > 2 && !wants_help(argc, argv, 2)) throw UsageError(std::string("version: unknown argument ") + argv[2]);
+      return argc > 2 ? print_usage("") : version();
     }
-    if (command == "version" || command == "--version") return version();
     if (command == "demo") return demo(Args(argc, argv, 2, {"--backend", "--size", "--radius-factor"}));
     if (command == "query")
-      return query(Args(argc, argv, 2, {"--radius", "--radius-factor", "--mode", "--backend", "--out", "--to", "--against", "--thickness"},
-                        {"--stats", "--self"}));
+      return query(Args(argc, argv, 2,
+                        {"--radius", "--radius-factor", "--kind", "--mode", "--backend", "--out", "--format", "--to",
+                         "--against", "--thickness"},
+                        {"--stats", "--self", "--leaf-exact"}));
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "minkq: %s\n(run 'minkq --help' for usage)\n", e.what());
+    std::fprintf(stderr, "minkq: %s\n(run 'minkq %s--help' for usage)\n", e.what(),
+                 command == "demo" || command == "query" ? (command + " ").c_str() : "");
     return kExitUsage;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "minkq: %s\n", e.what());

@@ -1,5 +1,5 @@
 // minkq-mpi: the distributed query of a mesh file, for checking and for users.
-//   mpirun -n K minkq-mpi query MESH --radius R [--mode M] --partition slab|morton|random [--seed S]
+//   mpirun -n K minkq-mpi query MESH --radius R [--mode M] [--leaf-exact] --partition slab|morton|random [--seed S]
 // Every rank loads the mesh and takes its part; rank 0 prints the lines `minkq query` prints
 // (the digests of the global pair sets, in the single-process numbering) and each rank's
 // figures.
@@ -37,8 +37,10 @@ const char* const kUsage = R"(usage: mpirun -n K minkq-mpi query MESH --radius R
   It fails (exit 3) when a pair is reported by two ranks.
 
 options:
-  --mode M        box, sphere, capsule_ray, capsule_exact, leaf_exact (default), as minkq query;
-                  a comma-separated list runs each in turn, each after a line "mode M"
+  --mode M        box (default), sphere, capsule_ray, capsule_exact, as minkq query (and its
+                  old word leaf_exact, with a warning); a comma-separated list runs each in
+                  turn, each after a line "mode M"
+  --leaf-exact    the primitive distance at the leaves too (every mode): the contacts
   --partition P   slab (triangles by centroid x), morton (chunks of the centroids' Morton
                   order), random (every triangle and every vertex on a random rank); default slab
   --seed S        the random partition's seed (default 1)
@@ -120,11 +122,14 @@ int query(const Args& args, int rank, int size) {
   const int local_rank = node_rank();
   agreed(rank, [&] {
     if (args.positional.size() != 1) throw UsageError("query needs exactly one MESH argument");
-    const std::string list = args.get("--mode") ? *args.get("--mode") : "leaf_exact";
+    const std::string list = args.get("--mode") ? *args.get("--mode") : "box";
+    const auto warn = [rank](const std::string& message) {
+      if (rank == 0) std::fprintf(stderr, "minkq-mpi: warning: %s\n", message.c_str());
+    };
     for (size_t at = 0; at <= list.size();) {
       const size_t comma = std::min(list.find(',', at), list.size());
       const std::string name = list.substr(at, comma - at);
-      modes.emplace_back(name, query_modes(name, false));
+      modes.emplace_back(name, query_modes(name, args.has("--leaf-exact"), false, true, warn));
       at = comma + 1;
     }
     tools::Partition partition;
@@ -151,7 +156,7 @@ int query(const Args& args, int rank, int size) {
   bool twice = false;
   for (const auto& [mode_name, m] : modes) {
     if (rank == 0 && modes.size() > 1) std::printf("mode %s\n", mode_name.c_str());
-    for (const auto& [kind, name, mode] : {std::tuple{MINKQ_QUERY_VT, "vt", m.vt}, std::tuple{MINKQ_QUERY_EE, "ee", m.ee}}) {
+    for (const auto& [kind, name, mode] : {std::tuple{MINKQ_QUERY_VT, "vt", m.of(MINKQ_QUERY_VT)}, std::tuple{MINKQ_QUERY_EE, "ee", m.of(MINKQ_QUERY_EE)}}) {
       const minkq_query_desc q{kind, mode, m.flags, radius};
       check(minkq_mpi_scene_query(scene, &q, result), "minkq_mpi_scene_query");
       local_pairs[kind == MINKQ_QUERY_EE] = minkq_mpi_result_count(result);
@@ -199,12 +204,13 @@ int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
   int code = 0;
   try {
-    if (command == "--help" || command == "-h" || command == "help") {
+    if (command == "--help" || command == "-h" || command == "help" || (command == "query" && wants_help(argc, argv, 2))) {
       if (rank == 0) std::fputs(kUsage, stdout);
     } else if (command == "query") {
       std::unique_ptr<Args> args;
       agreed(rank, [&] {
-        args = std::make_unique<Args>(argc, argv, 2, std::vector<std::string>{"--radius", "--radius-factor", "--mode", "--partition", "--seed", "--backend"});
+        args = std::make_unique<Args>(argc, argv, 2, std::vector<std::string>{"--radius", "--radius-factor", "--mode", "--partition", "--seed", "--backend"},
+                                       std::vector<std::string>{"--leaf-exact"});
       });
       code = query(*args, rank, size);
     } else {

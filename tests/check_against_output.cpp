@@ -3,7 +3,7 @@
 // as the CLI reads them. In every mode, with and without a thickness per vertex (0 to 2 r):
 //   - the pairs are those of the two meshes concatenated (B's vertices, triangles and edges after
 //     A's): they contain every pair of the double oracle on the concatenated mesh whose distance
-//     is <= r + t(a) + t(b), leaf_exact keeps no other pair beyond that reach plus its slack, and
+//     is <= r + t(a) + t(b), --leaf-exact keeps no other pair beyond that reach plus its slack, and
 //     without --self every pair joins A and B;
 //   - --self adds exactly the pairs `minkq query A` and `minkq query B` report (B's renumbered),
 //     with their parts of the thickness file (--thickness on one mesh).
@@ -140,7 +140,7 @@ std::pair<Pairs, Pairs> true_pairs(const Concatenated& s, double r, bool cross_o
   return {vt, ee};
 }
 
-const char* const kModes[] = {"box", "sphere", "capsule_ray", "capsule_exact", "leaf_exact"};
+const char* const kModes[] = {"box", "sphere", "capsule_ray", "capsule_exact", "box --leaf-exact"};
 
 // Runs `command --mode M --out PREFIX` in every mode and checks the pairs against the oracle;
 // returns the failures. `pairs` gets each mode's VT and EE pairs.
@@ -155,7 +155,7 @@ int check_modes(const std::string& label, const std::string& command, const Conc
   for (const char* mode : kModes) {
     if (run(command + " --mode " + mode + " --out " + quoted(prefix)) != 0) throw std::runtime_error(label + ": minkq failed");
     const Pairs vt = minkq::test::read_pairs(prefix + ".vt.bin"), ee = minkq::test::read_pairs(prefix + ".ee.bin");
-    const bool exact = std::string(mode) == "leaf_exact";
+    const bool exact = std::string(mode).find("--leaf-exact") != std::string::npos;
     failures += minkq::test::compare_pairs(
         label + " " + mode + " VT", vt, vt_truth, exact,
         [&](int32_t v, int32_t t, double* S) { return minkq::test::vt_distance(s.mesh, v, t, S); },

@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     std::snprintf(radius, sizeof radius, "%.9g", double(r));  // round-trips the float exactly
     const std::string prefix = work + "/out";
     const std::string command = "\"" + binary + "\" query \"" + mesh_path + "\" --radius " + radius +
-                                " --mode leaf_exact --backend cpu --out \"" + prefix + "\"";
+                                " --mode box --leaf-exact --backend cpu --out \"" + prefix + "\"";
     std::printf("%s\n", command.c_str());
     std::fflush(stdout);
     if (std::system(command.c_str()) != 0) throw std::runtime_error("minkq query failed");

@@ -79,10 +79,11 @@ int main(int argc, char** argv) {
         }
       }
     }
-    if (run(base + " --radius 0.001 --mode leaf_exact --backend cpu") != 2 * 256) {  // exit status 2 (usage)
-      std::printf("leaf_exact with --to should be refused\n");
-      ++failures;
-    }
+    for (const char* leaf_exact : {"--leaf-exact", "--mode leaf_exact"})  // the switch and the old word
+      if (run(base + " --radius 0.001 " + leaf_exact + " --backend cpu") != 2 * 256) {  // exit status 2 (usage)
+        std::printf("%s with --to should be refused\n", leaf_exact);
+        ++failures;
+      }
     ref::Mesh other = ref::twisted_sheet(5, 1.0);
     ref::set_float64(other, std::vector<double>(other.xyz.begin(), other.xyz.end()));
     write_obj(work + "/other.obj", other);
