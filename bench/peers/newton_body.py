@@ -4,12 +4,13 @@ what minkq.newton.ClothBodyContacts finds, and a double-precision oracle's conta
 The scene is Newton 1.8's ``vbd_soft_rigid_contact`` example with the bear's bag alone
 (examples/python/newton_cloth_body.py: a cloth bag, Newton's bear mesh dropped into it, the bag
 lifted after 120 frames), simulated by Newton (``SolverVBD``, ``CollisionPipeline``) on Warp's
-CPU device. Every ``--every`` frames, at the same positions:
+CPU device. Every ``--every`` frames, at the same positions, for the example's soft contact gap
+(0.01) and each of ``--gaps`` (a Newton pipeline made with that gap, for the measurement only):
 
 - Newton: its soft contacts for the bear (``CollisionPipeline.collide``: per particle, the
   closest point of the mesh within ``soft_contact_gap + particle_radius + shape_margin``, by
   signed distance); counted as distinct particles;
-- minkq: ``ClothBodyContacts(model).detect(soft_contact_gap)``: cloth vertex - bear triangle
+- minkq: ``ClothBodyContacts(model).detect(gap)``: cloth vertex - bear triangle
   (VT c->b), bear vertex - cloth triangle (VT b->c), cloth edge - bear edge (EE), every pair
   within the same band (unsigned distance);
 - oracle: every such pair by brute force in double (bindings/python/tests/newton_body_oracle.py).
@@ -21,7 +22,7 @@ contact: contacts that Newton's per-particle pass has no trace of (a bear corner
 between the particles). "Newton only": particles Newton reports outside the oracle's band
 (inside the bear, by its signed distance).
 
-    python bench/peers/newton_body.py [--frames 180] [--every 30] [--out table.md]
+    python bench/peers/newton_body.py [--frames 180] [--every 30] [--gaps 0] [--out table.md]
 
 Exits 1 when minkq misses a contact of the oracle.
 
@@ -46,15 +47,15 @@ import newton_body_oracle as bo  # noqa: E402
 from newton_cloth_body import bear_bag_example, soft_contacts  # noqa: E402
 
 COLUMNS = (
-    "frame", "Newton: particles", "oracle VT c->b: pairs (particles)", "minkq VT c->b: pairs (particles)",
+    "frame", "gap", "Newton: particles", "oracle VT c->b: pairs (particles)", "minkq VT c->b: pairs (particles)",
     "Newton misses: particles (+ pinned)", "Newton only: particles", "oracle VT b->c", "minkq VT b->c",
     "uncovered by Newton", "oracle EE", "minkq EE", "uncovered by Newton", "minkq missed",
 )
 
 
-def measure(example, contacts, gap: float) -> list:
+def measure(example, contacts, gap: float, pipeline) -> list:
     model, state = example.model, example.state_0
-    newton_particles = {p for p, _ in soft_contacts(example, set(contacts.shapes))}
+    newton_particles = {p for p, _ in soft_contacts(example, set(contacts.shapes), pipeline)}
     contacts.update(state)
     pairs = contacts.detect(gap)
     cloth = bo.side(state.particle_q.numpy(), contacts.tri_indices, contacts.edge_indices, model.particle_radius.numpy())
@@ -89,6 +90,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=180)
     parser.add_argument("--every", type=int, default=30)
+    parser.add_argument("--gaps", default="0",
+                        help="soft contact gaps measured besides the example's (comma-separated; Newton's pipeline "
+                             "made again for each, for the measurement only)")
     parser.add_argument("--out", help="write the markdown table here")
     args = parser.parse_args()
 
@@ -100,12 +104,17 @@ def main() -> int:
 
     example = bear_bag_example()
     gap = example.params["soft_contact_gap"]
+    pipelines = {gap: (example.pipeline, example.contacts)}
+    for g in (float(g) for g in args.gaps.split(",") if g.strip()):
+        pipeline = newton.CollisionPipeline(example.model, broad_phase="nxn", soft_contact_gap=g)
+        pipelines.setdefault(g, (pipeline, pipeline.contacts()))
     contacts = ClothBodyContacts(example.model, state=example.state_0)
     rows = []
     for frame in range(args.frames + 1):
         if frame % args.every == 0:
-            rows.append([frame, *measure(example, contacts, gap)])
-            print(" | ".join(map(str, rows[-1])), flush=True)
+            for g, pipeline in pipelines.items():
+                rows.append([frame, g, *measure(example, contacts, g, pipeline)])
+                print(" | ".join(map(str, rows[-1])), flush=True)
         if frame < args.frames:
             example.step()
 
@@ -118,16 +127,17 @@ def main() -> int:
     lines = [
         "# Cloth against a body mesh: Newton's soft contacts, minkq's three kinds, an oracle",
         "",
-        f"`bench/peers/newton_body.py --frames {args.frames} --every {args.every}` ({datetime.date.today()}, minkq "
+        f"`bench/peers/newton_body.py --frames {args.frames} --every {args.every} --gaps {args.gaps}` ({datetime.date.today()}, minkq "
         f"{minkq.__version__} {commit}, warp-lang {wp.__version__}, newton {newton.__version__}), Warp's `cpu` device "
         f"({platform.processor() or platform.machine()}). Counts only: they do not depend on timing.",
         "",
         f"Newton's `vbd_soft_rigid_contact` example, the bear's bag alone: a cloth bag of {model.particle_count} "
         f"particles, {model.tri_count} triangles, {model.edge_count} edges (particle radius "
-        f"{float(model.particle_radius.numpy()[0])}), Newton's bear mesh ({len(model.shape_source[bear].vertices)} "
+        f"{float(model.particle_radius.numpy()[0]):.4g}), Newton's bear mesh ({len(model.shape_source[bear].vertices)} "
         f"vertices, {len(model.shape_source[bear].indices) // 3} triangles, shape margin "
-        f"{float(model.shape_margin.numpy()[bear])}) on a free body dropped into it; the bag is lifted from frame 120. "
-        f"Band: `soft_contact_gap` {gap} + particle radius + shape margin. Newton: its soft contacts for the bear "
+        f"{float(model.shape_margin.numpy()[bear]):.4g}) on a free body dropped into it; the bag is lifted from frame 120. "
+        f"Band: gap + particle radius + shape margin, the gap Newton's `soft_contact_gap` (the example's {gap}, "
+        f"and {args.gaps} with a Newton pipeline made for the measurement). Newton: its soft contacts for the bear "
         "(one per particle: the closest point, signed distance), as distinct particles. minkq: "
         "`ClothBodyContacts.detect(soft_contact_gap)`. Oracle: every pair within the band, brute force in double. "
         "\"Newton misses\": oracle particles with no Newton contact (active; + pinned ones, which Newton skips). "

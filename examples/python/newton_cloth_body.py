@@ -43,11 +43,12 @@ def bear_bag_example(all_bags: bool = False, device: str = "cpu") -> Any:
         return soft_rigid.Example(newton.viewer.ViewerNull(), SimpleNamespace(seed=42))
 
 
-def soft_contacts(example: Any, shapes: Any) -> set:
+def soft_contacts(example: Any, shapes: Any, pipeline: Any = None) -> set:
     """Newton's soft contacts at the example's current state, as (particle, shape) pairs of
-    ``shapes``: its collision pipeline run once more on ``state_0``."""
-    example.pipeline.collide(example.state_0, example.contacts)
-    c = example.contacts
+    ``shapes``: a collision pipeline (the example's, or ``(pipeline, contacts)``) run once more
+    on ``state_0``."""
+    pipeline, c = (example.pipeline, example.contacts) if pipeline is None else pipeline
+    pipeline.collide(example.state_0, c)
     count = min(int(c.soft_contact_count.numpy()[0]), c.soft_contact_max)
     particle, shape = c.soft_contact_particle.numpy()[:count], c.soft_contact_shape.numpy()[:count]
     return {(int(p), int(s)) for p, s in zip(particle, shape) if int(s) in shapes}
