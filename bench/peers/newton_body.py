@@ -142,7 +142,7 @@ def main() -> int:
         f"Band: gap + particle radius + shape margin, the gap Newton's `soft_contact_gap` (the example's {gap}, "
         f"and {args.gaps} with a Newton pipeline made for the measurement). Newton: its soft contacts for the bear "
         "(one per particle: the closest point, signed distance), as distinct particles. minkq: "
-        "`ClothBodyContacts.detect(soft_contact_gap)`. Oracle: every pair within the band, brute force in double. "
+        "`ClothBodyContacts.detect(gap)`. Oracle: every pair within the band, brute force in double. "
         "\"Newton misses\": oracle particles with no Newton contact (active; + pinned ones, which Newton skips). "
         "\"Uncovered\": oracle VT b->c / EE contacts none of whose cloth vertices has a Newton contact. "
         "\"Newton only\": Newton particles outside the oracle's band (inside the bear). \"minkq missed\": oracle "
