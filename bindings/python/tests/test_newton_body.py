@@ -167,6 +167,10 @@ def test_bad_input(model):
     with pytest.raises(ValueError, match="none of its 1 shapes is a mesh"):
         mn.ClothBodyContacts(builder.finalize(device="cpu"))
     state = model.state()
+    state.body_q = None
+    with pytest.raises(ValueError, match="state: has no body_q, but shape 0 is on body 0"):
+        contacts.update(state)
+    state = model.state()
     q = state.particle_q.numpy()
     q[5, 1] = np.nan
     state.particle_q.assign(q)

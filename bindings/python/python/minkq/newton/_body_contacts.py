@@ -107,7 +107,8 @@ class ClothBodyContacts:
     ``state``: positions to build from (default ``model.state()``'s, the initial ones).
 
     Raises ValueError for a model without cloth triangles, without such mesh shapes, or a
-    ``shapes`` entry that is out of range or not a mesh (naming it); minkq's errors for
+    ``shapes`` entry that is out of range, listed twice or not a mesh (naming it), a state
+    without ``body_q`` when a shape is on a body; minkq's errors for
     non-finite positions (naming the geometry: 0 the cloth, k + 1 the k-th shape).
 
     >>> contacts = ClothBodyContacts(model)                  # doctest: +SKIP
@@ -207,6 +208,8 @@ class ClothBodyContacts:
     def _shape_vertices(self, k: int, state: Any) -> np.ndarray:
         """Shape k's vertices in world space (float32), at ``state``'s body pose."""
         body = int(self._shape_body[k])
+        if body >= 0 and getattr(state, "body_q", None) is None:
+            raise ValueError(f"state: has no body_q, but shape {self.shapes[k]} is on body {body}")
         pose = None if body < 0 else state.body_q.numpy()[body].astype(np.float64)
         xyz = shape_world_vertices(self._local[k], self._shape_scale[k], self._shape_xform[k], pose)
         return xyz.astype(np.float32)
