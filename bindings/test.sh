@@ -18,7 +18,7 @@
 #     ldd resolving libminkq/libtbb/libxxhash inside the package, and the tests and the demo run
 #     with the system's TBB and xxHash and the build trees hidden in a mount namespace), then
 #     installs it beside Warp and runs the error, digest and interop tests on it again;
-#   - runs both demos and the Newton example on small scenes.
+#   - runs both demos and the Newton examples on small scenes.
 # Environment: MINKQ_LIB_DIR (see above); MINKQ_BINDINGS_BUILD_DIR (default: build-bindings at
 # the repository root) for the library, the virtual environment and the wheel;
 # MINKQ_CHECK_SDIST=1 [python wheel] also builds the sdist, a wheel from it in a fresh folder
@@ -133,5 +133,6 @@ step "examples on a 64 x 64 sheet"
 "$target/debug/minkq-demo" --backend cpu --size 64
 "${tree_env[@]}" "$venv/bin/python" "$root/examples/python/demo.py" --backend cpu --size 64 --repeat 1
 "${tree_env[@]}" "$venv/bin/python" "$root/examples/python/newton_detector.py" --size 128
+"${tree_env[@]}" "$venv/bin/python" "$root/examples/python/newton_cloth_body.py" --frames 10 --every 10
 
 step "done"

@@ -19,7 +19,7 @@ def test_package_ships_type_information():
     for name in ("py.typed", "_native.pyi", "__init__.py", "__main__.py", "_errors.py", "_api.py", "_args.py",
                  "_results.py", "_device.py", "_scene.py", "_stream_ordered.py", "_geometry.py", "_bvh.py", "_interop.py",
                  "newton/__init__.py", "newton/_compat.py", "newton/_kernels.py", "newton/_capture.py", "newton/_detector.py",
-                 "newton/_install.py", "newton/examples.py", "demo.py", "mpi.py"):
+                 "newton/_install.py", "newton/_body_contacts.py", "newton/examples.py", "demo.py", "mpi.py"):
         assert os.path.exists(os.path.join(root, name)), name
     assert minkq.abi_version() == minkq.ABI_VERSION
     # The library the package loaded is the release the package says it is.

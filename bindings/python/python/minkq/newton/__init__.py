@@ -120,10 +120,19 @@ Deliberate differences (documented choices):
 - Device. The model's device: minkq's CPU backend for ``"cpu"``, its CUDA backend for
   ``"cuda:N"`` (positions read in place on the GPU, no host round trip; a libminkq built
   without CUDA raises :class:`~minkq.UnsupportedError`).
+
+Cloth against body meshes. :class:`ClothBodyContacts` finds the contacts between a model's
+cloth and the mesh shapes of its bodies (vertex-triangle both ways and edge-edge, every pair
+within ``radius`` plus the particle radius and the shape margin) from one minkq scene of many
+geometries, beside Newton's soft contacts (one closest point per particle and shape)::
+
+    contacts = ClothBodyContacts(model)            # the cloth, and every mesh shape colliding with particles
+    contacts.update(state)                         # particle_q, and body_q for the shapes on bodies
+    pairs = contacts.detect(soft_contact_gap)      # pairs.vertex_triangle, .triangle_vertex, .edge_edge
 """
 
 
-# The package's parts, by concern: _compat (the only module that imports Newton's and Warp's
+# The package's parts, by concern: _body_contacts (cloth against the model's body meshes), _compat (the only module that imports Newton's and Warp's
 # private modules), _kernels (Warp functions and kernels), _capture (Warp graph capture: host
 # calls replayed by CPU graphs, paused captures, pass buffers), _detector (the detector class)
 # and _install (install / uninstall). The names used from outside them (the
@@ -131,10 +140,19 @@ Deliberate differences (documented choices):
 
 import warp as wp  # noqa: F401 - minkq.newton.wp (the tests patch Warp through it)
 
+from ._body_contacts import ClothBodyContacts, ClothBodyPairs
 from ._capture import ReplayError, capture_launch
 from ._capture import _capture_paused, _graph_being_captured, _recorded, _Scratch  # noqa: F401 - used by the tests
 from ._detector import TriMeshCollisionDetector
 from ._detector import EDGE_OVERFLOW, TRIANGLE_OVERFLOW, VERTEX_OVERFLOW, _minkq_device_for  # noqa: F401 - used by the tests
 from ._install import install, uninstall
 
-__all__ = ["ReplayError", "TriMeshCollisionDetector", "capture_launch", "install", "uninstall"]
+__all__ = [
+    "ClothBodyContacts",
+    "ClothBodyPairs",
+    "ReplayError",
+    "TriMeshCollisionDetector",
+    "capture_launch",
+    "install",
+    "uninstall",
+]
