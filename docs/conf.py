@@ -24,6 +24,9 @@ root_doc = "index"
 exclude_patterns = ["_tools", "tutorials/*.py"]
 myst_heading_anchors = 3
 myst_enable_extensions = ["colon_fence", "deflist"]
+# The bench programs write their tables with H1 then H3 sections (bench/results/*.md, included
+# as they are): a heading jump is a matter of style there, not a fault of the site.
+suppress_warnings = ["myst.header"]
 
 # C reference: Doxygen's XML of capi/minkq.h and mpi/minkq_mpi.h (docs/_tools/Doxyfile).
 breathe_projects = {"minkq": str(build / "doxygen" / "xml")}
@@ -42,3 +45,17 @@ html_static_path = []
 # cargo doc's output (build/rust/rust/...) lands in the site as rust/; the figures as figures/.
 html_extra_path = [str(build / "rust")]
 figures = build / "figures"
+
+# The benchmark results (bench/results/*.md, written by the bench programs) as pages of the
+# site: one page each under _generated/results/, including the file as it is, with the plots
+# bench/plot.py drew beside it.
+results = root / "bench" / "results"
+pages = root / "docs" / "_generated" / "results"
+pages.mkdir(parents=True, exist_ok=True)
+for stale in pages.glob("*.md"):
+    stale.unlink()
+for table in sorted(results.glob("*.md")):
+    text = f"```{{include}} ../../../bench/results/{table.name}\n```\n"
+    for plot in sorted(results.glob(f"{table.stem}_*.png")):
+        text += f"\n![{plot.stem}](../../../bench/results/{plot.name})\n"
+    (pages / table.name).write_text(text)
