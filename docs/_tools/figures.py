@@ -27,6 +27,13 @@ def _panel(ax, title):
     ax.set_yticks([])
 
 
+def _save(fig, out: Path, name: str):
+    """Writes the figure as out/name.svg, without a date, and frees it."""
+    fig.tight_layout()
+    fig.savefig(out / f"{name}.svg", metadata={"Date": None})
+    plt.close(fig)
+
+
 def _capsule(ax, a, b, r, **style):
     """A 2D capsule: the points within r of segment ab."""
     import numpy as np
@@ -56,8 +63,7 @@ def modes(out: Path):
             ax.add_patch(Circle(p, r, fill=False, color=SHAPE, label="sphere (r)"))
             ax.text(0.05, 2.35, "sphere misses the box: dropped", color=SHAPE)
         ax.plot(*p, "o", color=ELEMENT)
-        ax.set_xlim(-0.3, 3.1)
-        ax.set_ylim(-0.3, 2.5)
+        ax.set(xlim=(-0.3, 3.1), ylim=(-0.3, 2.5))
     ax = axes[2]
     _panel(ax, "EE, box and capsule_exact")
     e, f = ((0, 0), (2, 1)), ((-0.5, 0.9), (0.6, 1.8))
@@ -67,11 +73,8 @@ def modes(out: Path):
     ax.add_patch(Rectangle((-r, -r), 2 + 2 * r, 1 + 2 * r, fill=False, color=BOX, ls="--", label="edge's box + r"))
     _capsule(ax, *e, r, color=SHAPE)
     ax.text(-0.3, 2.05, "f crosses the box, misses the capsule", color=SHAPE)
-    ax.set_xlim(-0.6, 3.0)
-    ax.set_ylim(-0.6, 2.3)
-    fig.tight_layout()
-    fig.savefig(out / "modes.svg", metadata={"Date": None})
-    plt.close(fig)
+    ax.set(xlim=(-0.6, 3.0), ylim=(-0.6, 2.3))
+    _save(fig, out, "modes")
 
 
 def node_tests(out: Path):
@@ -87,11 +90,8 @@ def node_tests(out: Path):
         ax.plot(x, y, "o", color=ELEMENT)
         verdict = ("box: visit" if hit_box else "box: skip") + (", sphere: visit" if hit_sphere else ", sphere: skip")
         ax.text(x + 0.65, y, verdict, va="center")
-    ax.set_xlim(-0.3, 6.3)
-    ax.set_ylim(-0.3, 2.7)
-    fig.tight_layout()
-    fig.savefig(out / "node_tests.svg", metadata={"Date": None})
-    plt.close(fig)
+    ax.set(xlim=(-0.3, 6.3), ylim=(-0.3, 2.7))
+    _save(fig, out, "node_tests")
 
 
 def swept(out: Path):
@@ -114,11 +114,8 @@ def swept(out: Path):
     ys = [p[1] for p in e0 + e1]
     ax.add_patch(Rectangle((min(xs), min(ys)), max(xs) - min(xs), max(ys) - min(ys), fill=False, color=BOX))
     ax.text(2.5, 2.3, "EE: the box over both positions", color=BOX)
-    ax.set_xlim(-0.3, 4.3)
-    ax.set_ylim(-0.5, 2.5)
-    fig.tight_layout()
-    fig.savefig(out / "swept.svg", metadata={"Date": None})
-    plt.close(fig)
+    ax.set(xlim=(-0.3, 4.3), ylim=(-0.5, 2.5))
+    _save(fig, out, "swept")
 
 
 if __name__ == "__main__":
