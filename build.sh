@@ -4,7 +4,10 @@
 #   ./build.sh test   installs what is missing, builds, runs the whole test suite (ctest, with
 #                     the export and ABI checks of abi/, then cargo test and pytest for the
 #                     bindings, programs built against the installed library and the .deb, then
-#                     both fuzzers for a minute)
+#                     both fuzzers for a minute, then the documentation site, built with
+#                     warnings as errors, its tutorials run and its pages opened in Chromium)
+#   ./build.sh docs   installs what is missing, builds, builds the documentation site into
+#                     build-docs/html (docs/build.sh)
 #   ./build.sh build  installs what is missing and builds only
 # PRESET=cpu|cuda|default (default: default = CUDA when nvcc is found).
 set -euo pipefail
@@ -40,7 +43,11 @@ case "${1:-}" in
     MINKQ_CHECK_SDIST=1 MINKQ_LIB_DIR="$PWD/$binary_dir/capi" bindings/test.sh
     examples/consumers.sh "$binary_dir"  # cmake --install, find_package, pkg-config, Rust, .deb
     fuzz/run.sh 60  # differential (vs Embree and the oracle) and C API fuzzers, a minute each
+    # The site, from the wheel bindings/test.sh built; its tutorials run in that venv (Warp, mpi4py).
+    MINKQ_DOCS_WHEEL=$(ls build-bindings/wheels/minkq-*.whl) MINKQ_DOCS_PYTHON=$PWD/build-bindings/venv/bin/python \
+      docs/build.sh "$binary_dir" --check
     ;;
+  docs) build; docs/build.sh "$binary_dir" ;;
   build) build ;;
-  *) sed -n '2,7p' "$0"; exit 2 ;;
+  *) sed -n '2,11p' "$0"; exit 2 ;;
 esac
