@@ -46,18 +46,18 @@ r = 0.6 / (n - 1)
 
 
 def check(scene, whole_xyz, what):
-    single = minkq.Scene(minkq.Device("cpu"), whole_xyz, tris, vt=True, ee=True, drop_incident=True)
+    single = minkq.Scene(whole_xyz, tris, vt=True, ee=True, drop_incident=True)
     for kind, mode, leaf in [("vt", "box", False), ("vt", "sphere", False), ("vt", "box", True),
                              ("ee", "box", False), ("ee", "capsule_exact", False), ("ee", "box", True)]:
-        mine = scene.query(kind, mode, r, leaf_exact=leaf)
-        counted = scene.count(kind, mode, r, leaf_exact=leaf)
+        mine = scene.query(kind, r, mode=mode, leaf_exact=leaf)
+        counted = scene.count(kind, r, mode=mode, leaf_exact=leaf)
         if counted != len(mine):
             failures.append(f"{what} {kind} {mode}: count {counted} but {len(mine)} pairs on rank {rank}")
         gathered = comm.gather(mine, root=0)
         if rank != 0:
             continue
         union = np.concatenate(gathered)
-        want = single.query(kind, mode, r, leaf_exact=leaf, canonical=True).astype(np.int64)
+        want = single.query(kind, r, mode=mode, leaf_exact=leaf, canonical=True).astype(np.int64)
         got = np.unique(union, axis=0)
         if len(got) != len(union):
             failures.append(f"{what} {kind} {mode}: {len(union) - len(got)} pairs on two ranks")
