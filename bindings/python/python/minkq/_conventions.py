@@ -47,7 +47,7 @@ def device_spec(device: Any, name: str = "device") -> str:
             return f"cuda:{torch.cuda.current_device()}"
         if kind in ("cpu", "cuda"):
             return kind if device.index is None else f"{kind}:{device.index}"
-        raise ValueError(f"{name}: minkq runs on 'cpu' and 'cuda' devices, got torch.device({str(device)!r})")
+        raise ValueError(f"{name}: minkq runs on 'cpu' and 'cuda' devices, got torch.device({kind!r})")
     alias = getattr(device, "alias", None)  # warp.context.Device: alias "cpu" / "cuda:N"
     if isinstance(alias, str) and hasattr(device, "is_cuda"):
         return f"cuda:{device.ordinal}" if device.is_cuda else "cpu"
