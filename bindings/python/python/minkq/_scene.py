@@ -30,6 +30,14 @@ class Scene(Closable, _StreamOrdered, _SceneQueries, _Geometries):
     """A triangle mesh, or codimensional elements (particles, rods), on a device with the BVHs
     for its queries: VT and EE over triangles, VV and EV over vertices and edges.
 
+    ``device``: where the scene runs. None (the default) takes it from the arrays: the CPU for
+    numpy arrays, lists and host arrays of other libraries, the GPU of a CUDA array (a Warp
+    array or torch tensor on ``cuda:1`` gives ``cuda:1``). Or name it: ``"cpu"``, ``"cuda"``,
+    ``"cuda:N"``, ``"auto"``, a ``torch.device``, a Warp device or a :class:`Device`.
+    ``close()`` (or ``with minkq.Scene(...) as scene:``) releases the scene and its device
+    memory at once; later calls raise ValueError. The old spelling ``Scene(device, vertices,
+    triangles, edges)`` works for one more release with a DeprecationWarning.
+
     ``vertices``: (n, 3) float32 or float64; ``triangles``: (m, 3) int32, or None (the same
     as an empty (0, 3) array: no triangles); ``edges``: (e, 2) int32, or None (or an empty
     array) to derive them from the triangles (every distinct undirected edge as (min, max),
@@ -37,7 +45,8 @@ class Scene(Closable, _StreamOrdered, _SceneQueries, _Geometries):
     C-contiguous numpy arrays of exactly these dtypes are used without a copy; other host
     arrays (int64 indices, strided or byte-swapped arrays, lists, ...) are converted once: a
     copy is made (an index that does not fit in int32 raises IndexOutOfRangeError naming it).
-    Arrays of other libraries must have exactly these dtypes.
+    Indices of other libraries in another integer dtype (PyTorch's int64 faces) are converted
+    the same way, through a host copy; their vertices must have exactly these dtypes.
 
     Precision (:attr:`dtype`): float64 vertices (numpy, Warp ``wp.vec3d`` / float64, PyTorch
     float64, ...; also lists of Python floats, which numpy reads as float64) make a float64
