@@ -10,6 +10,7 @@ import pytest
 
 import minkq
 from oracle import rolled_sheet
+from test_dtypes import _Foreign  # a host array of another library (DLPack only)
 
 R = 0.04
 
@@ -17,19 +18,6 @@ R = 0.04
 @pytest.fixture(scope="module")
 def mesh():
     return rolled_sheet(12, 9)
-
-
-class _Foreign:
-    """A host array of another library (DLPack only)."""
-
-    def __init__(self, array):
-        self._array = array
-
-    def __dlpack__(self, stream=None):
-        return self._array.__dlpack__()
-
-    def __dlpack_device__(self):
-        return self._array.__dlpack_device__()
 
 
 class _OnGpu(_Foreign):
