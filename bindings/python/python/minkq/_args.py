@@ -24,6 +24,26 @@ if TYPE_CHECKING:
     Shape = Literal["sphere", "capsule", "box"]
     Pairs = npt.NDArray[np.int32]
 
+    from typing import Protocol, Union
+
+    class SupportsDLPack(Protocol):
+        """An array of another library read through DLPack (Warp, PyTorch, CuPy, JAX)."""
+
+        def __dlpack__(self, *, stream: Any = ...) -> Any: ...
+
+        def __dlpack_device__(self) -> Tuple[int, int]: ...
+
+    class SupportsCudaArrayInterface(Protocol):
+        """An array of another library read through the CUDA array interface (Numba, CuPy)."""
+
+        @property
+        def __cuda_array_interface__(self) -> Any: ...
+
+    Foreign = Union[SupportsDLPack, SupportsCudaArrayInterface]
+    """Arrays of other libraries: results made like them are of their library, hence Any."""
+    Array = Union["npt.ArrayLike", Foreign]
+    """What an array argument takes: numpy arrays and sequences, and arrays of other libraries."""
+
 KINDS = ("vt", "ee", "vv", "ev")
 MODES = ("box", "sphere", "capsule_ray", "capsule_exact")
 FLOAT32, FLOAT64 = np.dtype(np.float32), np.dtype(np.float64)

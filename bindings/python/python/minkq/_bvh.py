@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Optional, Tuple, overload
 
 import numpy as np
 
@@ -12,7 +12,9 @@ from ._conventions import Closable, deprecated, old_device_form, resolve_device
 from ._results import QueryInfo, _SizedQueries
 
 if TYPE_CHECKING:
-    from ._args import Mode, Pairs, Shape
+    import numpy.typing as npt
+
+    from ._args import Array, Mode, Pairs, Shape
 
 
 class BVH(Closable, _SizedQueries):
@@ -78,6 +80,14 @@ class BVH(Closable, _SizedQueries):
         """
         return self._native.tree_growth()
 
+    @overload
+    def query(self, shape: "Shape", queries: "npt.ArrayLike", radius: float = ..., *, mode: "Mode" = ...,
+              canonical: bool = ..., like: None = ..., out: "Optional[np.ndarray]" = ...) -> "Pairs": ...
+
+    @overload
+    def query(self, shape: "Shape", queries: "Array", radius: float = ..., *, mode: "Mode" = ...,
+              canonical: bool = ..., like: Any = ..., out: Any = ...) -> Any: ...
+
     def query(
         self,
         shape: "Shape",
@@ -95,7 +105,8 @@ class BVH(Closable, _SizedQueries):
         default, as everywhere), ``"sphere"``. ``"capsule"``: segments (n, 2, 3) float32; modes
         ``"box"``, ``"capsule_ray"``, ``"capsule_exact"``. ``"box"``: boxes (n, 2, 3) or (n, 6);
         mode ``"box"``, radius 0. ``out=``: an array or :class:`PairBuffer` to reuse, as for
-        :meth:`Scene.query`; the result is then a view of it.
+        :meth:`Scene.query`; the result is then a view of it. Typed by the queries' library:
+        numpy in, ``NDArray[int32]`` out; arrays of other libraries give theirs (Any).
         """
         return self._query(shape, queries, radius, mode, canonical, False, like, out)[0]
 

@@ -3,13 +3,15 @@ work. :class:`minkq.Scene` takes them from :class:`_SceneQueries`."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Optional, Tuple, overload
 
 from ._args import KINDS, MODES, _Args, _choice, _radius
 from ._conventions import deprecated, old_mode_form
 from ._results import QueryInfo, WorkStats, _SizedQueries
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from ._args import Kind, Mode, Pairs
     from ._interop import Like
 
@@ -21,6 +23,18 @@ class _SceneQueries(_SizedQueries):
 
     _native: Any
     _like: Optional["Like"]
+
+    @overload
+    def query(self, kind: "Kind", radius: float, *, mode: "Mode" = ..., leaf_exact: bool = ..., canonical: bool = ...,
+              like: "np.ndarray", out: None = ...) -> "Pairs": ...
+
+    @overload
+    def query(self, kind: "Kind", radius: float, *, mode: "Mode" = ..., leaf_exact: bool = ..., canonical: bool = ...,
+              like: Any = ..., out: "np.ndarray") -> "Pairs": ...
+
+    @overload
+    def query(self, kind: "Kind", radius: Any, *_deprecated: Any, mode: "Mode" = ..., leaf_exact: bool = ...,
+              canonical: bool = ..., like: Any = ..., out: Any = ...) -> Any: ...
 
     def query(
         self,
@@ -49,7 +63,8 @@ class _SceneQueries(_SizedQueries):
         C-contiguous (capacity, 2) int32 array (numpy, or another library's on the scene's
         device; :class:`CapacityError`, with the exact count as ``needed``, when it is too
         small, nothing written past it), or a :class:`PairBuffer`, which grows as needed; the
-        result is then ``out[:count]``, a view of it.
+        result is then ``out[:count]``, a view of it. Typed: a numpy ``like`` or ``out`` gives
+        an ``NDArray[int32]``; otherwise the library of the scene's arrays decides (Any).
 
         The old spelling ``query(kind, mode, radius)`` (a positional mode) works for one more
         release with a DeprecationWarning.
