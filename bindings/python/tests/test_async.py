@@ -298,7 +298,7 @@ def test_warp_graph_capture_replays_refit_and_queries_over_moved_vertices(wp, me
     xyz, tris = mesh
     gpu = minkq.Device("cuda:0")
     positions = wp.array(xyz, dtype=wp.vec3, device="cuda:0")
-    scene = minkq.Scene(gpu, positions, wp.array(tris, dtype=wp.int32, device="cuda:0"))
+    scene = minkq.Scene(positions, wp.array(tris, dtype=wp.int32, device="cuda:0"), device=gpu)
     capacity = 8192
     scene.reserve(refit=True, canonical_capacity=capacity)
     vt_pairs = wp.zeros((capacity, 2), dtype=wp.int32, device="cuda:0")
@@ -391,7 +391,7 @@ def test_warp_cuda_arrays_on_an_explicit_stream_and_short_capacity(wp, mesh):
     _needs_cuda(wp)
     xyz, tris = mesh
     gpu = minkq.Device("cuda:0")
-    scene = minkq.Scene(gpu, wp.array(xyz, dtype=wp.vec3, device="cuda:0"), wp.array(tris, dtype=wp.int32, device="cuda:0"))
+    scene = minkq.Scene(wp.array(xyz, dtype=wp.vec3, device="cuda:0"), wp.array(tris, dtype=wp.int32, device="cuda:0"), device=gpu)
     scene.reserve(refit=True, rebuild=True, canonical_capacity=4096)
     expected = minkq.Scene(xyz, tris).query("ee", R, canonical=True)
     stream = wp.Stream("cuda:0")

@@ -278,9 +278,10 @@ def test_warp_cuda_arrays_are_read_and_written_on_the_gpu(wp, mesh):
     stream = wp.Stream("cuda:0")
     with wp.ScopedStream(stream):  # produced on a non-default stream: DLPack orders it before minkq's
         positions = wp.array(xyz, dtype=wp.vec3, device="cuda:0")
-        scene = minkq.Scene(gpu, positions, wp.array(tris, dtype=wp.int32, device="cuda:0"))
+        scene = minkq.Scene(positions, wp.array(tris, dtype=wp.int32, device="cuda:0"))  # on the arrays' GPU
         pairs = scene.query("ee", 0.04, mode="capsule_exact", leaf_exact=True, canonical=True)
     assert isinstance(pairs, wp.array) and pairs.device.is_cuda
+    assert (scene.device.backend, scene.device.ordinal) == (gpu.backend, gpu.ordinal)
     assert np.array_equal(pairs.numpy(), reference.query("ee", 0.04, mode="capsule_exact", leaf_exact=True, canonical=True))
     out = wp.empty((4096, 2), dtype=wp.int32, device="cuda:0")
     _, digest = scene.query_digest("vt", 0.04, mode="sphere", out=out)

@@ -387,7 +387,7 @@ def test_warp_graph_capture_replays_swept_steps(wp, mesh):
     gpu = minkq.Device("cuda:0")
     p0 = wp.array(xyz, dtype=wp.vec3, device="cuda:0")
     p1 = wp.array(xyz, dtype=wp.vec3, device="cuda:0")
-    scene = minkq.Scene(gpu, p0, wp.array(tris, dtype=wp.int32, device="cuda:0"))
+    scene = minkq.Scene(p0, wp.array(tris, dtype=wp.int32, device="cuda:0"), device=gpu)
     capacity = 8192
     scene.reserve(refit=True, swept=True, canonical_capacity=capacity)
     vt_pairs = wp.zeros((capacity, 2), dtype=wp.int32, device="cuda:0")
