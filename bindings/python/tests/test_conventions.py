@@ -189,3 +189,25 @@ def test_old_spellings_work_with_a_deprecation_warning(mesh):
         scene.query("vt", "sphere", R, mode="capsule_exact")
     with pytest.raises(TypeError, match="got a minkq.Device first and device= as well"):
         minkq.Scene(device, xyz, tris, device="cpu")
+
+
+def test_deprecation_warnings_name_the_callers_line(mesh):
+    """Python shows a DeprecationWarning by default where it is attributed to __main__: each
+    must name the line of the old spelling, not a line inside minkq."""
+    xyz, tris = mesh
+    device = minkq.Device("cpu")
+    scene = minkq.Scene(xyz, tris)
+    boxes = np.stack([xyz - 0.01, xyz + 0.01], axis=1).astype(np.float32)
+    old_spellings = {
+        "Scene": lambda: minkq.Scene(device, xyz, tris),
+        "from_geometries": lambda: minkq.Scene.from_geometries(device, [minkq.Geometry(xyz, tris)]),
+        "BVH": lambda: minkq.BVH(device, boxes),
+        "query": lambda: scene.query("vt", "sphere", R),
+        "query_async": lambda: scene.query_async(np.zeros((1, 2), np.int32), np.zeros(1, np.uint64), "vt", "box", R),
+        "query_into": lambda: scene.query_into(np.zeros((4096, 2), np.int32), "vt", "box", R),
+        "BVH.query_into": lambda: minkq.BVH(boxes).query_into(np.zeros((4096, 2), np.int32), "box", boxes),
+    }
+    for name, call in old_spellings.items():
+        with pytest.warns(DeprecationWarning) as record:
+            call()
+        assert [w.filename for w in record] == [__file__], name

@@ -18,10 +18,11 @@ _DEVICES: Dict[str, Device] = {}
 _DEVICES_LOCK = threading.Lock()
 
 
-def deprecated(old: str, new: str, stacklevel: int = 3) -> None:
-    """Warns that the spelling ``old`` is deprecated in favour of ``new`` (the caller's caller
-    is the line named)."""
-    warnings.warn(f"{old} is deprecated and will be removed in the next release: use {new}", DeprecationWarning, stacklevel=stacklevel + 1)
+def deprecated(old: str, new: str, depth: int = 1) -> None:
+    """Warns that the spelling ``old`` is deprecated in favour of ``new``, naming the user's line:
+    the caller of the ``depth`` minkq functions that called this one (1: its caller's caller)."""
+    message = f"{old} is deprecated and will be removed in the next release: use {new}"
+    warnings.warn(message, DeprecationWarning, stacklevel=depth + 2)
 
 
 def _device(spec: str) -> Device:
@@ -81,13 +82,14 @@ def resolve_device(device: Any, arrays: Iterable[Any]) -> Device:
     return _device("cpu")
 
 
-def old_device_form(what: str, args: Tuple[Any, ...], device: Any) -> Tuple[Tuple[Any, ...], Any]:
+def old_device_form(what: str, args: Tuple[Any, ...], device: Any, depth: int = 1) -> Tuple[Tuple[Any, ...], Any]:
     """``(args, device)`` of a call whose positional ``args`` may start with a minkq.Device (the
-    old ``what(device, ...)``): that device, with a DeprecationWarning; else ``args`` as given."""
+    old ``what(device, ...)``): that device, with a DeprecationWarning; else ``args`` as given.
+    ``depth``: the minkq functions between this one and the user's call."""
     if args and isinstance(args[0], Device):
         if device is not None:
             raise TypeError(f"{what}: got a minkq.Device first and device= as well")
-        deprecated(f"{what}(device, ...)", f"{what}(..., device=device) (or no device: it is taken from the arrays)", 4)
+        deprecated(f"{what}(device, ...)", f"{what}(..., device=device) (or no device: it is taken from the arrays)", depth + 1)
         return args[1:], args[0]
     return args, device
 
@@ -100,7 +102,7 @@ def old_mode_form(what: str, radius: Any, old: Tuple[Any, ...], mode: Any) -> Tu
             raise TypeError(f"{what}: expected {what}(kind, radius, *, mode='box', ...), got {2 + len(old)} positional arguments")
         if mode != "box":
             raise TypeError(f"{what}: got a mode positionally and mode= as well")
-        deprecated(f"{what}(kind, mode, radius) with a positional mode", f"{what}(kind, radius, mode=...)", 4)
+        deprecated(f"{what}(kind, mode, radius) with a positional mode", f"{what}(kind, radius, mode=...)", 2)
         return radius, old[0]
     if old:
         raise TypeError(f"{what}: takes kind and radius positionally, the rest as keywords; got {2 + len(old)} positional arguments")

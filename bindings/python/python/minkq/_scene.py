@@ -405,7 +405,7 @@ def _old_constructor(positional: tuple, device: Any) -> tuple:
     """``((vertices, triangles, edges), device)`` of the constructor's positional arguments, also
     in the old spelling ``Scene(device, vertices, triangles, edges=None)`` (with a
     DeprecationWarning)."""
-    positional, device = old_device_form("Scene", positional, device)
+    positional, device = old_device_form("Scene", positional, device, depth=2)
     if len(positional) > 3 and any(p is not None for p in positional[3:]):
         raise TypeError(f"Scene: expected (vertices, triangles=None, edges=None, *, device=None, ...), got {len(positional)} positional arguments")
     if positional and positional[0] is None:
