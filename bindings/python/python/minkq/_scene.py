@@ -149,10 +149,12 @@ class Scene(Closable, _StreamOrdered, _SceneQueries, _Geometries):
         self._ranges = None
 
     @classmethod
-    def from_geometries(cls, *geometries_: Any, device: Any = None) -> "Scene":
+    def from_geometries(cls, geometries: Sequence[Geometry], *_deprecated: Any, device: Any = None) -> "Scene":
         """A scene of several geometries (:class:`Geometry`: meshes, rods, particles), each with
         its own trees, pair kinds, thickness, world and collision filter, moving or static
-        (``minkq_scene_create_geometries``). Its queries report each geometry's self pairs (where
+        (``minkq_scene_create_geometries``), on ``device`` (None: the device of the geometries'
+        vertices, as for the constructor; the old spelling ``from_geometries(device,
+        geometries)`` works for one more release with a DeprecationWarning). Its queries report each geometry's self pairs (where
         it has ``self_pairs``) and the cross pairs its geometries' worlds, groups and masks allow,
         in every mode, with ``leaf_exact``, float64 and swept positions as for a one-mesh scene.
 
@@ -190,10 +192,10 @@ class Scene(Closable, _StreamOrdered, _SceneQueries, _Geometries):
         >>> scene.query("vt", 0.2).tolist()
         []
         """
-        positional, device = old_device_form("Scene.from_geometries", geometries_, device)
+        positional, device = old_device_form("Scene.from_geometries", (geometries,) + _deprecated, device)
         if len(positional) != 1:
-            raise TypeError(f"Scene.from_geometries: expected (geometries, *, device=None), got {len(geometries_)} positional arguments")
-        geometries: Sequence[Geometry] = positional[0]
+            raise TypeError(f"Scene.from_geometries: expected (geometries, *, device=None), got {1 + len(_deprecated)} positional arguments")
+        geometries = positional[0]
         vertices = [getattr(g, "vertices", None) for g in geometries] if isinstance(geometries, (list, tuple)) else []
         device = resolve_device(device, vertices)
         args, natives, dtypes, like = _native_geometries(device, geometries)
