@@ -40,6 +40,8 @@ def test_the_device_comes_from_the_arrays_or_device_in_any_spelling(mesh):
     if minkq.cuda_device_count() < 2:
         with pytest.raises((minkq.UnsupportedError, minkq.DeviceError, minkq.InvalidArgumentError), match="(?i)cuda"):
             minkq.Scene(_OnGpu(xyz), tris)
+    with pytest.raises(TypeError, match=r"vertices: expected an \(n, 3\) array, got 'cpu': the device is a keyword"):
+        minkq.Scene("cpu", xyz, tris)
     with pytest.raises(TypeError, match="device: expected 'cpu', 'cuda:N', a minkq.Device, a torch.device or a Warp device, got int"):
         minkq.Scene(xyz, tris, device=0)
     with pytest.raises(ValueError, match=r"device: minkq runs on 'cpu' and 'cuda' devices, got torch.device\('mps'\)"):

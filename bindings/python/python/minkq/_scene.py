@@ -410,6 +410,7 @@ def _old_constructor(positional: tuple, device: Any) -> tuple:
     positional, device = old_device_form("Scene", positional, device, depth=2)
     if len(positional) > 3 and any(p is not None for p in positional[3:]):
         raise TypeError(f"Scene: expected (vertices, triangles=None, edges=None, *, device=None, ...), got {len(positional)} positional arguments")
-    if positional and positional[0] is None:
-        raise TypeError("vertices: expected an (n, 3) array, got None")
+    if positional and (positional[0] is None or isinstance(positional[0], str)):
+        hint = ": the device is a keyword, Scene(vertices, triangles, device=...)" if positional[0] is not None else ""
+        raise TypeError(f"vertices: expected an (n, 3) array, got {positional[0]!r}{hint}")
     return (tuple(positional) + (None, None, None))[:3], device
