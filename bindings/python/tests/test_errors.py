@@ -31,7 +31,7 @@ def scene(device, mesh):
         (lambda v, t: (v[:, :2].copy(), t), ValueError, r"vertices: expected shape \(n, 3\), got \(25, 2\)"),
         (lambda v, t: (v.ravel(), t), ValueError, r"vertices: expected shape \(n, 3\), got \(75,\)"),
         (lambda v, t: (v, t[:, :2].copy()), ValueError, r"triangles: expected shape \(n, 3\), got \(32, 2\)"),
-        (lambda v, t: ("vertices", t), TypeError, r"vertices: expected float32 values"),
+        (lambda v, t: ("vertices", t), TypeError, r"vertices: expected an \(n, 3\) array, got 'vertices'"),
         (lambda v, t: ([[0.5, 1.0, 2.0]], [[0.0, 1.0, 2.0]]), TypeError, r"triangles: expected int32 values, got float64"),
     ],
 )
