@@ -12,7 +12,9 @@
 #     bindgen freshness and cbindgen ABI round trip, the safe crate, the Rust example);
 #   - runs pytest on the build tree (with warp-lang 1.19.0, newton 1.8.0 and usd-core from PyPI
 #     for the minkq.newton tests, Newton's examples and Warp's arrays, on Warp's "cpu" device;
-#     tests marked gpu skip with their reason where there is no GPU), builds the repaired
+#     tests marked gpu skip with their reason where there is no GPU), then on the oldest and
+#     the newest CPython minkq supports (3.9 and 3.13, found on PATH or under pyenv), each with
+#     the extension built for it (python/check-pythons.sh), builds the repaired
 #     manylinux wheel with pip (the package's PEP 517 backend: maturin with auditwheel repair),
 #     checks it with python/check-wheel.sh (a fresh venv with only numpy and pytest, every rpath $ORIGIN-only,
 #     ldd resolving libminkq/libtbb/libxxhash inside the package, and the tests and the demo run
@@ -92,6 +94,16 @@ step "pytest on the build tree"
 cp "$target/debug/lib_native.so" python/python/minkq/_native.so
 tree_env=(env PYTHONPATH="$root/bindings/python/python" LD_LIBRARY_PATH="$MINKQ_LIB_DIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}")
 "${tree_env[@]}" "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+
+# The oldest and the newest CPython minkq supports (the build's own is between): the suite on
+# each, with the extension built for it (python/check-pythons.sh; MINKQ_PYTHON_VERSIONS
+# chooses others, "" none).
+python_versions=${MINKQ_PYTHON_VERSIONS-3.9 3.13}
+if [ -n "$python_versions" ]; then
+  step "pytest on CPython $python_versions"
+  # shellcheck disable=SC2086 # the versions are words
+  python/check-pythons.sh "$build" $python_versions
+fi
 
 # [python wheel] The wheel as pip builds it (the package's backend repairs it), checked alone.
 step "wheel (pip wheel: maturin + repair), check-wheel.sh in a fresh venv"

@@ -192,8 +192,8 @@ def compare(name, V0, V1, F, device, rows, gt_rows, notes, radii, named_radii=No
     assert V0.shape == V1.shape
     nV, nF = len(V0), len(F)
     t0 = time.perf_counter()
-    scene = minkq.Scene(device, V0, F)           # float64: the guarantee in double
-    scene0 = minkq.Scene(device, V0, F)          # built at x0, refit_swept each round
+    scene = minkq.Scene(V0, F, device=device)  # float64: the guarantee in double
+    scene0 = minkq.Scene(V0, F, device=device)  # built at x0, refit_swept each round
     E = np.ascontiguousarray(scene.edges(), np.int32)
     nE = len(E)
     mean_edge = float(np.mean(np.linalg.norm(V0[E[:, 0]] - V0[E[:, 1]], axis=1)))
@@ -241,15 +241,15 @@ def compare(name, V0, V1, F, device, rows, gt_rows, notes, radii, named_radii=No
 
         def mk_rebuild():
             scene.rebuild_swept(V0, V1)
-            return scene.query("vt", "box", r), scene.query("ee", "box", r)
+            return scene.query("vt", r), scene.query("ee", r)
 
         def mk_refit():
             scene0.refit_swept(V0, V1)
-            return scene0.query("vt", "box", r), scene0.query("ee", "box", r)
+            return scene0.query("vt", r), scene0.query("ee", r)
 
         def mk_refit_capsule():
             scene0.refit_swept(V0, V1)
-            return scene0.query("vt", "capsule_exact", r), scene0.query("ee", "box", r)
+            return scene0.query("vt", r, mode="capsule_exact"), scene0.query("ee", r)
         contestants += [("minkq rebuild_swept, VT box + EE box", mk_rebuild),
                         ("minkq refit_swept, VT box + EE box", mk_refit),
                         ("minkq refit_swept, VT capsule_exact + EE box", mk_refit_capsule)]
@@ -277,7 +277,7 @@ def compare(name, V0, V1, F, device, rows, gt_rows, notes, radii, named_radii=No
             for n, (k, mode) in {"query VT box": ("vt", "box"), "query VT capsule_exact": ("vt", "capsule_exact"),
                                  "query EE box": ("ee", "box")}.items():
                 t = time.perf_counter()
-                scene0.query(k, mode, r)
+                scene0.query(k, r, mode=mode)
                 dt = time.perf_counter() - t
                 if rnd:
                     ptimes[n].append(dt)

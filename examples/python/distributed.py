@@ -47,16 +47,16 @@ def main() -> int:
 
     with minkq.mpi.Scene(comm, xyz[local], index[tris[mine]], local, mine, vertex_rank[local] == rank,
                          np.ones(len(mine), bool), device=device) as scene:
-        pairs = {kind: scene.query(kind, "box", r, leaf_exact=True) for kind in ("vt", "ee")}
+        pairs = {kind: scene.query(kind, r, leaf_exact=True) for kind in ("vt", "ee")}
         info = scene.rank_info()
     everyone = comm.gather((pairs, info), root=0)
     if rank != 0:
         return 0
-    whole = minkq.Scene(minkq.Device("cpu"), xyz, tris, vt=True, ee=True, drop_incident=True)
+    whole = minkq.Scene(xyz, tris, vt=True, ee=True, drop_incident=True)
     ok = True
     for kind in ("vt", "ee"):
         union = np.concatenate([p[kind] for p, _ in everyone])
-        single = whole.query(kind, "box", r, leaf_exact=True, canonical=True)
+        single = whole.query(kind, r, leaf_exact=True, canonical=True)
         same = len(np.unique(union, axis=0)) == len(union) and np.array_equal(np.unique(union, axis=0), single)
         ok &= same
         print(f"{kind}: {len(union)} contacts over {size} ranks, {len(single)} in one process: "

@@ -8,6 +8,7 @@ on any difference.
 """
 
 import sys
+import warnings
 
 import numpy as np
 from mpi4py import MPI
@@ -46,18 +47,18 @@ r = 0.6 / (n - 1)
 
 
 def check(scene, whole_xyz, what):
-    single = minkq.Scene(minkq.Device("cpu"), whole_xyz, tris, vt=True, ee=True, drop_incident=True)
+    single = minkq.Scene(whole_xyz, tris, vt=True, ee=True, drop_incident=True)
     for kind, mode, leaf in [("vt", "box", False), ("vt", "sphere", False), ("vt", "box", True),
                              ("ee", "box", False), ("ee", "capsule_exact", False), ("ee", "box", True)]:
-        mine = scene.query(kind, mode, r, leaf_exact=leaf)
-        counted = scene.count(kind, mode, r, leaf_exact=leaf)
+        mine = scene.query(kind, r, mode=mode, leaf_exact=leaf)
+        counted = scene.count(kind, r, mode=mode, leaf_exact=leaf)
         if counted != len(mine):
             failures.append(f"{what} {kind} {mode}: count {counted} but {len(mine)} pairs on rank {rank}")
         gathered = comm.gather(mine, root=0)
         if rank != 0:
             continue
         union = np.concatenate(gathered)
-        want = single.query(kind, mode, r, leaf_exact=leaf, canonical=True).astype(np.int64)
+        want = single.query(kind, r, mode=mode, leaf_exact=leaf, canonical=True).astype(np.int64)
         got = np.unique(union, axis=0)
         if len(got) != len(union):
             failures.append(f"{what} {kind} {mode}: {len(union) - len(got)} pairs on two ranks")
@@ -83,6 +84,29 @@ with minkq.mpi.Scene(comm, xyz[local_v], index[tris[mine_t]], local_v, mine_t, v
         if f"rank {size - 1}: vertex 0" not in str(e):
             failures.append(f"message {e}")
     check(scene, moved, "after a failed refit")
+    # The conventions of minkq.Scene: mode="box" by default, out= (an int64 array or a growing
+    # PairBuffer), the old positional mode with a DeprecationWarning.
+    box = scene.query("ee", r, canonical=True)
+    buffer = minkq.PairBuffer(np.zeros((1, 2), np.int64))
+    if not np.array_equal(scene.query("ee", r, mode="box", canonical=True, out=buffer), box):
+        failures.append("out=PairBuffer differs")
+    out = np.full((len(box) + 2, 2), -1, np.int64)
+    got = scene.query("ee", r, canonical=True, out=out)
+    if not (np.shares_memory(got, out) and np.array_equal(got, box) and (out[len(box):] == -1).all()):
+        failures.append("out= array differs")
+    try:
+        scene.query("ee", r, out=np.zeros((len(box) - 1, 2), np.int64)) if len(box) else None
+        if len(box):
+            failures.append("a short out= was accepted")
+    except minkq.CapacityError as e:
+        if e.needed != len(box):
+            failures.append(f"needed {e.needed}, not {len(box)}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if scene.count("ee", "box", r) != len(box):
+            failures.append("old positional mode differs")
+    if not any(issubclass(w.category, DeprecationWarning) for w in caught):
+        failures.append("no DeprecationWarning for a positional mode")
     # Double values are refused on every rank, not rounded to float32 (before any collective).
     try:
         scene.refit(moved[local_v].astype(np.float64))
@@ -99,6 +123,17 @@ with minkq.mpi.Scene(comm, xyz[local_v], index[tris[mine_t]], local_v, mine_t, v
     check(scene, nudged, "skin kept")
     if scene.rank_info()["ghost_updates"] == before:
         failures.append(f"rank {rank}: the skin did not keep the ghost layer")
+
+# Indices are range checked, not wrapped around (before any collective call).
+far = index[tris[mine_t]].astype(np.int64)
+if comm.allreduce(len(far) > 0, op=MPI.LAND):  # every rank refuses it, or none calls
+    far[0, 0] += 2**32
+    try:
+        minkq.mpi.Scene(comm, xyz[local_v], far, local_v, mine_t, vertex_owner[local_v] == rank, np.ones(len(mine_t), bool))
+        failures.append("an index beyond int32 wrapped around")
+    except minkq.IndexOutOfRangeError as e:
+        if "triangles[0, 0]" not in str(e):
+            failures.append(f"message {e}")
 
 everyone = comm.allgather(failures)
 if rank == 0:

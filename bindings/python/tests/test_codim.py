@@ -32,7 +32,7 @@ def rods(seed: int, scale: float = 1.0, offset: float = 0.0, float64: bool = Fal
 
 
 def pairs(scene: minkq.Scene, kind: str, mode: str, r: float, leaf_exact: bool = False) -> set:
-    return as_set(scene.query(kind, mode, r, leaf_exact=leaf_exact))
+    return as_set(scene.query(kind, r, mode=mode, leaf_exact=leaf_exact))
 
 
 def check_codim(scene: minkq.Scene, xyz: np.ndarray, edges: np.ndarray, r: float, slack: float, what: str):
@@ -64,7 +64,7 @@ def check_codim(scene: minkq.Scene, xyz: np.ndarray, edges: np.ndarray, r: float
 @pytest.mark.parametrize("seed, scale", [(1, 1e-3), (2, 1.0), (3, 1e3)])
 def test_rods_and_particles_lose_no_pair_in_any_mode_at_any_scale(device, seed, scale):
     xyz, edges = rods(seed, scale, 0.25 * scale)
-    scene = minkq.Scene(device, xyz, None, edges, **CODIM)
+    scene = minkq.Scene(xyz, None, edges, **CODIM, device=device)
     assert (scene.vertex_count, scene.triangle_count, scene.edge_count) == (320, 0, 228)
     assert np.array_equal(scene.edges(), edges)
     assert repr(scene) == "minkq.Scene(320 vertices, 0 triangles, 228 edges)"
@@ -75,8 +75,8 @@ def test_no_triangles_may_be_none_an_empty_array_or_an_empty_list(device):
     xyz, edges = rods(4)
     want = None
     for triangles in (None, np.zeros((0, 3), np.int32), [], np.zeros((0, 3), np.int64)):
-        scene = minkq.Scene(device, xyz, triangles, edges, **CODIM)
-        got = (scene.query_digest("vv", "box", 0.04), scene.query_digest("ev", "box", 0.04))
+        scene = minkq.Scene(xyz, triangles, edges, **CODIM, device=device)
+        got = (scene.query_digest("vv", 0.04), scene.query_digest("ev", 0.04))
         if want is None:
             want = got
         assert scene.triangle_count == 0
@@ -85,14 +85,14 @@ def test_no_triangles_may_be_none_an_empty_array_or_an_empty_list(device):
 
 def test_vv_pairs_once_in_order_and_ev_drops_incident_edges_only_when_asked(device):
     xyz, edges = rods(4, n=(6, 30, 20))
-    keep = minkq.Scene(device, xyz, None, edges, **CODIM, drop_incident=False)
-    drop = minkq.Scene(device, xyz, None, edges, **CODIM)
+    keep = minkq.Scene(xyz, None, edges, **CODIM, drop_incident=False, device=device)
+    drop = minkq.Scene(xyz, None, edges, **CODIM, device=device)
     edge_set = set(map(tuple, edges.tolist()))
     incident = {(v, e) for e, (a, b) in enumerate(edges.tolist()) for v in (a, b)}
     r = 0.04
     for mode in MODES:
         for leaf in (False, True):
-            raw = drop.query("vv", mode, r, leaf_exact=leaf)
+            raw = drop.query("vv", r, mode=mode, leaf_exact=leaf)
             assert len(as_set(raw)) == len(raw), f"{mode}: VV pairs reported twice"
             assert (raw[:, 0] < raw[:, 1]).all(), f"{mode}: VV order"
             assert as_set(raw) == pairs(keep, "vv", mode, r, leaf), f"{mode}: drop_incident drops no VV pair"
@@ -109,17 +109,17 @@ def test_refit_and_rebuild_give_a_fresh_scenes_pairs(device):
     before, edges = rods(5, n=(10, 20, 60))
     after, same_edges = rods(6, n=(10, 20, 60))  # the same topology, other positions
     assert np.array_equal(edges, same_edges)
-    fresh = minkq.Scene(device, after, None, edges, **CODIM)
+    fresh = minkq.Scene(after, None, edges, **CODIM, device=device)
     for call in ("refit", "rebuild"):
-        scene = minkq.Scene(device, before, None, edges, **CODIM)
+        scene = minkq.Scene(before, None, edges, **CODIM, device=device)
         getattr(scene, call)(after)
         if call == "rebuild":
             assert scene.tree_growth() == 1.0
         for kind in ("vv", "ev"):
             for mode in MODES:
                 for leaf in (False, True):
-                    got = scene.query_digest(kind, mode, 0.05, leaf_exact=leaf)
-                    want = fresh.query_digest(kind, mode, 0.05, leaf_exact=leaf)
+                    got = scene.query_digest(kind, 0.05, mode=mode, leaf_exact=leaf)
+                    want = fresh.query_digest(kind, 0.05, mode=mode, leaf_exact=leaf)
                     assert len(got[0]) > 0 and np.array_equal(got[0], want[0]) and got[1] == want[1], (call, kind, mode)
 
 
@@ -130,15 +130,15 @@ def test_float64_scenes_find_pairs_that_rounding_pulls_apart(device):
         # Particles 0 and 1 (VV); particle 4 facing edge 0, from vertex 2 to 3 along y (EV).
         xyz = np.array([[plane, 0, 0], [point, 0, 0], [plane, -1, 5], [plane, 1, 5], [point, 0, 5]], np.float64)
         edges = np.array([[2, 3]], np.int32)
-        scene = minkq.Scene(device, xyz, None, edges, **CODIM)
-        rounded = minkq.Scene(device, xyz.astype(np.float32), None, edges, **CODIM)
+        scene = minkq.Scene(xyz, None, edges, **CODIM, device=device)
+        rounded = minkq.Scene(xyz.astype(np.float32), None, edges, **CODIM, device=device)
         assert scene.dtype == np.float64 and rounded.dtype == np.float32
         for mode in MODES:
             for leaf in (False, True):
-                assert scene.query("vv", mode, r, leaf_exact=leaf).tolist() == [[0, 1]], (mode, leaf)
-                assert scene.query("ev", mode, r, leaf_exact=leaf).tolist() == [[4, 0]], (mode, leaf)
-            assert len(rounded.query("vv", mode, r, leaf_exact=True)) == 0, mode
-            assert len(rounded.query("ev", mode, r, leaf_exact=True)) == 0, mode
+                assert scene.query("vv", r, mode=mode, leaf_exact=leaf).tolist() == [[0, 1]], (mode, leaf)
+                assert scene.query("ev", r, mode=mode, leaf_exact=leaf).tolist() == [[4, 0]], (mode, leaf)
+            assert len(rounded.query("vv", r, mode=mode, leaf_exact=True)) == 0, mode
+            assert len(rounded.query("ev", r, mode=mode, leaf_exact=True)) == 0, mode
         with pytest.raises(TypeError, match="vertices: got float64 values for a scene created from float32"):
             rounded.refit(xyz)  # never rounded quietly
 
@@ -149,7 +149,7 @@ def test_float64_rods_keep_the_double_truth(device):
     xyz, edges = rods(7, 1.0, 1000.0, float64=True)
     rng = np.random.default_rng(11)
     xyz = xyz + np.spacing(xyz.astype(np.float32)).astype(np.float64) * (rng.random(xyz.shape) - 0.5)
-    scene = minkq.Scene(device, xyz, None, edges, **CODIM)
+    scene = minkq.Scene(xyz, None, edges, **CODIM, device=device)
     assert scene.dtype == np.float64
     slack = np.sqrt(3) * float(np.spacing(np.float32(1001))) + 1e-5
     check_codim(scene, xyz, edges, 0.05, slack, "float64")
@@ -177,7 +177,7 @@ def test_swept_steps_contain_every_sampled_contact_in_every_mode(device, float64
     vv, ev = sampled(x0, x1, edges, r)
     assert len(vv) > len(vv_contacts(x0, r)) + 5, "the step must add VV contacts"
     for call in ("refit_swept", "rebuild_swept"):
-        scene = minkq.Scene(device, x0, None, edges, **CODIM)
+        scene = minkq.Scene(x0, None, edges, **CODIM, device=device)
         getattr(scene, call)(x0, x1)
         assert scene.is_swept
         got = {(kind, mode): pairs(scene, kind, mode, r) for kind in ("vv", "ev") for mode in MODES}
@@ -189,7 +189,7 @@ def test_swept_steps_contain_every_sampled_contact_in_every_mode(device, float64
             assert got[kind, "sphere"] == got[kind, "capsule_exact"], (call, kind)
             assert got[kind, "capsule_exact"] <= got[kind, "capsule_ray"] <= got[kind, "box"], (call, kind)
             with pytest.raises(minkq.UnsupportedError, match="MINKQ_QUERY_LEAF_EXACT on swept positions"):
-                scene.query(kind, "box", r, leaf_exact=True)
+                scene.query(kind, r, leaf_exact=True)
         assert all(a < b for a, b in got["vv", "box"])
         assert not any(p in edges[e] for p, e in got["ev", "box"])
         scene.refit(x0)  # static again: leaf-exact runs
@@ -199,14 +199,14 @@ def test_swept_steps_contain_every_sampled_contact_in_every_mode(device, float64
 
 def test_swept_steps_at_rest_give_the_static_pairs(device):
     xyz, edges = rods(9, n=(8, 16, 40))
-    fixed = minkq.Scene(device, xyz, None, edges, **CODIM)
-    still = minkq.Scene(device, xyz, None, edges, **CODIM)
+    fixed = minkq.Scene(xyz, None, edges, **CODIM, device=device)
+    still = minkq.Scene(xyz, None, edges, **CODIM, device=device)
     still.rebuild_swept(xyz, xyz)
     static_mode = {"box": "box", "capsule_ray": "box", "sphere": "sphere", "capsule_exact": "sphere"}
     for kind in ("vv", "ev"):
         for mode in MODES:
-            want = fixed.query_digest(kind, static_mode[mode], 0.04)
-            got = still.query_digest(kind, mode, 0.04)
+            want = fixed.query_digest(kind, 0.04, mode=static_mode[mode])
+            got = still.query_digest(kind, 0.04, mode=mode)
             assert len(want[0]) > 0 and np.array_equal(got[0], want[0]) and got[1] == want[1], (kind, mode)
 
 
@@ -218,12 +218,12 @@ def test_vv_and_ev_beside_triangles_equal_a_scene_without_them(device):
     v00 = (j * n + i).ravel()
     tris = np.concatenate([np.stack([v00, v00 + 1, v00 + n + 1], 1), np.stack([v00, v00 + n + 1, v00 + n], 1)])
     tris = tris.astype(np.int32)
-    every = minkq.Scene(device, xyz, tris, vv=True, ev=True)
-    mesh_only = minkq.Scene(device, xyz, tris)
+    every = minkq.Scene(xyz, tris, vv=True, ev=True, device=device)
+    mesh_only = minkq.Scene(xyz, tris, device=device)
     edges = every.edges()
     assert np.array_equal(edges, mesh_only.edges())
-    codim = minkq.Scene(device, xyz, None, edges, **CODIM)
-    ev_only = minkq.Scene(device, xyz, tris, vt=False, ee=False, ev=True)  # edges derived, as for EE
+    codim = minkq.Scene(xyz, None, edges, **CODIM, device=device)
+    ev_only = minkq.Scene(xyz, tris, vt=False, ee=False, ev=True, device=device)  # edges derived, as for EE
     assert np.array_equal(ev_only.edges(), edges)
     r = 0.13  # beyond the grid spacing: neighbours pair
     for mode in MODES:
@@ -244,30 +244,30 @@ def test_vv_and_ev_beside_triangles_equal_a_scene_without_them(device):
 def test_every_entry_point_takes_vv_and_ev(device):
     assert minkq.KINDS == ("vt", "ee", "vv", "ev")
     xyz, edges = rods(10, n=(8, 16, 40))
-    scene = minkq.Scene(device, xyz, None, edges, **CODIM)
+    scene = minkq.Scene(xyz, None, edges, **CODIM, device=device)
     scene.reserve(refit=True, canonical_capacity=4096)
     for kind in ("vv", "ev"):
-        want = scene.query(kind, "box", 0.05, leaf_exact=True, canonical=True)
+        want = scene.query(kind, 0.05, leaf_exact=True, canonical=True)
         n = len(want)
         assert n > 10, kind
-        pairs_, digest = scene.query_digest(kind, "box", 0.05, leaf_exact=True)
+        pairs_, digest = scene.query_digest(kind, 0.05, leaf_exact=True)
         assert np.array_equal(pairs_, want)
         with pytest.raises(minkq.CapacityError) as e:
-            scene.query_into(np.zeros((n - 1, 2), np.int32), kind, "box", 0.05, leaf_exact=True)
+            scene.query(kind, 0.05, leaf_exact=True, out=np.zeros((n - 1, 2), np.int32))
         assert e.value.needed == n
         out = np.full((n + 4, 2), -1, np.int32)
-        info = scene.query_into(out, kind, "box", 0.05, leaf_exact=True, digest=True)
-        assert info.count == n and info.digest == digest and np.array_equal(out[:n], want) and (out[n:] == -1).all()
-        assert scene.work(kind, "box", 0.05, leaf_exact=True).candidates == n
+        got, got_digest = scene.query_digest(kind, 0.05, leaf_exact=True, out=out)
+        assert len(got) == n and got_digest == digest and np.array_equal(out[:n], want) and (out[n:] == -1).all()
+        assert scene.work(kind, 0.05, leaf_exact=True).candidates == n
         # Stream-ordered (on the CPU: run to completion).
         out, count = np.zeros((4096, 2), np.int32), np.zeros(1, np.uint64)
-        scene.query_async(out, count, kind, "box", 0.05, leaf_exact=True, canonical=True)
+        scene.query_async(out, count, kind, 0.05, leaf_exact=True, canonical=True)
         scene.async_status()
         assert int(count[0]) == n and np.array_equal(out[:n], want), kind
     moved = (xyz + np.float32(0.01)).astype(np.float32)
     scene.refit_async(moved)
     scene.async_status()
-    fresh = minkq.Scene(device, moved, None, edges, **CODIM)
+    fresh = minkq.Scene(moved, None, edges, **CODIM, device=device)
     assert pairs(scene, "ev", "sphere", 0.05) == pairs(fresh, "ev", "sphere", 0.05)
     # The fused call stays VT + EE: a scene without them refuses it.
     with pytest.raises(minkq.InvalidArgumentError, match="VT query on a scene created without MINKQ_SCENE_VT"):
@@ -281,53 +281,53 @@ def test_kinds_a_scene_was_made_without_are_refused(device):
         name = kind.upper()
         message = f"^{name} query on a scene created without MINKQ_SCENE_{name}$"
         with pytest.raises(minkq.InvalidArgumentError, match=message):
-            scene.query(kind, "box", 0.1)
+            scene.query(kind, 0.1)
 
-    mesh = minkq.Scene(device, xyz[:3], np.array([[0, 1, 2]], np.int32))
+    mesh = minkq.Scene(xyz[:3], np.array([[0, 1, 2]], np.int32), device=device)
     for kind in ("vv", "ev"):
         refused(mesh, kind)
         with pytest.raises(minkq.InvalidArgumentError):
-            mesh.work(kind, "box", 0.1)
+            mesh.work(kind, 0.1)
         with pytest.raises(minkq.InvalidArgumentError):
-            mesh.query_into(np.zeros((4, 2), np.int32), kind, "box", 0.1)
+            mesh.query(kind, 0.1, out=np.zeros((4, 2), np.int32))
     # Loose particles: vertices only, VV alone.
-    particles = minkq.Scene(device, xyz, None, vt=False, ee=False, vv=True)
+    particles = minkq.Scene(xyz, None, vt=False, ee=False, vv=True, device=device)
     assert particles.edge_count == 0
-    assert particles.query("vv", "sphere", 0.1, leaf_exact=True).tolist() == [[0, 3]]
+    assert particles.query("vv", 0.1, mode="sphere", leaf_exact=True).tolist() == [[0, 3]]
     for kind in ("vt", "ee", "ev"):
         refused(particles, kind)
-    rod = minkq.Scene(device, xyz, None, np.array([[0, 1]], np.int32), vt=False, ee=False, ev=True, drop_incident=False)
-    assert rod.query("ev", "box", 0.1, leaf_exact=True, canonical=True).tolist() == [[0, 0], [1, 0], [3, 0]]
+    rod = minkq.Scene(xyz, None, np.array([[0, 1]], np.int32), vt=False, ee=False, ev=True, drop_incident=False, device=device)
+    assert rod.query("ev", 0.1, leaf_exact=True, canonical=True).tolist() == [[0, 0], [1, 0], [3, 0]]
     refused(rod, "vv")
     # Creation: no kind at all, an edge past the vertices, a NaN; sphere mode stays EE's refusal.
     with pytest.raises(minkq.InvalidArgumentError, match="MINKQ_SCENE_VV"):
-        minkq.Scene(device, xyz, None, vt=False, ee=False)
+        minkq.Scene(xyz, None, vt=False, ee=False, device=device)
     with pytest.raises(minkq.IndexOutOfRangeError):
-        minkq.Scene(device, xyz, None, np.array([[0, 4]], np.int32), **CODIM)
+        minkq.Scene(xyz, None, np.array([[0, 4]], np.int32), **CODIM, device=device)
     with pytest.raises(minkq.NonFiniteError, match="vertex 1 "):
-        minkq.Scene(device, np.array([[0, 0, 0], [np.nan, 0, 0]], np.float32), None, np.array([[0, 1]]), **CODIM)
-    both = minkq.Scene(device, xyz, None, np.array([[0, 1]], np.int32), vt=False, vv=True, ev=True)
+        minkq.Scene(np.array([[0, 0, 0], [np.nan, 0, 0]], np.float32), None, np.array([[0, 1]]), **CODIM, device=device)
+    both = minkq.Scene(xyz, None, np.array([[0, 1]], np.int32), vt=False, vv=True, ev=True, device=device)
     with pytest.raises(minkq.InvalidArgumentError, match="sphere mode"):
-        both.query("ee", "sphere", 0.1)
-    assert both.query("ev", "sphere", 0.1).tolist() == [[3, 0]]
+        both.query("ee", 0.1, mode="sphere")
+    assert both.query("ev", 0.1, mode="sphere").tolist() == [[3, 0]]
     with pytest.raises(ValueError, match="kind: expected one of 'vt', 'ee', 'vv', 'ev', got 've'"):
-        both.query("ve", "box", 0.1)
+        both.query("ve", 0.1)
 
 
 def test_warp_cpu_arrays_in_and_out(wp, device):
     xyz, edges = rods(12, n=(8, 16, 40))
     positions = wp.array(xyz, dtype=wp.vec3, device="cpu")
-    scene = minkq.Scene(device, positions, None, wp.array(edges, dtype=wp.int32, device="cpu"), **CODIM)
-    reference = minkq.Scene(device, xyz, None, edges, **CODIM)
+    scene = minkq.Scene(positions, None, wp.array(edges, dtype=wp.int32, device="cpu"), **CODIM, device=device)
+    reference = minkq.Scene(xyz, None, edges, **CODIM, device=device)
     for kind in ("vv", "ev"):
-        got = scene.query(kind, "box", 0.05, leaf_exact=True, canonical=True)
+        got = scene.query(kind, 0.05, leaf_exact=True, canonical=True)
         assert isinstance(got, wp.array) and got.dtype == wp.int32
-        want = reference.query(kind, "box", 0.05, leaf_exact=True, canonical=True)
+        want = reference.query(kind, 0.05, leaf_exact=True, canonical=True)
         assert len(want) > 10 and np.array_equal(got.numpy(), want), kind
         out = wp.full((4096, 2), -7, dtype=wp.int32, device="cpu")
-        info = scene.query_into(out, kind, "sphere", 0.05, canonical=True)
-        assert info.count == len(reference.query(kind, "sphere", 0.05))
+        got = scene.query(kind, 0.05, mode="sphere", canonical=True, out=out)
+        assert len(got) == len(reference.query(kind, 0.05, mode="sphere"))
     moved = (xyz * np.float32(0.9)).astype(np.float32)
     scene.refit(wp.array(moved, dtype=wp.vec3, device="cpu"))
     reference.refit(moved)
-    assert as_set(scene.query("ev", "sphere", 0.05).numpy()) == pairs(reference, "ev", "sphere", 0.05)
+    assert as_set(scene.query("ev", 0.05, mode="sphere").numpy()) == pairs(reference, "ev", "sphere", 0.05)

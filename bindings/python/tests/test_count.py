@@ -24,8 +24,8 @@ def test_scene_count_equals_the_stored_query_in_every_kind_and_mode(float64):
     rods, edges = rods_and_particles(5, 12, 20, 80)
     device = minkq.Device("cpu")
     dtype = np.float64 if float64 else np.float32
-    mesh = minkq.Scene(device, xyz.astype(dtype), tris, drop_incident=True)
-    codim = minkq.Scene(device, rods.astype(dtype), None, edges=edges, vt=False, ee=False, vv=True, ev=True)
+    mesh = minkq.Scene(xyz.astype(dtype), tris, drop_incident=True, device=device)
+    codim = minkq.Scene(rods.astype(dtype), None, edges=edges, vt=False, ee=False, vv=True, ev=True, device=device)
     counted = 0
     for scene, kinds, r in ((mesh, ("vt", "ee"), 0.02), (codim, ("vv", "ev"), 0.05)):
         for kind in kinds:
@@ -33,29 +33,29 @@ def test_scene_count_equals_the_stored_query_in_every_kind_and_mode(float64):
                 if kind == "ee" and mode == "sphere":
                     continue
                 for leaf in (False, True):
-                    n = scene.count(kind, mode, r, leaf_exact=leaf)
+                    n = scene.count(kind, r, mode=mode, leaf_exact=leaf)
                     assert isinstance(n, int)
-                    assert n == len(scene.query(kind, mode, r, leaf_exact=leaf)), (kind, mode, leaf)
+                    assert n == len(scene.query(kind, r, mode=mode, leaf_exact=leaf)), (kind, mode, leaf)
                     counted += n
     assert counted > 1000
 
 
 def test_count_refuses_what_query_refuses():
     xyz, tris = soup(3, 20)
-    scene = minkq.Scene(minkq.Device("cpu"), xyz, tris)
+    scene = minkq.Scene(xyz, tris)
     with pytest.raises(minkq.InvalidArgumentError):
-        scene.count("ee", "sphere", 0.1)
+        scene.count("ee", 0.1, mode="sphere")
     with pytest.raises(ValueError):
-        scene.count("vt", "box", -1.0)
+        scene.count("vt", -1.0)
     with pytest.raises(minkq.InvalidArgumentError):
-        scene.count("vv", "box", 0.1)  # a kind the scene was made without
+        scene.count("vv", 0.1)  # a kind the scene was made without
 
 
 def test_bvh_count_equals_the_stored_query_for_every_shape():
     rng = np.random.default_rng(7)
     lo = rng.uniform(0, 10, (400, 3)).astype(np.float32)
     boxes = np.stack([lo, lo + rng.uniform(0, 0.5, (400, 3)).astype(np.float32)], 1)
-    bvh = minkq.BVH(minkq.Device("cpu"), boxes)
+    bvh = minkq.BVH(boxes)
     centres = rng.uniform(0, 10, (200, 3)).astype(np.float32)
     segments = np.stack([centres, centres + rng.uniform(-1, 1, (200, 3)).astype(np.float32)], 1)
     cases = [("sphere", centres, 0.3, m) for m in ("box", "sphere")]

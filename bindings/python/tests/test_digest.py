@@ -95,7 +95,7 @@ class CScene:
         self.scene = ctypes.c_void_p()
         assert lib.minkq_scene_create(self.device, ctypes.byref(desc), ctypes.byref(self.scene)) == 0
 
-    def query(self, kind, mode, r, flags):
+    def c_query(self, kind, mode, r, flags):
         q = QueryDesc(KIND[kind], MODE[mode], flags | DIGEST, ctypes.c_float(r))
         info = QueryInfo()
         status = self.lib.minkq_scene_query(self.scene, ctypes.byref(q), None, ctypes.c_size_t(0), 0, ctypes.byref(info))
@@ -163,17 +163,17 @@ def test_pairs_and_digests_equal_the_c_api(device, make, r):
     xyz, tris = make()
     c_scene = CScene(load_library(), xyz, tris)
     try:
-        scene = minkq.Scene(device, xyz, tris)
+        scene = minkq.Scene(xyz, tris, device=device)
         for kind, mode in [("vt", "box"), ("vt", "sphere"), ("ee", "box"), ("ee", "capsule_ray"), ("ee", "capsule_exact")]:
             for leaf_exact in (False, True):
-                pairs, digest = scene.query_digest(kind, mode, r, leaf_exact=leaf_exact)
-                c_pairs, c_digest = c_scene.query(kind, mode, r, LEAF_EXACT if leaf_exact else 0)
+                pairs, digest = scene.query_digest(kind, r, mode=mode, leaf_exact=leaf_exact)
+                c_pairs, c_digest = c_scene.c_query(kind, mode, r, LEAF_EXACT if leaf_exact else 0)
                 assert np.array_equal(pairs, c_pairs), (kind, mode, leaf_exact)
                 assert digest == c_digest, (kind, mode, leaf_exact)
                 assert digest == xxh64(pairs.astype("<i4").tobytes())
                 out = np.empty((len(pairs), 2), np.int32)
-                info = scene.query_into(out, kind, mode, r, leaf_exact=leaf_exact, digest=True)
-                assert (info.count, info.digest) == (len(pairs), digest)
+                got, got_digest = scene.query_digest(kind, r, mode=mode, leaf_exact=leaf_exact, out=out)
+                assert (len(got), got_digest) == (len(pairs), digest)
                 assert len(pairs) > 0
     finally:
         c_scene.close()
@@ -188,8 +188,8 @@ def test_digest_of_the_default_demo_scene_equals_the_c_api(device):
     r = float(np.float32(demo.DEFAULT_FACTOR * demo.mean_edge_length(xyz, demo.derive_edges(tris))))
     c_scene = CScene(load_library(), xyz, tris)
     try:
-        pairs, digest = minkq.Scene(device, xyz, tris).query_digest("vt", "sphere", r, leaf_exact=True)
-        c_pairs, c_digest = c_scene.query("vt", "sphere", r, LEAF_EXACT)
+        pairs, digest = minkq.Scene(xyz, tris, device=device).query_digest("vt", r, mode="sphere", leaf_exact=True)
+        c_pairs, c_digest = c_scene.c_query("vt", "sphere", r, LEAF_EXACT)
         assert len(pairs) == demo.REFERENCE_CONTACTS["vt"]
         assert digest == c_digest and np.array_equal(pairs, c_pairs)
     finally:

@@ -22,7 +22,7 @@ def mesh():
 
 def _pairs(scene):
     return {
-        (kind, mode): scene.query(kind, mode, R, canonical=True)
+        (kind, mode): scene.query(kind, R, mode=mode, canonical=True)
         for kind, mode in (("vt", "box"), ("vt", "sphere"), ("ee", "box"), ("ee", "capsule_exact"))
     }
 
@@ -42,16 +42,16 @@ def test_other_dtypes_give_the_pairs_of_float32_int32(device, mesh, vdtype, tdty
         xyz = xyz.astype(np.float16).astype(np.float32)  # exactly representable in both
     if np.dtype(tdtype) == np.int16 and tris.max() > np.iinfo(np.int16).max:
         pytest.skip("mesh too large for int16 indices")
-    exact = _pairs(minkq.Scene(device, xyz, tris))
-    other = minkq.Scene(device, xyz.astype(vdtype), tris.astype(tdtype))
+    exact = _pairs(minkq.Scene(xyz, tris, device=device))
+    other = minkq.Scene(xyz.astype(vdtype), tris.astype(tdtype), device=device)
     _same(exact, _pairs(other))
 
 
 def test_float64_refit_rebuild_edges_and_bvh_queries(device, mesh):
     xyz, tris = mesh
     moved = xyz * np.float32(1.01)
-    exact = minkq.Scene(device, xyz, tris)
-    other = minkq.Scene(device, xyz.astype(np.float64), tris.astype(np.int64), edges=exact.edges().astype(np.int64))
+    exact = minkq.Scene(xyz, tris, device=device)
+    other = minkq.Scene(xyz.astype(np.float64), tris.astype(np.int64), edges=exact.edges().astype(np.int64), device=device)
     exact.refit(moved)
     other.refit(moved.astype(np.float64))
     _same(_pairs(exact), _pairs(other))
@@ -60,7 +60,7 @@ def test_float64_refit_rebuild_edges_and_bvh_queries(device, mesh):
     _same(_pairs(exact), _pairs(other))
 
     boxes = np.concatenate([xyz[tris].min(1), xyz[tris].max(1)], axis=1)
-    bvh32, bvh64 = minkq.BVH(device, boxes), minkq.BVH(device, boxes.astype(np.float64))
+    bvh32, bvh64 = minkq.BVH(boxes, device=device), minkq.BVH(boxes.astype(np.float64), device=device)
     for shape, queries, r in (("sphere", xyz, R), ("capsule", xyz[exact.edges()], R), ("box", boxes, 0.0)):
         a = bvh32.query(shape, queries, r, canonical=True)
         b = bvh64.query(shape, queries.astype(np.float64), r, canonical=True)
@@ -91,14 +91,14 @@ def test_index_that_does_not_fit_in_int32_is_refused_naming_the_element(device, 
     bad = tris.astype(np.int64)
     bad[4, 1] = value
     with pytest.raises(minkq.IndexOutOfRangeError, match=rf"triangles\{where[:-1]}\] = {value} does not fit in int32"):
-        minkq.Scene(device, xyz, bad)
+        minkq.Scene(xyz, bad, device=device)
     with pytest.raises(minkq.IndexOutOfRangeError, match=r"edges\[0, 0\] = 4294967296"):
-        minkq.Scene(device, xyz, tris, edges=np.array([[2**32, 1]], np.uint64))
+        minkq.Scene(xyz, tris, edges=np.array([[2**32, 1]], np.uint64), device=device)
     # Never wrapped around: 2**32 + 1 as int32 would be the valid index 1.
     wrapped = tris.astype(np.int64)
     wrapped[0, 0] = 2**32 + 1
     with pytest.raises(minkq.IndexOutOfRangeError, match="does not fit in int32"):
-        minkq.Scene(device, xyz, wrapped)
+        minkq.Scene(xyz, wrapped, device=device)
 
 
 def test_index_in_int32_but_past_the_vertices_is_the_library_s_error(device, mesh):
@@ -106,7 +106,7 @@ def test_index_in_int32_but_past_the_vertices_is_the_library_s_error(device, mes
     bad = tris.astype(np.int64)
     bad[2, 0] = len(xyz)
     with pytest.raises(minkq.IndexOutOfRangeError) as info:
-        minkq.Scene(device, xyz, bad)
+        minkq.Scene(xyz, bad, device=device)
     assert "does not fit" not in str(info.value)  # the C library's own index check
 
 
@@ -125,9 +125,17 @@ class _Foreign:
 
 def test_arrays_of_other_libraries_stay_strict(device, mesh):
     xyz, tris = mesh
-    minkq.Scene(device, _Foreign(xyz), _Foreign(tris))  # exact dtypes: read in place
-    assert minkq.Scene(device, _Foreign(xyz.astype(np.float64)), tris).dtype == np.float64  # read in place
+    minkq.Scene(_Foreign(xyz), _Foreign(tris), device=device)  # exact dtypes: read in place
+    assert minkq.Scene(_Foreign(xyz.astype(np.float64)), tris, device=device).dtype == np.float64  # read in place
     with pytest.raises(TypeError, match=r"vertices: expected a float32 or float64 array, got float16"):
-        minkq.Scene(device, _Foreign(xyz.astype(np.float16)), tris)
-    with pytest.raises(TypeError, match=r"triangles: expected a int32 array, got int64"):
-        minkq.Scene(device, xyz, _Foreign(tris.astype(np.int64)))
+        minkq.Scene(_Foreign(xyz.astype(np.float16)), tris, device=device)
+    # Foreign integer indices (PyTorch's int64 faces) are converted as numpy's are, range checked.
+    want = minkq.Scene(xyz, tris, device=device).query("vt", 0.05, canonical=True)
+    got = minkq.Scene(xyz, _Foreign(tris.astype(np.int64)), device=device).query("vt", 0.05, canonical=True)
+    assert np.array_equal(got, want)
+    far = tris.astype(np.int64)
+    far[1, 2] = 2**32 + int(far[1, 2])  # would wrap around to a valid index in int32
+    with pytest.raises(minkq.IndexOutOfRangeError, match=r"triangles\[1, 2\] = 4294967\d+ does not fit in int32"):
+        minkq.Scene(xyz, _Foreign(far), device=device)
+    with pytest.raises(TypeError, match=r"triangles: expected a int32 array, got float32"):
+        minkq.Scene(xyz, _Foreign(tris.astype(np.float32)), device=device)

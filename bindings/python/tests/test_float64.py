@@ -61,36 +61,36 @@ def test_the_cases_are_within_r_in_double_and_beyond_r_in_float():
 
 @pytest.mark.parametrize("plane, point", CASES)
 def test_pairs_that_rounding_pulls_apart_are_found_in_every_mode(device, plane, point):
-    vt64 = minkq.Scene(device, vertex_over_triangle(plane, point), TRIANGLE, ee=False)
-    ee64 = minkq.Scene(device, crossed_edges(plane, point), NO_TRIANGLES, CROSSED, vt=False)
+    vt64 = minkq.Scene(vertex_over_triangle(plane, point), TRIANGLE, ee=False, device=device)
+    ee64 = minkq.Scene(crossed_edges(plane, point), NO_TRIANGLES, CROSSED, vt=False, device=device)
     assert vt64.dtype == ee64.dtype == np.float64
     assert repr(vt64) == "minkq.Scene(4 vertices, 1 triangles, 0 edges, float64)"
     for leaf_exact in (False, True):
         for mode in VT_MODES:
-            assert vt64.query("vt", mode, R, leaf_exact=leaf_exact).tolist() == [[3, 0]], (mode, leaf_exact)
+            assert vt64.query("vt", R, mode=mode, leaf_exact=leaf_exact).tolist() == [[3, 0]], (mode, leaf_exact)
         for mode in EE_MODES:
-            assert ee64.query("ee", mode, R, leaf_exact=leaf_exact).tolist() == [[0, 1]], (mode, leaf_exact)
+            assert ee64.query("ee", R, mode=mode, leaf_exact=leaf_exact).tolist() == [[0, 1]], (mode, leaf_exact)
     # The rounded positions as a float32 scene (what float64 input used to become): the leaf
     # test rightly finds them beyond r.
-    vt32 = minkq.Scene(device, vertex_over_triangle(plane, point).astype(np.float32), TRIANGLE, ee=False)
-    ee32 = minkq.Scene(device, crossed_edges(plane, point).astype(np.float32), NO_TRIANGLES, CROSSED, vt=False)
+    vt32 = minkq.Scene(vertex_over_triangle(plane, point).astype(np.float32), TRIANGLE, ee=False, device=device)
+    ee32 = minkq.Scene(crossed_edges(plane, point).astype(np.float32), NO_TRIANGLES, CROSSED, vt=False, device=device)
     assert vt32.dtype == ee32.dtype == np.float32
-    assert len(vt32.query("vt", "box", R, leaf_exact=True)) == 0
-    assert len(ee32.query("ee", "box", R, leaf_exact=True)) == 0
+    assert len(vt32.query("vt", R, leaf_exact=True)) == 0
+    assert len(ee32.query("ee", R, leaf_exact=True)) == 0
 
 
 def test_float64_refit_and_rebuild_find_the_pairs_rounding_pulls_apart(device):
     (plane, point), (plane2, point2) = CASES[0], CASES[-1]
     far = vertex_over_triangle(plane, point)
     far[3, 0] += 1.0  # the vertex a whole unit away: no pair
-    scene = minkq.Scene(device, far, TRIANGLE, ee=False)
-    assert len(scene.query("vt", "box", R)) == 0
+    scene = minkq.Scene(far, TRIANGLE, ee=False, device=device)
+    assert len(scene.query("vt", R)) == 0
     scene.refit(vertex_over_triangle(plane, point))
-    assert scene.query("vt", "box", R, leaf_exact=True).tolist() == [[3, 0]]
+    assert scene.query("vt", R, leaf_exact=True).tolist() == [[3, 0]]
     scene.rebuild(far)
-    assert len(scene.query("vt", "box", R)) == 0
+    assert len(scene.query("vt", R)) == 0
     scene.rebuild(vertex_over_triangle(plane2, point2))
-    assert scene.query("vt", "sphere", R, leaf_exact=True).tolist() == [[3, 0]]
+    assert scene.query("vt", R, mode="sphere", leaf_exact=True).tolist() == [[3, 0]]
 
 
 def test_float64_numpy_vertices_are_read_in_place_and_other_layouts_copied_once_in_float64():
@@ -110,30 +110,30 @@ def test_float64_numpy_vertices_are_read_in_place_and_other_layouts_copied_once_
 
 
 def test_lists_of_python_floats_make_a_float64_scene(device):
-    scene = minkq.Scene(device, [[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], [[0, 1, 2]])
+    scene = minkq.Scene([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], [[0, 1, 2]], device=device)
     assert scene.dtype == np.float64
-    assert scene.query("vt", "sphere", 0.2, leaf_exact=True).tolist() == [[3, 0]]
-    ints = minkq.Scene(device, [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    assert scene.query("vt", 0.2, mode="sphere", leaf_exact=True).tolist() == [[3, 0]]
+    ints = minkq.Scene([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], device=device)
     assert ints.dtype == np.float32
 
 
 def test_float32_input_is_converted_exactly_on_a_float64_scene(device):
     xyz, tris = rolled_sheet(9, 3)
     moved = xyz * np.float32(1.01)
-    exact = minkq.Scene(device, xyz, tris)
-    wide = minkq.Scene(device, xyz.astype(np.float64), tris)
+    exact = minkq.Scene(xyz, tris, device=device)
+    wide = minkq.Scene(xyz.astype(np.float64), tris, device=device)
     assert (exact.dtype, wide.dtype) == (np.float32, np.float64)
     for call in ("refit", "rebuild"):
         getattr(exact, call)(moved)
         getattr(wide, call)(moved)  # float32 values are doubles exactly: no rounding, rho 0
         for kind, mode in (("vt", "sphere"), ("ee", "capsule_exact")):
-            a, b = exact.query_digest(kind, mode, 0.05), wide.query_digest(kind, mode, 0.05)
+            a, b = exact.query_digest(kind, 0.05, mode=mode), wide.query_digest(kind, 0.05, mode=mode)
             assert len(a[0]) and a[1] == b[1], (call, kind, mode)
 
 
 def test_float64_input_is_refused_on_a_float32_scene(device):
     xyz, tris = rolled_sheet(5, 0)
-    scene = minkq.Scene(device, xyz, tris)
+    scene = minkq.Scene(xyz, tris, device=device)
     message = r"vertices: got float64 values for a scene created from float32 vertices.*create the scene from float64"
     for call in (scene.refit, scene.rebuild):
         with pytest.raises(TypeError, match=message):
@@ -152,7 +152,7 @@ def test_float64_input_is_refused_on_a_float32_scene(device):
 
 def test_non_float64_arrays_are_refused_where_nothing_is_converted(device):
     xyz, tris = rolled_sheet(5, 0)
-    scene = minkq.Scene(device, xyz.astype(np.float64), tris)
+    scene = minkq.Scene(xyz.astype(np.float64), tris, device=device)
     with pytest.raises(TypeError, match=r"vertices: expected float64 values, the dtype of the scene's vertices, got "
                                         r"float32 \(test_interop, host memory\).*never converted"):
         scene.refit(DLPackOnly(xyz))
@@ -162,9 +162,9 @@ def test_non_float64_arrays_are_refused_where_nothing_is_converted(device):
                                             r"got float32.*stream-ordered calls"):
             call(xyz)
     with pytest.raises(TypeError, match=r"vertices: expected a float32 or float64 array, got int32"):
-        minkq.Scene(device, DLPackOnly(xyz.astype(np.int32)), tris)
+        minkq.Scene(DLPackOnly(xyz.astype(np.int32)), tris, device=device)
     with pytest.raises(TypeError, match=r"vertices: expected float32 or float64 values, got float128"):
-        minkq.Scene(device, xyz.astype(np.longdouble), tris)
+        minkq.Scene(xyz.astype(np.longdouble), tris, device=device)
 
 
 def test_a_double_beyond_the_float_range_is_non_finite_naming_the_vertex(device):
@@ -173,29 +173,29 @@ def test_a_double_beyond_the_float_range_is_non_finite_naming_the_vertex(device)
     bad = xyz.copy()
     bad[7, 1] = 1e39
     with pytest.raises(minkq.NonFiniteError, match="vertex 7 "):
-        minkq.Scene(device, bad, tris)
-    scene = minkq.Scene(device, xyz, tris)
-    expected = scene.query_digest("ee", "box", 0.05)[1]
+        minkq.Scene(bad, tris, device=device)
+    scene = minkq.Scene(xyz, tris, device=device)
+    expected = scene.query_digest("ee", 0.05)[1]
     for call in (scene.refit, scene.rebuild):
         with pytest.raises(minkq.NonFiniteError, match="vertex 7 "):
             call(bad)
-    assert scene.query_digest("ee", "box", 0.05)[1] == expected  # the positions were kept
+    assert scene.query_digest("ee", 0.05)[1] == expected  # the positions were kept
 
 
 def test_stream_ordered_calls_take_float64_on_the_cpu(device):
     (plane, point) = CASES[1]
     far = vertex_over_triangle(plane, point)
     far[3, 0] += 1.0
-    scene = minkq.Scene(device, far, TRIANGLE, ee=False)
+    scene = minkq.Scene(far, TRIANGLE, ee=False, device=device)
     scene.reserve(refit=True, rebuild=True, canonical_capacity=8)
     pairs, count = np.zeros((8, 2), np.int32), np.zeros(1, np.uint64)
     near = vertex_over_triangle(plane, point)
     scene.refit_async(near)
-    scene.query_async(pairs, count, "vt", "box", R, leaf_exact=True, canonical=True)
+    scene.query_async(pairs, count, "vt", R, leaf_exact=True, canonical=True)
     scene.async_status()
     assert pairs[: int(count[0])].tolist() == [[3, 0]]
     scene.rebuild_async(far)
-    scene.query_async(pairs, count, "vt", "box", R)
+    scene.query_async(pairs, count, "vt", R)
     scene.async_status()
     assert int(count[0]) == 0
     bad = near.copy()
@@ -210,19 +210,19 @@ def test_warp_float64_arrays_are_read_in_place(wp, device):
     near = vertex_over_triangle(plane, point)
     rows = wp.array(near, dtype=wp.vec3d, device="cpu")
     assert _interop.view(rows, "vertices", device).address == rows.ptr  # in place
-    scene = minkq.Scene(device, rows, TRIANGLE, ee=False)
+    scene = minkq.Scene(rows, TRIANGLE, ee=False, device=device)
     assert scene.dtype == np.float64
-    pairs = scene.query("vt", "box", R, leaf_exact=True)
+    pairs = scene.query("vt", R, leaf_exact=True)
     assert isinstance(pairs, wp.array) and pairs.numpy().tolist() == [[3, 0]]
     far = near.copy()
     far[3, 0] += 1.0
     scene.refit(wp.array(far, dtype=wp.float64, device="cpu"))  # (n, 3) float64
-    assert len(scene.query("vt", "box", R)) == 0
+    assert len(scene.query("vt", R)) == 0
     scene.reserve(refit=True)
     scene.refit_async(rows)
-    assert scene.query("vt", "box", R, leaf_exact=True).numpy().tolist() == [[3, 0]]
+    assert scene.query("vt", R, leaf_exact=True).numpy().tolist() == [[3, 0]]
     with pytest.raises(TypeError, match=r"vertices: expected float64 values.*got float32 \(warp, host memory\)"):
         scene.refit(wp.array(far.astype(np.float32), dtype=wp.vec3, device="cpu"))
     # Warp float32 vec3 arrays keep making float32 scenes (minkq.newton passes them).
-    assert minkq.Scene(device, wp.array(far.astype(np.float32), dtype=wp.vec3, device="cpu"), TRIANGLE).dtype == np.float32
+    assert minkq.Scene(wp.array(far.astype(np.float32), dtype=wp.vec3, device="cpu"), TRIANGLE, device=device).dtype == np.float32
 

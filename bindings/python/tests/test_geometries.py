@@ -76,9 +76,9 @@ def pair_scenes(device):
     and the one-mesh scene of both concatenated (the reference)."""
     body = minkq.Geometry(*BODY, kinds=ALL_KINDS, self_pairs=False, static=True)
     cloth = minkq.Geometry(*CLOTH, kinds=ALL_KINDS)
-    scene = minkq.Scene.from_geometries(device, [body, cloth])
+    scene = minkq.Scene.from_geometries([body, cloth], device=device)
     xyz, tris, edges = concatenated([BODY, CLOTH])
-    one = minkq.Scene(device, xyz, tris, edges, vv=True, ev=True)
+    one = minkq.Scene(xyz, tris, edges, vv=True, ev=True, device=device)
     return scene, one
 
 
@@ -109,10 +109,10 @@ def test_geometry_of_pairs_follows_the_ranges(device):
     elements (particles: no triangles or edges) and with local ids from its first."""
     particles = minkq.Geometry(CLOTH[0][::7] + np.float32([0, 0, 0.01]), kinds=("vt", "vv", "ev"))
     cloth = minkq.Geometry(*CLOTH, kinds=ALL_KINDS)
-    scene = minkq.Scene.from_geometries(device, [cloth, particles, cloth])
+    scene = minkq.Scene.from_geometries([cloth, particles, cloth], device=device)
     assert scene.geometry_range(1, "triangle") == (len(CLOTH[1]), 0)
     for kind in ALL_KINDS:
-        pairs = scene.query(kind, "box", RADII[kind])
+        pairs = scene.query(kind, RADII[kind])
         geometries, local = scene.geometry_of_pairs(kind, pairs)
         assert geometries.shape == local.shape == pairs.shape and len(pairs) > 10, kind
         elements = {"vt": ("vertex", "triangle"), "ee": ("edge",) * 2, "vv": ("vertex",) * 2, "ev": ("vertex", "edge")}
@@ -133,8 +133,8 @@ def test_geometry_of_pairs_follows_the_ranges(device):
 def test_cross_and_self_pairs_are_the_concatenated_meshes_pairs(pair_scenes, kind, leaf_exact):
     scene, one = pair_scenes
     for mode in EE_MODES if kind == "ee" else MODES:
-        got = split(scene, kind, scene.query(kind, mode, RADII[kind], leaf_exact=leaf_exact))
-        want = split(scene, kind, one.query(kind, mode, RADII[kind], leaf_exact=leaf_exact))
+        got = split(scene, kind, scene.query(kind, RADII[kind], mode=mode, leaf_exact=leaf_exact))
+        want = split(scene, kind, one.query(kind, RADII[kind], mode=mode, leaf_exact=leaf_exact))
         cross = {p for g, ps in want.items() if g[0] != g[1] for p in ps}
         assert len(cross) > 10, f"{kind} {mode}: the scene needs cross pairs"
         assert {p for g, ps in got.items() if g[0] != g[1] for p in ps} == cross, (kind, mode, leaf_exact)
@@ -152,11 +152,11 @@ def test_self_flags_choose_each_geometrys_own_pairs(device, pair_scenes, kind):
     r = 0.1
     for drop in (True, False):
         body = minkq.Geometry(*BODY, kinds=ALL_KINDS, drop_incident=drop)
-        scene = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH, kinds=ALL_KINDS, self_pairs=False)])
-        got = split(scene, kind, scene.query(kind, "box", r, leaf_exact=True))
+        scene = minkq.Scene.from_geometries([body, minkq.Geometry(*CLOTH, kinds=ALL_KINDS, self_pairs=False)], device=device)
+        got = split(scene, kind, scene.query(kind, r, leaf_exact=True))
         assert (1, 1) not in got, kind
         if drop:
-            want = split(scene, kind, one.query(kind, "box", r, leaf_exact=True))
+            want = split(scene, kind, one.query(kind, r, leaf_exact=True))
             assert got[(0, 0)] == want[(0, 0)], kind
             dropped = got[(0, 0)]
         elif kind != "vv":  # VV pairs are never incident
@@ -178,10 +178,10 @@ def test_the_cross_pairs_contain_the_double_oracle(pair_scenes):
         want = set(zip(*map(np.ndarray.tolist, np.nonzero(close))))
         assert len(want) > 10
         for mode in EE_MODES if kind == "ee" else MODES:
-            got = split(scene, kind, scene.query(kind, mode, R))
+            got = split(scene, kind, scene.query(kind, R, mode=mode))
             cross = got.get((0, 1), set()) | got.get((1, 0), set())
             assert want <= cross, f"{kind} {mode} lost {sorted(want - cross)[:5]}"
-        leaf = split(scene, kind, scene.query(kind, "box", R, leaf_exact=True))
+        leaf = split(scene, kind, scene.query(kind, R, leaf_exact=True))
         cross = leaf.get((0, 1), set()) | leaf.get((1, 0), set())
         assert want <= cross and all(loose[kind][p] for p in cross), kind
 
@@ -190,22 +190,22 @@ def test_groups_and_masks_filter_geometry_pairs(device):
     """Two cloths (group 2, mask 1: they ignore each other) over a body (group 1, mask 2)."""
     body = minkq.Geometry(*BODY, self_pairs=False, static=True, group=1, mask=2)
     cloths = [minkq.Geometry(*CLOTH, self_pairs=False, group=2, mask=1) for _ in range(2)]
-    scene = minkq.Scene.from_geometries(device, [body] + cloths)
-    two = minkq.Scene.from_geometries(device, [body, cloths[0]])
+    scene = minkq.Scene.from_geometries([body] + cloths, device=device)
+    two = minkq.Scene.from_geometries([body, cloths[0]], device=device)
     for kind in ("vt", "ee"):
-        got = split(scene, kind, scene.query(kind, "box", R, leaf_exact=True))
+        got = split(scene, kind, scene.query(kind, R, leaf_exact=True))
         assert set(got) <= {(0, 1), (1, 0), (0, 2), (2, 0), (1, 0)}, f"{kind}: the cloths must not pair: {set(got)}"
-        ref = two.query(kind, "box", R, leaf_exact=True)
+        ref = two.query(kind, R, leaf_exact=True)
         for g in (1, 2):  # each cloth meets the body as the one cloth alone does
             assert local(scene, kind, got, g) == local(two, kind, split(two, kind, ref), 1), (kind, g)
     # A mask bit the other's group lacks, either way round, drops the pair.
     for b_group, b_mask in ((2, 2), (4, 1)):
         lone = minkq.Geometry(*CLOTH, self_pairs=False, group=b_group, mask=b_mask)
-        assert len(minkq.Scene.from_geometries(device, [body, lone]).query("vt", "box", R)) == 0
+        assert len(minkq.Scene.from_geometries([body, lone], device=device).query("vt", R)) == 0
     # The same cloths in each other's masks meet (they coincide: every element pairs).
     open_cloths = [minkq.Geometry(*CLOTH, kinds="vt", self_pairs=False, group=2, mask=3) for _ in range(2)]
-    both = minkq.Scene.from_geometries(device, open_cloths)
-    assert set(split(both, "vt", both.query("vt", "box", R))) == {(0, 1), (1, 0)}
+    both = minkq.Scene.from_geometries(open_cloths, device=device)
+    assert set(split(both, "vt", both.query("vt", R))) == {(0, 1), (1, 0)}
 
 
 def local(scene: minkq.Scene, kind: str, by_geometry: dict, cloth: int) -> set:
@@ -231,38 +231,37 @@ def test_worlds_never_pair_and_world_minus_one_joins_every_world(device):
     over one body in world -1: each world's pairs are those of a one-world scene."""
     body = minkq.Geometry(*BODY, self_pairs=False, static=True, world=-1)
     worlds = [minkq.Geometry(*CLOTH, world=w) for w in (0, 1)]
-    scene = minkq.Scene.from_geometries(device, [body] + worlds)
-    alone = minkq.Scene.from_geometries(device, [body, worlds[0]])
+    scene = minkq.Scene.from_geometries([body] + worlds, device=device)
+    alone = minkq.Scene.from_geometries([body, worlds[0]], device=device)
     nc, tc = len(CLOTH[0]), len(CLOTH[1])
     for kind in ("vt", "ee"):
-        got = split(scene, kind, scene.query(kind, "box", R, leaf_exact=True))
+        got = split(scene, kind, scene.query(kind, R, leaf_exact=True))
         assert not {(1, 2), (2, 1)} & set(got), f"{kind}: a pair across worlds"
-        ref = split(alone, kind, alone.query(kind, "box", R, leaf_exact=True))
+        ref = split(alone, kind, alone.query(kind, R, leaf_exact=True))
         assert got[(1, 1)] and got[(2, 2)] and (got.get((0, 1)) or got.get((1, 0)))
         assert local(scene, kind, got, 1) == local(scene, kind, got, 2) == local(alone, kind, ref, 1), kind
         assert len(got[(1, 1)]) == len(got[(2, 2)]) == len(ref[(1, 1)])
     # World 1 of the scene, shifted to world 0's ids, is world 0.
-    vt = split(scene, "vt", scene.query("vt", "box", R, leaf_exact=True))
+    vt = split(scene, "vt", scene.query("vt", R, leaf_exact=True))
     assert {(v - nc, t - tc) for v, t in vt[(2, 2)]} == vt[(1, 1)]
 
 
 @pytest.mark.parametrize("t", [0.0, 0.01, 0.03])
 def test_uniform_thickness_is_a_larger_radius(device, t):
     with_t = minkq.Scene.from_geometries(
-        device,
         [
             minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=t),
             minkq.Geometry(*CLOTH, thickness=np.full(len(CLOTH[0]), t, np.float32)),
-        ],
+        ], device=device
     )
     without = minkq.Scene.from_geometries(
-        device, [minkq.Geometry(*BODY, self_pairs=False, static=True), minkq.Geometry(*CLOTH)]
+        [minkq.Geometry(*BODY, self_pairs=False, static=True), minkq.Geometry(*CLOTH)], device=device
     )
     r = 0.02
     for kind in ("vt", "ee"):
         for leaf_exact in (False, True):
-            a = as_set(with_t.query(kind, "box", r, leaf_exact=leaf_exact))
-            b = as_set(without.query(kind, "box", r + 2 * t, leaf_exact=leaf_exact))
+            a = as_set(with_t.query(kind, r, leaf_exact=leaf_exact))
+            b = as_set(without.query(kind, r + 2 * t, leaf_exact=leaf_exact))
             assert a == b, (kind, leaf_exact, len(a ^ b))
 
 
@@ -271,7 +270,7 @@ def test_varied_thickness_reaches_r_plus_both_thicknesses(device):
     tb = (0.02 * rng.random(len(BODY[0]))).astype(np.float32)
     tc = (0.02 * rng.random(len(CLOTH[0]))).astype(np.float32)
     body = minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=tb)
-    scene = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH, thickness=tc)])
+    scene = minkq.Scene.from_geometries([body, minkq.Geometry(*CLOTH, thickness=tc)], device=device)
     xyz, tris, edges = concatenated([BODY, CLOTH])
     t = np.concatenate([tb, tc]).astype(np.float64)
     r = 0.015
@@ -280,7 +279,7 @@ def test_varied_thickness_reaches_r_plus_both_thicknesses(device):
         ("ee", ee_distances(xyz, edges), t[edges].max(1), t[edges].max(1)),
     ):
         reach = r + a[:, None] + b[None, :]
-        got = split(scene, kind, scene.query(kind, "box", r, leaf_exact=True))
+        got = split(scene, kind, scene.query(kind, r, leaf_exact=True))
         pairs = set().union(*got.values())
         truth = {
             p for p in zip(*map(np.ndarray.tolist, np.nonzero(d <= reach))) if p in pairs or owner_ok(scene, kind, p)
@@ -289,7 +288,7 @@ def test_varied_thickness_reaches_r_plus_both_thicknesses(device):
         assert truth <= pairs, f"{kind} lost {sorted(truth - pairs)[:5]}"
         assert all(d[p] <= reach[p] + SLACK for p in pairs), kind
         for mode in EE_MODES if kind == "ee" else MODES:
-            assert truth <= as_set(scene.query(kind, mode, r)), (kind, mode)
+            assert truth <= as_set(scene.query(kind, r, mode=mode)), (kind, mode)
 
 
 def owner_ok(scene: minkq.Scene, kind: str, pair) -> bool:
@@ -314,37 +313,37 @@ def test_float64_geometries_find_pairs_that_rounding_pulls_apart(device, plane, 
     tri = np.array([[plane, -1, -1], [plane, 2, -1], [plane, -1, 2]], np.float64)
     particle = np.array([[point, 0, 0]], np.float64)
     scene = minkq.Scene.from_geometries(
-        device, [minkq.Geometry(tri, [[0, 1, 2]], kinds="vt", static=True), minkq.Geometry(particle, kinds="vt")]
+        [minkq.Geometry(tri, [[0, 1, 2]], kinds="vt", static=True), minkq.Geometry(particle, kinds="vt")], device=device
     )
     assert scene.dtype == np.float64
     for mode in MODES:
         for leaf_exact in (False, True):
-            assert scene.query("vt", mode, r, leaf_exact=leaf_exact).tolist() == [[3, 0]], (mode, leaf_exact)
+            assert scene.query("vt", r, mode=mode, leaf_exact=leaf_exact).tolist() == [[3, 0]], (mode, leaf_exact)
     scene.refit(particle + [1, 0, 0])
-    assert len(scene.query("vt", "box", r)) == 0
+    assert len(scene.query("vt", r)) == 0
     scene.refit_geometry(1, particle.astype(np.float32))  # taken: converted to float64 exactly
     scene.refit_geometry(1, particle)
-    assert scene.query("vt", "box", r).tolist() == [[3, 0]]
+    assert scene.query("vt", r).tolist() == [[3, 0]]
 
 
 def test_mixed_precision_moves_each_geometry_alone(device):
     a = minkq.Geometry(BODY[0].astype(np.float64), BODY[1], self_pairs=False)
-    scene = minkq.Scene.from_geometries(device, [a, minkq.Geometry(*CLOTH)])
-    before = as_set(scene.query("vt", "box", R))
+    scene = minkq.Scene.from_geometries([a, minkq.Geometry(*CLOTH)], device=device)
+    before = as_set(scene.query("vt", R))
     with pytest.raises(minkq.InvalidArgumentError, match="mix float32 and float64"):
         scene.refit(np.concatenate([BODY[0], CLOTH[0]]))
     scene.refit_geometry(0, BODY[0].astype(np.float64))
     scene.refit_geometry(1, CLOTH[0])
-    assert as_set(scene.query("vt", "box", R)) == before
+    assert as_set(scene.query("vt", R)) == before
     with pytest.raises(TypeError, match="float32"):
         scene.refit_geometry(1, CLOTH[0].astype(np.float64))
 
 
 def test_refit_of_one_geometry_is_a_fresh_scene(device):
     body = minkq.Geometry(*BODY, self_pairs=False, static=True)
-    scene = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH)])
+    scene = minkq.Scene.from_geometries([body, minkq.Geometry(*CLOTH)], device=device)
     moved = CLOTH[0] + np.float32([0.02, -0.01, -0.012])
-    fresh = minkq.Scene.from_geometries(device, [body, minkq.Geometry(moved, CLOTH[1])])
+    fresh = minkq.Scene.from_geometries([body, minkq.Geometry(moved, CLOTH[1])], device=device)
     for move in (
         scene.refit_geometry,
         scene.rebuild_geometry,
@@ -355,7 +354,7 @@ def test_refit_of_one_geometry_is_a_fresh_scene(device):
         move(1, moved)
         for kind in ("vt", "ee"):
             for mode in ("box", "capsule_exact"):
-                got, want = scene.query_digest(kind, mode, R), fresh.query_digest(kind, mode, R)
+                got, want = scene.query_digest(kind, R, mode=mode), fresh.query_digest(kind, R, mode=mode)
                 assert got[1] == want[1] and np.array_equal(got[0], want[0]), (kind, mode)
     assert scene.tree_growth() == 1.0  # the last move was a rebuild
 
@@ -363,17 +362,17 @@ def test_refit_of_one_geometry_is_a_fresh_scene(device):
 @pytest.mark.parametrize("rebuild", [False, True])
 def test_swept_geometry_is_the_concatenated_swept_scene(device, rebuild):
     body = minkq.Geometry(*BODY, self_pairs=False, static=True)
-    scene = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH)])
+    scene = minkq.Scene.from_geometries([body, minkq.Geometry(*CLOTH)], device=device)
     xyz, tris, edges = concatenated([BODY, CLOTH])
-    one = minkq.Scene(device, xyz, tris, edges)
+    one = minkq.Scene(xyz, tris, edges, device=device)
     x1 = CLOTH[0] + np.float32([0.0, 0.0, -0.03])
     (scene.rebuild_geometry_swept if rebuild else scene.refit_geometry_swept)(1, CLOTH[0], x1)
     one.refit_swept(xyz, np.concatenate([BODY[0], x1]))
     assert scene.is_swept
     for kind, modes in (("vt", MODES), ("ee", ("box",))):
         for mode in modes:
-            got = split(scene, kind, scene.query(kind, mode, R))
-            want = split(scene, kind, one.query(kind, mode, R))
+            got = split(scene, kind, scene.query(kind, R, mode=mode))
+            want = split(scene, kind, one.query(kind, R, mode=mode))
             for g in ((0, 1), (1, 0), (1, 1)):
                 assert got.get(g, set()) == want.get(g, set()), (kind, mode, g)
     scene.refit_geometry(1, x1)
@@ -382,7 +381,7 @@ def test_swept_geometry_is_the_concatenated_swept_scene(device, rebuild):
 
 def test_static_geometries_are_refused_and_skipped(device):
     body = minkq.Geometry(*BODY, self_pairs=False, static=True)
-    scene = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH)])
+    scene = minkq.Scene.from_geometries([body, minkq.Geometry(*CLOTH)], device=device)
     with pytest.raises(minkq.InvalidArgumentError, match=r"^geometry 0 is static \(MINKQ_GEOMETRY_STATIC\)"):
         scene.refit_geometry(0, BODY[0])
     with pytest.raises(minkq.InvalidArgumentError, match="geometry 0 is static"):
@@ -406,7 +405,7 @@ def test_stream_ordered_calls_serve_scenes_of_many_geometries(device):
     vertex is reported naming its geometry; the constructor's scene is one geometry and keeps
     them too."""
     def make():
-        return minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, static=True), minkq.Geometry(*CLOTH)])
+        return minkq.Scene.from_geometries([minkq.Geometry(*BODY, static=True), minkq.Geometry(*CLOTH)], device=device)
 
     scene, twin = make(), make()
     scene.reserve(refit=True, canonical_capacity=1 << 14)
@@ -415,10 +414,10 @@ def test_stream_ordered_calls_serve_scenes_of_many_geometries(device):
     twin.refit(moved)
     scene.async_status()
     for kind in ("vt", "ee"):
-        expected = twin.query(kind, "box", R, leaf_exact=True)
+        expected = twin.query(kind, R, leaf_exact=True)
         pairs = np.zeros((len(expected) + 4, 2), np.int32)
         count = np.zeros(1, np.uint64)
-        scene.query_async(pairs, count, kind, "box", R, leaf_exact=True, canonical=True)
+        scene.query_async(pairs, count, kind, R, leaf_exact=True, canonical=True)
         assert int(count[0]) == len(expected) > 0
         expected = expected[np.lexsort((expected[:, 1], expected[:, 0]))]
         assert np.array_equal(pairs[: len(expected)], expected), kind
@@ -427,7 +426,7 @@ def test_stream_ordered_calls_serve_scenes_of_many_geometries(device):
     scene.refit_async(bad)
     with pytest.raises(minkq.NonFiniteError, match=r"vertex 4 .*geometry 1 \(its vertex 4\) kept its positions"):
         scene.async_status()
-    one = minkq.Scene(device, *CLOTH)
+    one = minkq.Scene(*CLOTH, device=device)
     assert one.geometry_count == 1 and one.geometry_range(0, "triangle") == (0, len(CLOTH[1]))
     one.reserve(refit=True)
     one.refit_async(CLOTH[0])
@@ -440,7 +439,7 @@ def test_bad_geometries_raise_with_the_geometry_named(device):
     good = minkq.Geometry(tri, [[0, 1, 2]])
 
     def make(*geometries):
-        return minkq.Scene.from_geometries(device, list(geometries))
+        return minkq.Scene.from_geometries(list(geometries), device=device)
 
     with pytest.raises(minkq.IndexOutOfRangeError, match="^geometry 1: triangle 0 references vertex 3"):
         make(good, minkq.Geometry(tri, [[0, 1, 3]]))
@@ -459,7 +458,7 @@ def test_bad_geometries_raise_with_the_geometry_named(device):
     with pytest.raises(TypeError, match=r"geometries\[1\]: expected a minkq.Geometry, got tuple"):
         make(good, (tri, [[0, 1, 2]]))
     with pytest.raises(TypeError, match="expected a list of minkq.Geometry"):
-        minkq.Scene.from_geometries(device, good)
+        minkq.Scene.from_geometries(good, device=device)
     with pytest.raises(ValueError, match="kinds: expected names among"):
         minkq.Geometry(tri, kinds=("vt", "xx"))
     with pytest.raises(ValueError, match="kinds: expected at least one"):
@@ -507,13 +506,13 @@ def test_a_particle_set_and_rods_against_a_mesh(device):
     rod_edges = np.stack([np.arange(29), np.arange(1, 30)], 1).astype(np.int32)
     cloth = minkq.Geometry(*CLOTH, kinds=("vv", "ev"), self_pairs=False)
     rods = minkq.Geometry(rod, None, rod_edges, kinds=("vv", "ev"), self_pairs=False)
-    scene = minkq.Scene.from_geometries(device, [cloth, rods])
+    scene = minkq.Scene.from_geometries([cloth, rods], device=device)
     xyz = np.concatenate([CLOTH[0], rod])
     edges = np.concatenate([derive_edges(CLOTH[1]), rod_edges + len(CLOTH[0])]).astype(np.int32)
-    one = minkq.Scene(device, xyz, None, edges, vt=False, ee=False, vv=True, ev=True)
+    one = minkq.Scene(xyz, None, edges, vt=False, ee=False, vv=True, ev=True, device=device)
     for kind in ("vv", "ev"):
-        got = split(scene, kind, scene.query(kind, "sphere", 0.05, leaf_exact=True))
-        want = split(scene, kind, one.query(kind, "sphere", 0.05, leaf_exact=True))
+        got = split(scene, kind, scene.query(kind, 0.05, mode="sphere", leaf_exact=True))
+        want = split(scene, kind, one.query(kind, 0.05, mode="sphere", leaf_exact=True))
         cross = {p for g, ps in want.items() if g[0] != g[1] for p in ps}
         assert cross and set().union(*got.values()) == cross, kind
 
@@ -523,26 +522,25 @@ def test_arrays_of_other_libraries_are_read_in_place(device):
     moves: the pairs of numpy arrays; never converted (a float64 thickness is refused)."""
     tb = np.full(len(BODY[0]), 0.005, np.float32)
     reference = minkq.Scene.from_geometries(
-        device,
         [
             minkq.Geometry(*BODY, self_pairs=False, static=True, thickness=tb),
             minkq.Geometry(BODY[0].astype(np.float64) + 0.02, BODY[1]),
-        ],
+        ], device=device
     )
     body = minkq.Geometry(
         DLPackOnly(BODY[0]), DLPackOnly(BODY[1]), self_pairs=False, static=True, thickness=DLPackOnly(tb)
     )
     moving = minkq.Geometry(DLPackOnly(BODY[0].astype(np.float64) + 0.02), DLPackOnly(BODY[1]))
-    scene = minkq.Scene.from_geometries(device, [body, moving])
+    scene = minkq.Scene.from_geometries([body, moving], device=device)
     assert scene.dtype == np.float64
     for kind in ("vt", "ee"):
-        assert scene.query_digest(kind, "box", R)[1] == reference.query_digest(kind, "box", R)[1], kind
+        assert scene.query_digest(kind, R)[1] == reference.query_digest(kind, R)[1], kind
     moved = BODY[0].astype(np.float64) + [0.01, 0.0, 0.03]
     scene.refit_geometry(1, DLPackOnly(moved))
     reference.refit_geometry(1, moved)
-    assert scene.query_digest("vt", "box", R)[1] == reference.query_digest("vt", "box", R)[1]
+    assert scene.query_digest("vt", R)[1] == reference.query_digest("vt", R)[1]
     with pytest.raises(TypeError, match=r"geometries\[0\]\.thickness: expected a float32 array, got float64"):
-        minkq.Scene.from_geometries(device, [minkq.Geometry(*BODY, thickness=DLPackOnly(tb.astype(np.float64)))])
+        minkq.Scene.from_geometries([minkq.Geometry(*BODY, thickness=DLPackOnly(tb.astype(np.float64)))], device=device)
     with pytest.raises(TypeError, match="expected float64 values"):
         scene.refit_geometry(1, DLPackOnly(moved.astype(np.float32)))
 
@@ -556,14 +554,14 @@ def test_warp_arrays_in_and_out(wp, device):
         wp.array(CLOTH[1], dtype=wp.int32, device="cpu"),
         thickness=wp.full(len(CLOTH[0]), 0.01, dtype=wp.float32, device="cpu"),
     )
-    scene = minkq.Scene.from_geometries(device, [body, cloth])
-    reference = minkq.Scene.from_geometries(device, [body, minkq.Geometry(*CLOTH, thickness=0.01)])
-    pairs = scene.query("vt", "box", R, leaf_exact=True, canonical=True)
+    scene = minkq.Scene.from_geometries([body, cloth], device=device)
+    reference = minkq.Scene.from_geometries([body, minkq.Geometry(*CLOTH, thickness=0.01)], device=device)
+    pairs = scene.query("vt", R, leaf_exact=True, canonical=True)
     assert isinstance(pairs, wp.array) and pairs.dtype == wp.int32
-    assert np.array_equal(pairs.numpy(), reference.query("vt", "box", R, leaf_exact=True, canonical=True))
+    assert np.array_equal(pairs.numpy(), reference.query("vt", R, leaf_exact=True, canonical=True))
     moved = CLOTH[0] + np.float32([0, 0, -0.02])
     scene.refit_geometry(1, wp.array(moved, dtype=wp.vec3, device="cpu"))
     reference.refit_geometry(1, moved)
-    assert scene.query_digest("ee", "box", R)[1] == reference.query_digest("ee", "box", R)[1]
+    assert scene.query_digest("ee", R)[1] == reference.query_digest("ee", R)[1]
     g, local = scene.geometry_of("vertex", pairs.numpy()[:, 0])
     assert set(g.tolist()) == {0, 1} and (local >= 0).all()

@@ -100,16 +100,16 @@ def mesh():
 
 def test_dlpack_host_arrays_are_read_in_place(device, mesh):
     xyz, tris = mesh
-    reference = minkq.Scene(device, xyz, tris)
+    reference = minkq.Scene(xyz, tris, device=device)
     before = sys.getrefcount(xyz)
     wrapped = DLPackOnly(xyz)
     view = _interop.view(wrapped, "vertices", device)
     assert view.address == xyz.ctypes.data and view.cuda is None and view.strides == (12, 4)
     del view
-    scene = minkq.Scene(device, wrapped, DLPackOnly(tris))
+    scene = minkq.Scene(wrapped, DLPackOnly(tris), device=device)
     for kind, mode in (("vt", "sphere"), ("ee", "capsule_exact")):
-        pairs, digest = scene.query_digest(kind, mode, 0.04, leaf_exact=True)
-        expected = reference.query_digest(kind, mode, 0.04, leaf_exact=True)
+        pairs, digest = scene.query_digest(kind, 0.04, mode=mode, leaf_exact=True)
+        expected = reference.query_digest(kind, 0.04, mode=mode, leaf_exact=True)
         assert isinstance(pairs, np.ndarray) and np.array_equal(pairs, expected[0]) and digest == expected[1]
     # Every capsule was released after its call (the producer's deleter ran).
     del wrapped
@@ -123,54 +123,54 @@ def test_strided_rows_are_read_in_place_and_inner_strides_rejected(device, mesh)
     padded[:, 3] = np.nan  # never read
     rows = DLPackOnly(padded[:, :3])
     assert _interop.view(rows, "vertices", device).strides == (16, 4)
-    scene = minkq.Scene(device, rows, tris)
-    expected = minkq.Scene(device, xyz, tris).query_digest("ee", "box", 0.03)[1]
-    assert scene.query_digest("ee", "box", 0.03)[1] == expected
+    scene = minkq.Scene(rows, tris, device=device)
+    expected = minkq.Scene(xyz, tris, device=device).query_digest("ee", 0.03)[1]
+    assert scene.query_digest("ee", 0.03)[1] == expected
     table = np.full((len(scene.edges()), 4), -1, np.int32)
     table[:, 2:] = scene.edges()
-    explicit = minkq.Scene(device, xyz, tris, DLPackOnly(table[:, 2:]))
-    assert explicit.query_digest("ee", "box", 0.03)[1] == expected
+    explicit = minkq.Scene(xyz, tris, DLPackOnly(table[:, 2:]), device=device)
+    assert explicit.query_digest("ee", 0.03)[1] == expected
     with pytest.raises(ValueError, match=r"vertices: expected rows of 12 contiguous bytes.*does not copy"):
-        minkq.Scene(device, DLPackOnly(np.zeros((5, 6), np.float32)[:, ::2]), tris)
+        minkq.Scene(DLPackOnly(np.zeros((5, 6), np.float32)[:, ::2]), tris, device=device)
     with pytest.raises(ValueError, match="out: expected C-contiguous"):
-        scene.query_into(DLPackOnly(np.zeros((10, 4), np.int32)[:, :2]), "vt", "box", 0.03)
+        scene.query("vt", 0.03, out=DLPackOnly(np.zeros((10, 4), np.int32)[:, :2]))
 
 
 def test_wrong_dtype_or_shape_names_the_argument(device, mesh):
     xyz, tris = mesh
     with pytest.raises(TypeError, match="vertices: expected a float32 or float64 array, got float16"):
-        minkq.Scene(device, DLPackOnly(xyz.astype(np.float16)), tris)
-    with pytest.raises(TypeError, match="triangles: expected a int32 array, got int64"):
-        minkq.Scene(device, xyz, DLPackOnly(tris.astype(np.int64)))
+        minkq.Scene(DLPackOnly(xyz.astype(np.float16)), tris, device=device)
+    # Foreign int64 indices are converted as numpy's are (test_dtypes.py checks the range).
+    assert minkq.Scene(xyz, DLPackOnly(tris.astype(np.int64)), device=device).triangle_count == len(tris)
     with pytest.raises(ValueError, match=r"edges: expected shape \(n, 2\), got \(4, 3\)"):
-        minkq.Scene(device, xyz, tris, DLPackOnly(np.zeros((4, 3), np.int32)))
-    scene = minkq.Scene(device, xyz, tris)
+        minkq.Scene(xyz, tris, DLPackOnly(np.zeros((4, 3), np.int32)), device=device)
+    scene = minkq.Scene(xyz, tris, device=device)
     with pytest.raises(TypeError, match="out: expected a int32 array, got float32"):
-        scene.query_into(DLPackOnly(np.zeros((4, 2), np.float32)), "vt", "box", 0.1)
+        scene.query("vt", 0.1, out=DLPackOnly(np.zeros((4, 2), np.float32)))
     with pytest.raises(TypeError, match="out: expected a numpy array or an array with __dlpack__"):
-        scene.query_into([[0, 0]], "vt", "box", 0.1)
+        scene.query("vt", 0.1, out=[[0, 0]])
 
 
 def test_cuda_arrays_on_the_cpu_backend_raise_and_are_never_read(device, mesh):
     xyz, tris = mesh
     fake = FakeCudaDLPack(xyz)
     with pytest.raises(minkq.InvalidArgumentError, match=r"vertices: .* on cuda:0 \(DLPack\) cannot be read by the minkq device 'cpu.*does not copy"):
-        minkq.Scene(device, fake, tris)
+        minkq.Scene(fake, tris, device=device)
     assert fake.streams == [], "the producer was asked for its tensor"
     with pytest.raises(minkq.InvalidArgumentError, match=r"vertices: .*__cuda_array_interface__.*does not copy"):
-        minkq.Scene(device, FakeCudaArrayInterface(xyz), tris)
-    scene = minkq.Scene(device, xyz, tris)
+        minkq.Scene(FakeCudaArrayInterface(xyz), tris, device=device)
+    scene = minkq.Scene(xyz, tris, device=device)
     with pytest.raises(minkq.InvalidArgumentError, match="^vertices: "):
         scene.refit(FakeCudaArrayInterface(xyz))
     with pytest.raises(minkq.InvalidArgumentError, match="^out: "):
-        scene.query_into(FakeCudaArrayInterface(np.zeros((8, 2), np.int32)), "vt", "box", 0.1)
+        scene.query("vt", 0.1, out=FakeCudaArrayInterface(np.zeros((8, 2), np.int32)))
     with pytest.raises(minkq.InvalidArgumentError, match="^like: "):
-        scene.query("vt", "box", 0.1, like=FakeCudaDLPack(np.zeros((1, 2), np.int32)))
-    bvh = minkq.BVH(device, np.zeros((1, 2, 3), np.float32))
+        scene.query("vt", 0.1, like=FakeCudaDLPack(np.zeros((1, 2), np.int32)))
+    bvh = minkq.BVH(np.zeros((1, 2, 3), np.float32), device=device)
     with pytest.raises(minkq.InvalidArgumentError, match="^centres: "):
         bvh.query("sphere", FakeCudaArrayInterface(xyz), 0.1)
     with pytest.raises(minkq.InvalidArgumentError, match="^boxes: "):
-        minkq.BVH(device, FakeCudaDLPack(np.zeros((1, 6), np.float32)))
+        minkq.BVH(FakeCudaDLPack(np.zeros((1, 6), np.float32)), device=device)
 
 
 def test_cuda_array_interface_stream_and_device_checks(monkeypatch, mesh):
@@ -213,8 +213,8 @@ def test_dlpack_cuda_producers_are_asked_for_minkqs_stream():
 
 def test_unknown_libraries_get_numpy_results_on_the_host(device, mesh):
     xyz, tris = mesh
-    scene = minkq.Scene(device, DLPackOnly(xyz), tris)
-    assert isinstance(scene.query("vt", "box", 0.03), np.ndarray)
+    scene = minkq.Scene(DLPackOnly(xyz), tris, device=device)
+    assert isinstance(scene.query("vt", 0.03), np.ndarray)
     with pytest.raises(TypeError, match="pass a \\(capacity, 2\\) int32 array of your own to query_into"):
         _interop.allocate_pairs(_interop.Like("mylib", 0, None, "mylib.Array"), 4)
 
@@ -227,27 +227,27 @@ def test_warp_arrays_in_and_out(wp, device, mesh):
     positions = wp.array(xyz, dtype=wp.vec3, device="cpu")
     triangles = wp.array(tris, dtype=wp.int32, device="cpu")
     assert _interop.view(positions, "vertices", device).address == positions.ptr  # in place
-    scene = minkq.Scene(device, positions, triangles)
-    reference = minkq.Scene(device, xyz, tris)
-    pairs = scene.query("ee", "capsule_exact", 0.04, leaf_exact=True, canonical=True)
+    scene = minkq.Scene(positions, triangles, device=device)
+    reference = minkq.Scene(xyz, tris, device=device)
+    pairs = scene.query("ee", 0.04, mode="capsule_exact", leaf_exact=True, canonical=True)
     assert isinstance(pairs, wp.array) and pairs.device == positions.device and pairs.dtype == wp.int32
-    assert np.array_equal(pairs.numpy(), reference.query("ee", "capsule_exact", 0.04, leaf_exact=True, canonical=True))
-    assert isinstance(reference.query("vt", "box", 0.04, like=positions), wp.array)
+    assert np.array_equal(pairs.numpy(), reference.query("ee", 0.04, mode="capsule_exact", leaf_exact=True, canonical=True))
+    assert isinstance(reference.query("vt", 0.04, like=positions), wp.array)
     # A first query that finds nothing (its array was allocated empty) gives an empty array.
-    nothing = scene.query("vt", "box", 0.0, leaf_exact=True)
+    nothing = scene.query("vt", 0.0, leaf_exact=True)
     assert isinstance(nothing, wp.array) and nothing.shape == (0, 2)
     out = wp.full((4096, 2), -7, dtype=wp.int32, device="cpu")
-    info = scene.query_into(out, "vt", "sphere", 0.04, canonical=True, digest=True)
-    assert info.digest == reference.query_digest("vt", "sphere", 0.04)[1]
-    assert (out.numpy()[info.count :] == -7).all()
+    got, digest = scene.query_digest("vt", 0.04, mode="sphere", out=out)
+    assert digest == reference.query_digest("vt", 0.04, mode="sphere")[1]
+    assert (out.numpy()[len(got) :] == -7).all()
     with pytest.raises(minkq.CapacityError) as e:
-        scene.query_into(wp.zeros((1, 2), dtype=wp.int32, device="cpu"), "vt", "sphere", 0.04)
-    assert e.value.needed == info.count
+        scene.query("vt", 0.04, mode="sphere", out=wp.zeros((1, 2), dtype=wp.int32, device="cpu"))
+    assert e.value.needed == len(got)
     # Refit from a Warp array: the scene follows it.
     moved = wp.array(xyz * np.float32(0.8), dtype=wp.vec3, device="cpu")
     scene.refit(moved)
     reference.refit(xyz * np.float32(0.8))
-    assert scene.query_digest("ee", "box", 0.04)[1] == reference.query_digest("ee", "box", 0.04)[1]
+    assert scene.query_digest("ee", 0.04)[1] == reference.query_digest("ee", 0.04)[1]
 
 
 def test_warp_arrays_with_a_bvh(wp, device):
@@ -256,8 +256,8 @@ def test_warp_arrays_with_a_bvh(wp, device):
     boxes = np.concatenate([lo, lo + 0.1], axis=1)
     centres = rng.random((40, 3)).astype(np.float32)
     segments = rng.random((30, 2, 3)).astype(np.float32)
-    bvh = minkq.BVH(device, wp.array(boxes, dtype=wp.float32, device="cpu"))
-    reference = minkq.BVH(device, boxes)
+    bvh = minkq.BVH(wp.array(boxes, dtype=wp.float32, device="cpu"), device=device)
+    reference = minkq.BVH(boxes, device=device)
     spheres = bvh.query("sphere", wp.array(centres, dtype=wp.vec3, device="cpu"), 0.05, canonical=True)
     assert isinstance(spheres, wp.array)
     assert np.array_equal(spheres.numpy(), reference.query("sphere", centres, 0.05, canonical=True))
@@ -274,17 +274,18 @@ def test_warp_cuda_arrays_are_read_and_written_on_the_gpu(wp, mesh):
         pytest.skip("needs a CUDA GPU and a libminkq built with CUDA (none here)")
     xyz, tris = mesh
     gpu = minkq.Device("cuda:0")
-    reference = minkq.Scene(minkq.Device("cpu"), xyz, tris)
+    reference = minkq.Scene(xyz, tris)
     stream = wp.Stream("cuda:0")
     with wp.ScopedStream(stream):  # produced on a non-default stream: DLPack orders it before minkq's
         positions = wp.array(xyz, dtype=wp.vec3, device="cuda:0")
-        scene = minkq.Scene(gpu, positions, wp.array(tris, dtype=wp.int32, device="cuda:0"))
-        pairs = scene.query("ee", "capsule_exact", 0.04, leaf_exact=True, canonical=True)
+        scene = minkq.Scene(positions, wp.array(tris, dtype=wp.int32, device="cuda:0"))  # on the arrays' GPU
+        pairs = scene.query("ee", 0.04, mode="capsule_exact", leaf_exact=True, canonical=True)
     assert isinstance(pairs, wp.array) and pairs.device.is_cuda
-    assert np.array_equal(pairs.numpy(), reference.query("ee", "capsule_exact", 0.04, leaf_exact=True, canonical=True))
+    assert (scene.device.backend, scene.device.ordinal) == (gpu.backend, gpu.ordinal)
+    assert np.array_equal(pairs.numpy(), reference.query("ee", 0.04, mode="capsule_exact", leaf_exact=True, canonical=True))
     out = wp.empty((4096, 2), dtype=wp.int32, device="cuda:0")
-    info = scene.query_into(out, "vt", "sphere", 0.04, digest=True)
-    assert info.digest == reference.query_digest("vt", "sphere", 0.04)[1]
+    _, digest = scene.query_digest("vt", 0.04, mode="sphere", out=out)
+    assert digest == reference.query_digest("vt", 0.04, mode="sphere")[1]
     with pytest.raises(minkq.InvalidArgumentError, match="does not copy device arrays"):
         reference.refit(positions)
 
@@ -295,10 +296,10 @@ def test_torch_cuda_tensors(mesh):
     if minkq.cuda_device_count() == 0 or not torch.cuda.is_available():
         pytest.skip("needs a CUDA GPU and a libminkq built with CUDA (none here)")
     xyz, tris = mesh
-    scene = minkq.Scene(minkq.Device("cuda:0"), torch.from_numpy(xyz).cuda(), torch.from_numpy(tris).cuda())
-    pairs = scene.query("vt", "sphere", 0.04, canonical=True)
+    scene = minkq.Scene(torch.from_numpy(xyz).cuda(), torch.from_numpy(tris).cuda(), device=minkq.Device("cuda:0"))
+    pairs = scene.query("vt", 0.04, mode="sphere", canonical=True)
     assert isinstance(pairs, torch.Tensor) and pairs.is_cuda
-    reference = minkq.Scene(minkq.Device("cpu"), xyz, tris).query("vt", "sphere", 0.04, canonical=True)
+    reference = minkq.Scene(xyz, tris).query("vt", 0.04, mode="sphere", canonical=True)
     assert np.array_equal(pairs.cpu().numpy(), reference)
     if torch.cuda.device_count() > 1:
         with pytest.raises(minkq.InvalidArgumentError, match="on cuda:1 but the minkq device"):

@@ -179,7 +179,7 @@ def test_a_failure_during_a_replay_is_printed_kept_and_raised(capfd):
     def broken(*args, **kwargs):
         raise ValueError("injected failure")
 
-    detector._scene.query_into = broken
+    detector._scene.query = broken
     wp.capture_launch(capture.graph)  # Warp's own replay cannot raise it...
     err = capfd.readouterr().err
     assert "edge_edge_collision_detection failed during a Warp graph replay" in err and "injected failure" in err
@@ -191,7 +191,7 @@ def test_a_failure_during_a_replay_is_printed_kept_and_raised(capfd):
     detector.check_replays()  # raised once
     with pytest.raises(mn.ReplayError, match="2 failed"):  # minkq.newton.capture_launch raises at once
         mn.capture_launch(capture.graph)
-    del detector._scene.query_into
+    del detector._scene.query
     mn.capture_launch(capture.graph)  # and works again
     assert detector.replay_failures == 2 and detector.replayed_calls == 4
 

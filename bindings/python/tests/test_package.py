@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import minkq
-from minkq import _args, _bvh, _device, _geometry, _scene, _stream_ordered
+from minkq import _args, _bvh, _conventions, _device, _geometry, _scene, _scene_queries, _stream_ordered
 from oracle import rolled_sheet
 
 
@@ -44,7 +44,7 @@ def test_public_items_have_docstrings():
 
 
 def test_docstring_examples_run():
-    for module in (_device, _scene, _stream_ordered, _geometry, _bvh):
+    for module in (_device, _scene, _scene_queries, _conventions, _stream_ordered, _geometry, _bvh):
         failures, tried = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         assert tried >= 1 and failures == 0, module.__name__
 
@@ -61,7 +61,7 @@ def test_c_contiguous_inputs_are_not_copied():
 
 def test_repr_and_properties(device):
     xyz, tris = rolled_sheet(4, 0)
-    scene = minkq.Scene(device, xyz, tris)
+    scene = minkq.Scene(xyz, tris, device=device)
     assert (scene.vertex_count, scene.triangle_count, scene.edge_count) == (16, 18, 33)
     assert repr(scene) == "minkq.Scene(16 vertices, 18 triangles, 33 edges)"
     assert repr(device).startswith("minkq.Device('cpu (")
@@ -105,7 +105,7 @@ def gil_sheet(device):
         if n not in sheets:
             xyz, tris = demo.twisted_sheet(n, 3.0)
             r = 0.25 * demo.mean_edge_length(xyz, demo.derive_edges(tris))
-            sheets[n] = (xyz, tris, xyz * np.float32(1.001), r, minkq.Scene(device, xyz, tris))
+            sheets[n] = (xyz, tris, xyz * np.float32(1.001), r, minkq.Scene(xyz, tris, device=device))
         return sheets[n]
 
     return sheet
@@ -116,10 +116,10 @@ def gil_sheet(device):
 def test_gil_is_released_during_build_refit_rebuild_and_query(device, gil_sheet, name):
     sheet = gil_sheet
     calls = {
-        "build": lambda n: lambda: minkq.Scene(device, sheet(n)[0], sheet(n)[1]),
+        "build": lambda n: lambda: minkq.Scene(sheet(n)[0], sheet(n)[1], device=device),
         "refit": lambda n: lambda: sheet(n)[4].refit(sheet(n)[2]),
         "rebuild": lambda n: lambda: sheet(n)[4].rebuild(sheet(n)[2]),
-        "query": lambda n: lambda: sheet(n)[4].query("ee", "capsule_exact", sheet(n)[3],
+        "query": lambda n: lambda: sheet(n)[4].query("ee", sheet(n)[3], mode="capsule_exact",
                                                      leaf_exact=True),
     }
     make_call = calls[name]
@@ -142,16 +142,16 @@ def test_gil_is_released_during_build_refit_rebuild_and_query(device, gil_sheet,
 
 def test_threads_share_a_scene_and_a_device(device):
     xyz, tris = rolled_sheet(14, 3)
-    scene = minkq.Scene(device, xyz, tris)
-    expected = scene.query_digest("ee", "capsule_exact", 0.03)[1]
+    scene = minkq.Scene(xyz, tris, device=device)
+    expected = scene.query_digest("ee", 0.03, mode="capsule_exact")[1]
     results, errors = [], []
 
     def work(seed):
         try:
-            own = minkq.Scene(device, *rolled_sheet(10, seed))  # builds on the shared device
+            own = minkq.Scene(*rolled_sheet(10, seed), device=device)  # builds on the shared device
             for _ in range(5):
-                results.append(scene.query_digest("ee", "capsule_exact", 0.03)[1])
-                own.query("vt", "sphere", 0.03)
+                results.append(scene.query_digest("ee", 0.03, mode="capsule_exact")[1])
+                own.query("vt", 0.03, mode="sphere")
         except Exception as e:  # pragma: no cover - reported below
             errors.append(e)
 
@@ -175,10 +175,10 @@ def test_default_demo_scene_true_contacts_equal_minkq_demo_reference(device):
     h = demo.mean_edge_length(xyz, edges)
     r = float(np.float32(demo.DEFAULT_FACTOR * h))
     assert (f"{r:.6g}", f"{h:.6g}") == ("0.00235628", "0.00942512")  # as `minkq demo` prints them
-    scene = minkq.Scene(device, xyz, tris)
+    scene = minkq.Scene(xyz, tris, device=device)
     assert np.array_equal(scene.edges(), edges)
-    vt = len(scene.query("vt", "sphere", r, leaf_exact=True))
-    ee = len(scene.query("ee", "capsule_exact", r, leaf_exact=True))
+    vt = len(scene.query("vt", r, mode="sphere", leaf_exact=True))
+    ee = len(scene.query("ee", r, mode="capsule_exact", leaf_exact=True))
     assert {"vt": vt, "ee": ee} == demo.REFERENCE_CONTACTS
 
 

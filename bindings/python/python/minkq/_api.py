@@ -7,6 +7,7 @@ geometries in minkq._geometry) and box BVHs (minkq._bvh)."""
 
 from ._args import KINDS, MODES
 from ._bvh import BVH
+from ._conventions import PairBuffer
 from ._device import Device, abi_version, cuda_device_count, version
 from ._geometry import ELEMENTS, Geometry
 from ._results import QueryInfo, WorkStats
@@ -19,6 +20,7 @@ __all__ = [
     "Device",
     "ELEMENTS",
     "Geometry",
+    "PairBuffer",
     "QueryInfo",
     "Scene",
     "WorkStats",

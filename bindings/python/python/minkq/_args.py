@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Optional, Tuple
 import numpy as np
 
 from ._errors import IndexOutOfRangeError
-from ._interop import Like, checked, checked_count, has_protocol, like, view
+from ._interop import Like, checked, checked_count, has_protocol, host_copy, like, view
 
 if TYPE_CHECKING:
     from typing import Literal
@@ -23,6 +23,26 @@ if TYPE_CHECKING:
     Mode = Literal["box", "sphere", "capsule_ray", "capsule_exact"]
     Shape = Literal["sphere", "capsule", "box"]
     Pairs = npt.NDArray[np.int32]
+
+    from typing import Protocol, Union
+
+    class SupportsDLPack(Protocol):
+        """An array of another library read through DLPack (Warp, PyTorch, CuPy, JAX)."""
+
+        def __dlpack__(self, *, stream: Any = ...) -> Any: ...
+
+        def __dlpack_device__(self) -> Tuple[int, int]: ...
+
+    class SupportsCudaArrayInterface(Protocol):
+        """An array of another library read through the CUDA array interface (Numba, CuPy)."""
+
+        @property
+        def __cuda_array_interface__(self) -> Any: ...
+
+    Foreign = Union[SupportsDLPack, SupportsCudaArrayInterface]
+    """Arrays of other libraries: results made like them are of their library, hence Any."""
+    Array = Union["npt.ArrayLike", Foreign]
+    """What an array argument takes: numpy arrays and sequences, and arrays of other libraries."""
 
 KINDS = ("vt", "ee", "vv", "ev")
 MODES = ("box", "sphere", "capsule_ray", "capsule_exact")
@@ -110,8 +130,8 @@ def _converted(array: np.ndarray, name: str, dtype: np.dtype) -> np.ndarray:
                 if bad.any():
                     at = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), array.shape))
                     raise IndexOutOfRangeError(
-                        f"{name}[{', '.join(map(str, at))}] = {array[at]} does not fit in int32: minkq indices "
-                        f"are int32 (0 to {info.max})"
+                        f"{name}[{', '.join(map(str, at))}] = {array[at]} does not fit in {dtype.name}: minkq indices "
+                        f"are {dtype.name} (0 to {info.max})"
                     )
         return array.astype(dtype)
     hint = " (floats are not rounded to indices)" if kind == "f" else ""
@@ -146,7 +166,13 @@ class _Args:
     def rows(self, value: Any, name: str, dtype: Any, trailing: Tuple[int, ...]) -> Any:
         if not has_protocol(value):
             return _rows(value, name, dtype, trailing)
-        array = checked(view(value, name, self.device, self.stream), name, dtype, trailing)
+        array = view(value, name, self.device, self.stream)
+        dtype = np.dtype(dtype)
+        if dtype.kind == "i" and array.dtype != dtype and array.dtype.kind in "iu" and self.stream is None:
+            # Other integer indices (PyTorch's int64 faces): converted as numpy's are, range
+            # checked, through a host copy (indices are read once, when the scene is built).
+            return _rows(host_copy(value), name, dtype, trailing)
+        array = checked(array, name, dtype, trailing)
         self.views.append(array)
         return array.descriptor()
 

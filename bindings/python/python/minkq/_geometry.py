@@ -91,8 +91,8 @@ class Geometry:
     ...                        kinds="vt", self_pairs=False, static=True)
     >>> cloth = minkq.Geometry(np.array([[0, 0, .05], [1, 0, .05], [0, 1, .05]], np.float32), [[0, 1, 2]],
     ...                        kinds="vt", thickness=0.02)
-    >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [floor, cloth])
-    >>> scene.query("vt", "box", 0.035, leaf_exact=True, canonical=True).tolist()  # 0.05 <= 0.035 + 0.02 + 0
+    >>> scene = minkq.Scene.from_geometries([floor, cloth])
+    >>> scene.query("vt", 0.035, leaf_exact=True, canonical=True).tolist()  # 0.05 <= 0.035 + 0.02 + 0
     [[3, 0], [4, 0], [5, 0]]
     >>> scene.geometry_of("vertex", [3, 4, 5])
     (array([1, 1, 1], dtype=int32), array([0, 1, 2], dtype=int32))
@@ -269,8 +269,8 @@ class _Geometries:
         >>> import numpy as np, minkq
         >>> tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
         >>> a, b = minkq.Geometry(tri, [[0, 1, 2]]), minkq.Geometry(tri + [0, 0, .1], [[0, 1, 2]])
-        >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [a, b])
-        >>> vt = scene.query("vt", "box", 0.2, leaf_exact=True, canonical=True)
+        >>> scene = minkq.Scene.from_geometries([a, b])
+        >>> vt = scene.query("vt", 0.2, leaf_exact=True, canonical=True)
         >>> vt.tolist()
         [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
         >>> [g.tolist() for g in scene.geometry_of("vertex", vt[:, 0])]
@@ -305,8 +305,8 @@ class _Geometries:
         >>> import numpy as np, minkq
         >>> tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
         >>> body = minkq.Geometry(tri, [[0, 1, 2]], self_pairs=False, static=True)
-        >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [body, minkq.Geometry(tri + [0, 0, .1], [[0, 1, 2]])])
-        >>> geometries, local = scene.geometry_of_pairs("vt", scene.query("vt", "box", 0.2, canonical=True))
+        >>> scene = minkq.Scene.from_geometries([body, minkq.Geometry(tri + [0, 0, .1], [[0, 1, 2]])])
+        >>> geometries, local = scene.geometry_of_pairs("vt", scene.query("vt", 0.2, canonical=True))
         >>> geometries[:4].tolist(), local[:4].tolist()
         ([[0, 1], [0, 1], [0, 1], [1, 0]], [[0, 0], [1, 0], [2, 0], [0, 0]])
         """

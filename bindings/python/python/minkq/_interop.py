@@ -134,6 +134,22 @@ def has_protocol(value: Any) -> bool:
     )
 
 
+def host_copy(value: Any) -> np.ndarray:
+    """The values of an array of another library as a numpy array: read in place from host
+    memory (DLPack), copied from device memory by the array's own library (PyTorch ``.cpu()``,
+    Warp ``.numpy()``, CuPy ``.get()``)."""
+    if hasattr(value, "__dlpack_device__") and int(value.__dlpack_device__()[0]) in (DL_CPU, DL_CUDA_HOST):
+        if hasattr(np, "from_dlpack"):
+            return np.from_dlpack(value)
+        return np.asarray(value)
+    for method in ("cpu", "numpy", "get"):
+        if callable(getattr(value, method, None)):
+            value = getattr(value, method)()
+            if isinstance(value, np.ndarray):
+                return value
+    return np.asarray(value)
+
+
 def view(value: Any, name: str, device: Any, stream: Optional[int] = None) -> Foreign:
     """``value`` viewed in place, checked against the minkq ``device`` (a minkq.Device): a CUDA
     array needs a CUDA device of the same ordinal. ``stream``: None for the blocking calls

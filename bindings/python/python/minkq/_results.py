@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple
 
 from ._args import _Args
+from ._conventions import PairBuffer
 from ._errors import CapacityError
 from ._interop import Like, allocate_pairs, head
 
@@ -55,8 +56,8 @@ class _SizedQueries:
     def __init__(self) -> None:
         self._last_count: Dict[Tuple[Any, ...], int] = {}
 
-    def _run(self, key: Tuple[Any, ...], run: Callable[[Any], Tuple[int, Optional[int]]], like: Optional[Like] = None) -> Tuple[Any, Optional[int]]:
-        ((pairs, digest),) = self._run_outputs([key], lambda out: (run(out),), like, lambda e: 0)
+    def _run(self, key: Tuple[Any, ...], run: Callable[[Any], Tuple[int, Optional[int]]], like: Optional[Like] = None, out: Any = None) -> Tuple[Any, Optional[int]]:
+        ((pairs, digest),) = self._run_outputs([key], lambda out: (run(out),), like, lambda e: 0, [out])
         return pairs, digest
 
     def _run_outputs(
@@ -65,26 +66,55 @@ class _SizedQueries:
         run: Callable[..., Tuple[Tuple[int, Optional[int]], ...]],
         like: Optional[Like],
         short: Callable[[CapacityError], int],
+        outs: Optional[List[Any]] = None,
     ) -> List[Tuple[Any, Optional[int]]]:
-        """Runs ``run(*outs)``, one array per key, each sized by the last count under its key; on
-        CapacityError the array ``short(e)`` names regrows to ``e.needed`` and the call runs again
-        (at most once per array). Returns (pairs, digest) per key."""
+        """Runs ``run(*outs)``, one array per key: the caller's ``outs`` (``out=``: an array, used
+        as it is, or a :class:`PairBuffer`, grown as needed; None: an array of ``like``'s kind,
+        sized by the last count under its key). On CapacityError the array ``short(e)`` names
+        regrows to ``e.needed`` (with headroom for a PairBuffer; the caller's own array raises it)
+        and the call runs again (at most once per array). Returns (pairs, digest) per key: views
+        of the caller's arrays, copies of ours when much larger than their pairs."""
         like_key = (None if like is None else (like.kind, like.cuda),)
         keys = [k + like_key for k in keys]
+        given = [None] * len(keys) if outs is None else outs
         capacity = [_with_headroom(self._last_count[k]) if k in self._last_count else 0 for k in keys]
+        arrays = [_initial(out, like, c) for out, c in zip(given, capacity)]
         for attempt in range(len(keys) + 1):
-            outs = [allocate_pairs(like, c) for c in capacity]
             args = _Args(self.device)
             try:
-                results = run(*[args.out(out) for out in outs])
+                results = run(*[args.out(out, _out_name(given, i)) for i, out in enumerate(arrays)])
                 break
             except CapacityError as e:
-                if attempt == len(keys):
+                i = short(e)
+                if attempt == len(keys) or (given[i] is not None and not isinstance(given[i], PairBuffer)):
                     raise
-                capacity[short(e)] = e.needed
+                arrays[i] = _grown(given[i], like, e.needed, self.device)
         pairs = []
-        for key, out, (count, digest) in zip(keys, outs, results):
+        for key, out, array, (count, digest) in zip(keys, given, arrays, results):
             self._last_count[key] = count
-            # Do not keep a much larger array alive behind a small result.
-            pairs.append((head(out, count, 2 * count < len(out)), digest))
+            # Do not keep a much larger array of ours alive behind a small result.
+            pairs.append((head(array, count, out is None and 2 * count < len(array)), digest))
         return pairs
+
+
+def _out_name(given: List[Any], i: int) -> str:
+    return "out" if len(given) == 1 else f"out[{i}]"
+
+
+def _initial(out: Any, like: Optional[Like], capacity: int) -> Any:
+    """The array a query writes into first: the caller's (``out``, or its PairBuffer's), else a
+    new one of ``like``'s kind."""
+    if isinstance(out, PairBuffer):
+        if out.array is None:
+            out.array = allocate_pairs(like, capacity)
+        return out.array
+    return allocate_pairs(like, capacity) if out is None else out
+
+
+def _grown(out: Any, like: Optional[Like], needed: int, device: "Device") -> Any:
+    """A new array for ``needed`` pairs: exactly, for ours; with headroom, in the kind of its
+    current array, for a PairBuffer (which keeps it)."""
+    if not isinstance(out, PairBuffer):
+        return allocate_pairs(like, needed)
+    out.array = allocate_pairs(_Args(device).like(out.array, "out"), _with_headroom(needed))
+    return out.array

@@ -3,20 +3,22 @@ blocking (the stream-ordered calls are in minkq._stream_ordered)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Sequence, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Sequence
 
 import numpy as np
 
 from . import _native
-from ._args import FLOAT64, KINDS, MODES, _Args, _choice, _like, _radius
-from ._device import Device
+from ._args import FLOAT64, _Args, _like
+from ._conventions import Closable, old_device_form, resolve_device
 from ._geometry import Geometry, _Geometries, _moving_dtype, _native_geometries
 from ._interop import stream_handle
-from ._results import QueryInfo, WorkStats, _SizedQueries
+from ._results import _SizedQueries
+from ._scene_queries import _SceneQueries
 from ._stream_ordered import _StreamOrdered
 
 if TYPE_CHECKING:
-    from ._args import Kind, Mode, Pairs
+    from ._args import Pairs
+    from ._device import Device
 
 _BLOCKING = object()
 """The ``stream`` of :meth:`Scene._move` for the blocking calls."""
@@ -24,9 +26,17 @@ _NO_TRIANGLES = np.zeros((0, 3), np.int32)
 """``triangles=None``: a scene of vertices and edges only."""
 
 
-class Scene(_StreamOrdered, _SizedQueries, _Geometries):
+class Scene(Closable, _StreamOrdered, _SceneQueries, _Geometries):
     """A triangle mesh, or codimensional elements (particles, rods), on a device with the BVHs
     for its queries: VT and EE over triangles, VV and EV over vertices and edges.
+
+    ``device``: where the scene runs. None (the default) takes it from the arrays: the CPU for
+    numpy arrays, lists and host arrays of other libraries, the GPU of a CUDA array (a Warp
+    array or torch tensor on ``cuda:1`` gives ``cuda:1``). Or name it: ``"cpu"``, ``"cuda"``,
+    ``"cuda:N"``, ``"auto"``, a ``torch.device``, a Warp device or a :class:`Device`.
+    ``close()`` (or ``with minkq.Scene(...) as scene:``) releases the scene and its device
+    memory at once; later calls raise ValueError. The old spelling ``Scene(device, vertices,
+    triangles, edges)`` works for one more release with a DeprecationWarning.
 
     ``vertices``: (n, 3) float32 or float64; ``triangles``: (m, 3) int32, or None (the same
     as an empty (0, 3) array: no triangles); ``edges``: (e, 2) int32, or None (or an empty
@@ -35,7 +45,8 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
     C-contiguous numpy arrays of exactly these dtypes are used without a copy; other host
     arrays (int64 indices, strided or byte-swapped arrays, lists, ...) are converted once: a
     copy is made (an index that does not fit in int32 raises IndexOutOfRangeError naming it).
-    Arrays of other libraries must have exactly these dtypes.
+    Indices of other libraries in another integer dtype (PyTorch's int64 faces) are converted
+    the same way, through a host copy; their vertices must have exactly these dtypes.
 
     Precision (:attr:`dtype`): float64 vertices (numpy, Warp ``wp.vec3d`` / float64, PyTorch
     float64, ...; also lists of Python floats, which numpy reads as float64) make a float64
@@ -69,10 +80,10 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
     >>> import numpy as np, minkq
     >>> rod = np.array([[0, 0, 0], [.1, 0, 0], [.2, 0, 0], [.3, 0, 0], [.2, .05, 0]], np.float32)
     >>> edges = np.array([[0, 1], [1, 2], [2, 3]], np.int32)  # vertex 4: a particle
-    >>> rods = minkq.Scene(minkq.Device("cpu"), rod, None, edges, vt=False, ee=False, vv=True, ev=True)
-    >>> rods.query("vv", "sphere", 0.06, leaf_exact=True, canonical=True).tolist()
+    >>> rods = minkq.Scene(rod, None, edges, vt=False, ee=False, vv=True, ev=True)
+    >>> rods.query("vv", 0.06, mode="sphere", leaf_exact=True, canonical=True).tolist()
     [[2, 4]]
-    >>> rods.query("ev", "box", 0.06, leaf_exact=True, canonical=True).tolist()
+    >>> rods.query("ev", 0.06, leaf_exact=True, canonical=True).tolist()
     [[4, 1], [4, 2]]
 
     Arrays of other libraries (Warp arrays, PyTorch and CuPy tensors: anything with
@@ -92,10 +103,10 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
     >>> import numpy as np, minkq
     >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
     >>> t = np.array([[0, 1, 2], [3, 4, 5]], np.int32)
-    >>> scene = minkq.Scene(minkq.Device("cpu"), v, t)
-    >>> scene.query("vt", "sphere", 0.2, leaf_exact=True, canonical=True).tolist()
+    >>> scene = minkq.Scene(v, t)
+    >>> scene.query("vt", 0.2, mode="sphere", leaf_exact=True, canonical=True).tolist()
     [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
-    >>> minkq.Scene(minkq.Device("cpu"), v.astype(np.float64), t).dtype
+    >>> minkq.Scene(v.astype(np.float64), t).dtype
     dtype('float64')
 
     Raises :class:`NonFiniteError` (also for a double beyond the float range, about 3.4e38),
@@ -111,11 +122,11 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
 
     def __init__(
         self,
-        device: Device,
         vertices: Any,
-        triangles: Any,
+        triangles: Any = None,
         edges: Any = None,
-        *,
+        *_deprecated: Any,
+        device: Any = None,
         vt: bool = True,
         ee: bool = True,
         vv: bool = False,
@@ -123,9 +134,8 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         drop_incident: bool = True,
     ) -> None:
         super().__init__()
-        if not isinstance(device, Device):
-            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
-        self.device = device
+        (vertices, triangles, edges), device = _old_constructor((vertices, triangles, edges) + _deprecated, device)
+        self.device = device = resolve_device(device, (vertices, triangles, edges))
         args = _Args(device)
         vertices, self._dtype = args.vertices(vertices, "vertices", None)
         self._like = _like(args.last)
@@ -139,10 +149,12 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         self._ranges = None
 
     @classmethod
-    def from_geometries(cls, device: Device, geometries: Sequence[Geometry]) -> "Scene":
+    def from_geometries(cls, geometries: Sequence[Geometry], *_deprecated: Any, device: Any = None) -> "Scene":
         """A scene of several geometries (:class:`Geometry`: meshes, rods, particles), each with
         its own trees, pair kinds, thickness, world and collision filter, moving or static
-        (``minkq_scene_create_geometries``). Its queries report each geometry's self pairs (where
+        (``minkq_scene_create_geometries``), on ``device`` (None: the device of the geometries'
+        vertices, as for the constructor; the old spelling ``from_geometries(device,
+        geometries)`` works for one more release with a DeprecationWarning). Its queries report each geometry's self pairs (where
         it has ``self_pairs``) and the cross pairs its geometries' worlds, groups and masks allow,
         in every mode, with ``leaf_exact``, float64 and swept positions as for a one-mesh scene.
 
@@ -171,17 +183,21 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         >>> tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
         >>> body = minkq.Geometry(tri, [[0, 1, 2]], self_pairs=False, static=True)
         >>> cloth = minkq.Geometry(tri + [0, 0, .1], [[0, 1, 2]])
-        >>> scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [body, cloth])
+        >>> scene = minkq.Scene.from_geometries([body, cloth])
         >>> scene.geometry_count, scene.geometry_range(1, "vertex"), scene.vertex_count
         (2, (3, 3), 6)
-        >>> scene.query("vt", "box", 0.2, leaf_exact=True, canonical=True).tolist()
+        >>> scene.query("vt", 0.2, leaf_exact=True, canonical=True).tolist()
         [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
         >>> scene.refit_geometry(1, tri + [0, 0, 1])  # the cloth moves away; the body stays
-        >>> scene.query("vt", "box", 0.2).tolist()
+        >>> scene.query("vt", 0.2).tolist()
         []
         """
-        if not isinstance(device, Device):
-            raise TypeError(f"device: expected a minkq.Device, got {type(device).__name__}")
+        positional, device = old_device_form("Scene.from_geometries", (geometries,) + _deprecated, device)
+        if len(positional) != 1:
+            raise TypeError(f"Scene.from_geometries: expected (geometries, *, device=None), got {1 + len(_deprecated)} positional arguments")
+        geometries = positional[0]
+        vertices = [getattr(g, "vertices", None) for g in geometries] if isinstance(geometries, (list, tuple)) else []
+        device = resolve_device(device, vertices)
         args, natives, dtypes, like = _native_geometries(device, geometries)
         scene = cls.__new__(cls)
         _SizedQueries.__init__(scene)
@@ -244,10 +260,10 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
 
         >>> import numpy as np, minkq
         >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
-        >>> scene = minkq.Scene(minkq.Device("cpu"), v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> scene = minkq.Scene(v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
         >>> v[3:, 2] = 1.0  # lift the upper triangle away
         >>> scene.rebuild(v)
-        >>> scene.query("vt", "sphere", 0.2).tolist(), scene.tree_growth()
+        >>> scene.query("vt", 0.2, mode="sphere").tolist(), scene.tree_growth()
         ([], 1.0)
         """
         self._move(self._native.rebuild, {"vertices": vertices})
@@ -286,18 +302,18 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         >>> x0 = np.array([[0, -1, -1], [0, 2, -1], [0, -1, 2], [-1, .1, .1]], np.float32)
         >>> x1 = x0.copy()
         >>> x1[3, 0] = 1.0  # vertex 3 crosses triangle 0
-        >>> scene = minkq.Scene(minkq.Device("cpu"), x0, np.array([[0, 1, 2]], np.int32))
+        >>> scene = minkq.Scene(x0, np.array([[0, 1, 2]], np.int32))
         >>> modes = ("box", "sphere", "capsule_ray", "capsule_exact")
         >>> for x in (x0, x1):  # at rest at either end, 1 from the triangle
         ...     scene.refit(x)
-        ...     print([scene.query("vt", mode, 0.01).tolist() for mode in modes])
+        ...     print([scene.query("vt", 0.01, mode=mode).tolist() for mode in modes])
         [[], [], [], []]
         [[], [], [], []]
         >>> scene.refit_swept(x0, x1)
-        >>> scene.is_swept, [scene.query("vt", mode, 0.01).tolist() for mode in modes]
+        >>> scene.is_swept, [scene.query("vt", 0.01, mode=mode).tolist() for mode in modes]
         (True, [[[3, 0]], [[3, 0]], [[3, 0]], [[3, 0]]])
         >>> try:
-        ...     scene.query("ee", "capsule_exact", 0.01)
+        ...     scene.query("ee", 0.01, mode="capsule_exact")
         ... except minkq.UnsupportedError as e:
         ...     print(e)
         query: swept EE queries run box mode only (a moving edge sweeps no segment)
@@ -340,7 +356,7 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         >>> i, j = np.meshgrid(np.arange(8), np.arange(8))
         >>> v00 = (j * 9 + i).ravel()
         >>> tris = np.concatenate([np.stack([v00, v00 + 1, v00 + 10], 1), np.stack([v00, v00 + 10, v00 + 9], 1)])
-        >>> scene = minkq.Scene(minkq.Device("cpu"), flat, tris.astype(np.int32))
+        >>> scene = minkq.Scene(flat, tris.astype(np.int32))
         >>> scene.tree_growth()
         1.0
         >>> a = 2 * np.pi * flat[:, 0]  # rolled up into a tube
@@ -353,99 +369,6 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
         1.0
         """
         return self._native.tree_growth()
-
-    def query(
-        self,
-        kind: "Kind",
-        mode: "Mode",
-        radius: float,
-        *,
-        leaf_exact: bool = False,
-        canonical: bool = False,
-        like: Any = None,
-    ) -> "Pairs":
-        """Pairs within ``radius`` as a (k, 2) int32 array: (vertex, triangle) for ``kind="vt"``,
-        (e, f) with e < f for ``"ee"``, (v, w) with v < w for ``"vv"``, (vertex, edge) for
-        ``"ev"`` (each needs the scene's flag of the same name).
-
-        ``mode`` is the node test, from fast to tight: ``"box"``, ``"sphere"`` (point queries:
-        VT, VV, EV), ``"capsule_ray"``, ``"capsule_exact"``. ``leaf_exact=True`` tests the
-        primitives at the leaves, so that the pairs are the true contacts (plus, at most, pairs
-        within r + 2**-19 S). ``canonical=True`` sorts the pairs.
-
-        The result is a numpy array, or an array of the library and device of the vertices last
-        given (a Warp array on ``cuda:0`` gives a Warp array on ``cuda:0``, written there in
-        place), or of ``like`` when given.
-        """
-        return self._query(kind, mode, radius, leaf_exact, canonical, False, like)[0]
-
-    def query_digest(
-        self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False, like: Any = None
-    ) -> Tuple["Pairs", int]:
-        """Like :meth:`query`, canonical, with the xxHash64 (seed 0) of the little-endian pairs:
-        equal across backends, runs and language bindings."""
-        pairs, digest = self._query(kind, mode, radius, leaf_exact, True, True, like)
-        assert digest is not None
-        return pairs, digest
-
-    def query_into(
-        self,
-        out: Any,
-        kind: "Kind",
-        mode: "Mode",
-        radius: float,
-        *,
-        leaf_exact: bool = False,
-        canonical: bool = False,
-        digest: bool = False,
-    ) -> QueryInfo:
-        """Runs a query into ``out``, a writable C-contiguous (capacity, 2) int32 array (numpy,
-        or another library's host or, on a CUDA device, device array written in place); pairs
-        go to ``out[:count]``. Raises :class:`CapacityError` (``needed``: the exact count) when
-        ``out`` is too small, writing nothing past it."""
-        args = _Args(self.device)
-        checked_args = (args.out(out), _choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
-        count, dig = self._native.query_into(*checked_args, bool(leaf_exact), bool(canonical), bool(digest))
-        return QueryInfo(count, dig)
-
-    def query_vt_ee(
-        self,
-        radius: float,
-        *,
-        vt_mode: "Mode" = "box",
-        ee_mode: "Mode" = "box",
-        leaf_exact: bool = False,
-        canonical: bool = False,
-        like: Any = None,
-    ) -> Tuple["Pairs", "Pairs"]:
-        """The VT and the EE pairs within ``radius`` from one pass (one parallel loop on the CPU,
-        one kernel launch and one count readback on CUDA): exactly what ``query("vt", vt_mode,
-        ...)`` and ``query("ee", ee_mode, ...)`` return (VV and EV queries run through
-        :meth:`query`). ``leaf_exact=True`` gives the contacts (meant for the default box modes:
-        docs/design-notes.md). Results as :meth:`query`.
-
-        >>> import numpy as np, minkq
-        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]], np.float32)
-        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
-        >>> vt, ee = scene.query_vt_ee(0.2, leaf_exact=True, canonical=True)
-        >>> vt.tolist()
-        [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]
-        >>> len(ee)
-        9
-        """
-        vt_mode = _choice(vt_mode, "vt_mode", MODES)
-        ee_mode = _choice(ee_mode, "ee_mode", MODES)
-        r = _radius(radius)
-        flags = (bool(leaf_exact), bool(canonical), False)
-        target = self._like if like is None else _Args(self.device).like(like)
-        key = (vt_mode, ee_mode) + flags
-        (vt, _), (ee, _) = self._run_outputs(
-            [("vt",) + key, ("ee",) + key],
-            lambda vt_out, ee_out: self._native.query_vt_ee_into(vt_out, ee_out, vt_mode, ee_mode, r, *flags),
-            target,
-            lambda e: 0 if e.message.startswith("VT:") else 1,  # the first short buffer, VT before EE
-        )
-        return vt, ee
 
     def _move(
         self,
@@ -471,44 +394,23 @@ class Scene(_StreamOrdered, _SizedQueries, _Geometries):
             self._stream = handle
         self._like = _like(args.last)
 
-    def count(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> int:
-        """The exact number of pairs :meth:`query` would return, none written or kept: to size
-        a buffer for :meth:`query_into` first, or when the count is all that is needed.
-
-        >>> import numpy as np, minkq
-        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], np.float32)
-        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2]], np.int32))
-        >>> scene.count("vt", "sphere", 0.2) == len(scene.query("vt", "sphere", 0.2)) == 1
-        True
-        """
-        checked = (_choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
-        return int(self._native.count(*checked, bool(leaf_exact)))
-
-    def work(self, kind: "Kind", mode: "Mode", radius: float, *, leaf_exact: bool = False) -> "WorkStats":
-        """Runs the query once with the library's work counters on and returns them (the pairs
-        are not kept). The counts depend only on the tree and the queries: the same on every
-        backend.
-
-        >>> import numpy as np, minkq
-        >>> xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.1]], np.float32)
-        >>> scene = minkq.Scene(minkq.Device("cpu"), xyz, np.array([[0, 1, 2]], np.int32))
-        >>> w = scene.work("vt", "sphere", 0.2)
-        >>> (w.candidates, w.primitive_tests >= w.candidates)
-        (1, True)
-        """
-        checked = (_choice(kind, "kind", KINDS), _choice(mode, "mode", MODES), _radius(radius))
-        return WorkStats(*self._native.work(*checked, bool(leaf_exact)))
-
-    def _query(self, kind: Any, mode: Any, radius: Any, leaf_exact: bool, canonical: bool, digest: bool, like: Any) -> Tuple[Any, Optional[int]]:
-        kind = _choice(kind, "kind", KINDS)
-        mode = _choice(mode, "mode", MODES)
-        r = _radius(radius)
-        flags = (bool(leaf_exact), bool(canonical), bool(digest))
-        target = self._like if like is None else _Args(self.device).like(like)
-        return self._run((kind, mode) + flags, lambda out: self._native.query_into(out, kind, mode, r, *flags), target)
-
     def __repr__(self) -> str:
+        if self.closed:
+            return "minkq.Scene(closed)"
         precision = ", float64" if self._dtype == FLOAT64 else ""
         if self.geometry_count > 1:
             precision += f", {self.geometry_count} geometries"
         return f"minkq.Scene({self.vertex_count} vertices, {self.triangle_count} triangles, {self.edge_count} edges{precision})"
+
+
+def _old_constructor(positional: tuple, device: Any) -> tuple:
+    """``((vertices, triangles, edges), device)`` of the constructor's positional arguments, also
+    in the old spelling ``Scene(device, vertices, triangles, edges=None)`` (with a
+    DeprecationWarning)."""
+    positional, device = old_device_form("Scene", positional, device, depth=2)
+    if len(positional) > 3 and any(p is not None for p in positional[3:]):
+        raise TypeError(f"Scene: expected (vertices, triangles=None, edges=None, *, device=None, ...), got {len(positional)} positional arguments")
+    if positional and (positional[0] is None or isinstance(positional[0], str)):
+        hint = ": the device is a keyword, Scene(vertices, triangles, device=...)" if positional[0] is not None else ""
+        raise TypeError(f"vertices: expected an (n, 3) array, got {positional[0]!r}{hint}")
+    return (tuple(positional) + (None, None, None))[:3], device

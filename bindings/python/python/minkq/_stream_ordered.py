@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict
 import numpy as np
 
 from ._args import KINDS, MODES, _Args, _choice, _radius
+from ._conventions import old_mode_form
 from ._interop import stream_handle
 
 if TYPE_CHECKING:
@@ -44,12 +45,12 @@ class _StreamOrdered:
 
         >>> import numpy as np, minkq
         >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .1], [1, 0, .1], [0, 1, .1]], np.float32)
-        >>> scene = minkq.Scene(minkq.Device("cpu"), v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
+        >>> scene = minkq.Scene(v, np.array([[0, 1, 2], [3, 4, 5]], np.int32))
         >>> scene.reserve(refit=True, canonical_capacity=64)
         >>> pairs, count = np.zeros((64, 2), np.int32), np.zeros(1, np.uint64)
         >>> v[3:, 2] = 0.15
         >>> scene.refit_async(v)
-        >>> scene.query_async(pairs, count, "vt", "sphere", 0.2, canonical=True)
+        >>> scene.query_async(pairs, count, "vt", 0.2, mode="sphere", canonical=True)
         >>> scene.async_status()  # waits for the stream; raises if a refit met a NaN
         >>> int(count[0]), pairs[: count[0]].tolist()
         (6, [[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]])
@@ -103,15 +104,15 @@ class _StreamOrdered:
         >>> x0 = np.array([[0, -1, -1], [0, 2, -1], [0, -1, 2], [-1, .1, .1]], np.float32)
         >>> x1 = x0.copy()
         >>> x1[3, 0] = 1.0  # the flying vertex of refit_swept
-        >>> scene = minkq.Scene(minkq.Device("cpu"), x0, np.array([[0, 1, 2]], np.int32))
+        >>> scene = minkq.Scene(x0, np.array([[0, 1, 2]], np.int32))
         >>> scene.reserve(refit=True, swept=True)
         >>> scene.refit_swept_async(x0, x1)
         >>> scene.async_status()
-        >>> scene.query("vt", "capsule_exact", 0.01).tolist()
+        >>> scene.query("vt", 0.01, mode="capsule_exact").tolist()
         [[3, 0]]
         >>> x1[3, 1] = np.nan
         >>> scene.refit_swept_async(x0, x1)  # accepted: the scene is at rest at x0
-        >>> scene.query("vt", "capsule_exact", 0.01).tolist(), scene.is_swept
+        >>> scene.query("vt", 0.01, mode="capsule_exact").tolist(), scene.is_swept
         ([], True)
         >>> try:
         ...     scene.async_status()
@@ -132,14 +133,14 @@ class _StreamOrdered:
         out_pairs: Any,
         out_count: Any,
         kind: "Kind",
-        mode: "Mode",
-        radius: float,
-        *,
+        radius: Any,
+        *_deprecated: Any,
+        mode: "Mode" = "box",
         leaf_exact: bool = False,
         canonical: bool = False,
         stream: Any = None,
     ) -> None:
-        """:meth:`query_into`, enqueued on ``stream`` (``minkq_scene_query_async``): writes the
+        """:meth:`query` with ``out=``, enqueued on ``stream`` (``minkq_scene_query_async``): writes the
         exact number of pairs to ``out_count[0]`` (a (1,) uint64 or int64 array), also when it
         exceeds the capacity of ``out_pairs`` ((capacity, 2) int32, C-contiguous), and
         min(count, capacity) of the pairs, never past it (which ones, when they do not all fit,
@@ -149,7 +150,9 @@ class _StreamOrdered:
         host); on the CPU they are host memory, written when this returns. ``stream`` as in
         :meth:`refit_async` (None: the current stream of ``out_pairs``'s library).
         ``canonical=True`` sorts the pairs when they fit and needs the capacity reserved
-        (:meth:`reserve`)."""
+        (:meth:`reserve`). The old spelling with a positional mode, ``query_async(out_pairs,
+        out_count, kind, mode, radius)``, works for one more release with a DeprecationWarning."""
+        mode, radius = old_mode_form("query_async", radius, _deprecated, mode)
         kind = _choice(kind, "kind", KINDS)
         mode = _choice(mode, "mode", MODES)
         r = _radius(radius)

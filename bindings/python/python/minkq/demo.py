@@ -109,23 +109,23 @@ def run(backend: str = "auto", size: int = DEFAULT_SIZE, factor: float = DEFAULT
     print(f"minkq demo (Python): twisted sheet {size}x{size}, 3 turns: {len(xyz)} vertices, {len(tris)} triangles, {len(edges)} edges")
     print(f"radius {r:.6g} = {factor:g} x mean edge length {h:.6g}; device {device.name}")
     t0 = time.perf_counter()
-    scene = minkq.Scene(device, xyz, tris, vt=True, ee=True, drop_incident=True)
+    scene = minkq.Scene(xyz, tris, vt=True, ee=True, drop_incident=True, device=device)
     print(f"scene build {1e3 * (time.perf_counter() - t0):.1f} ms")
     if not np.array_equal(scene.edges(), edges):
         raise RuntimeError("the library's edge numbering differs from derive_edges")
 
-    truth = {kind: keys(scene.query(kind, mode, r, leaf_exact=True)) for kind, mode in (("vt", "sphere"), ("ee", "capsule_exact"))}
+    truth = {kind: keys(scene.query(kind, r, mode=mode, leaf_exact=True)) for kind, mode in (("vt", "sphere"), ("ee", "capsule_exact"))}
     print(f"true contacts: the leaf_exact pairs, {len(truth['vt'])} VT and {len(truth['ee'])} EE\n")
 
     print(f"{'kind':<4} {'mode':<26} {'candidates':>12} {'true':>12} {'fp ratio':>9} {'false neg':>10} {'query ms':>10} {'speedup':>8}")
     false_negatives = 0
     box_ms = 0.0
     for kind, name, mode, leaf_exact in MODES:
-        scene.query(kind, mode, r, leaf_exact=leaf_exact)  # sizes the output: the timed runs run once
+        scene.query(kind, r, mode=mode, leaf_exact=leaf_exact)  # sizes the output: the timed runs run once
         times: List[float] = []
         for _ in range(repeat):
             start = time.perf_counter()
-            pairs = scene.query(kind, mode, r, leaf_exact=leaf_exact)
+            pairs = scene.query(kind, r, mode=mode, leaf_exact=leaf_exact)
             times.append(1e3 * (time.perf_counter() - start))
         ms = sorted(times)[len(times) // 2]
         if mode == "box":

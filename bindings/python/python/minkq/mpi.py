@@ -11,7 +11,7 @@ single-process scene's) and each pair is on exactly one rank::
     import minkq.mpi
     scene = minkq.mpi.Scene(MPI.COMM_WORLD, vertices, triangles, vertex_ids, triangle_ids,
                             vertex_owned, triangle_owned)
-    pairs = scene.query("ee", "box", radius, leaf_exact=True)   # this rank's pairs
+    pairs = scene.query("ee", radius, leaf_exact=True)   # this rank's pairs
 
 An error on any rank raises the same exception, with the same message naming the rank and
 the element, on every rank.
@@ -20,7 +20,15 @@ This module loads ``libminkq_mpi.so`` (built with minkq's MPI component and link
 the system's MPI, so it is not in the wheel): from ``MINKQ_MPI_LIB`` (the file) or
 ``MINKQ_MPI_LIB_DIR`` (its folder) when set, else from the library search path (after
 ``cmake --install`` or the Debian package). It uses the libminkq that library links, not the
-wheel's, so its scenes take a device spec string rather than a :class:`minkq.Device`.
+wheel's, so its scenes take ``device=`` as a spec ("cpu", "cuda:N"), a ``torch.device`` or a Warp
+device (a :class:`minkq.Device` gives its spec) and make their own device from it.
+
+The conventions and dtype policy are :class:`minkq.Scene`'s: ``mode="box"`` by default,
+``out=`` (an (capacity, 2) int64 array, :class:`CapacityError` when short, or a
+:class:`minkq.PairBuffer`, grown as needed), ``close()`` and ``with``; float64 vertices are
+refused rather than rounded (a distributed scene is float32 only), int64 and other integer
+indices converted with a range check, floats never rounded to indices. The old spelling
+``query(kind, mode, radius)`` works for one more release with a DeprecationWarning.
 """
 
 from __future__ import annotations
@@ -31,7 +39,10 @@ from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 
-from ._errors import _from_status
+from ._args import _rows
+from ._conventions import PairBuffer, array_device, device_spec, old_mode_form
+from ._errors import CapacityError, _from_status
+from ._interop import has_protocol, host_copy
 
 __all__ = ["Scene", "library_path", "local_device"]
 
@@ -229,13 +240,19 @@ def _vertices(value: Any, name: str) -> np.ndarray:
     """Vertex rows as (n, 3) float32; TypeError for double (or wider) values, which would be
     rounded: a distributed scene is float32 only (minkq_mpi_scene_create refuses
     MINKQ_SCENE_FLOAT64), and minkq.Scene refuses the same rounding for a float32 scene."""
-    array = np.asarray(value)
+    array = host_copy(value) if has_protocol(value) else np.asarray(value)
     if array.dtype.kind == "f" and array.dtype.itemsize > 4:
         raise TypeError(
             f"{name}: got {array.dtype} values for a minkq.mpi scene, which is float32 only: rounding them "
             "could lose a pair within r in double; pass float32 values"
         )
-    return np.ascontiguousarray(array, dtype=np.float32).reshape(-1, 3)
+    return _rows(array, name, np.float32, (3,))
+
+
+def _indices(value: Any, name: str, dtype: Any, trailing: tuple) -> np.ndarray:
+    """Index rows (or ids) as C-contiguous ``dtype``, converted as :class:`minkq.Scene` converts
+    them: integers range checked, floats refused."""
+    return _rows(host_copy(value) if has_protocol(value) else value, name, dtype, trailing)
 
 
 def _host(array: np.ndarray, count: int) -> _Buffer:
@@ -249,12 +266,15 @@ class Scene:
     ``triangles`` (m, 3) local vertex indices; ``vertex_ids`` (n,) and ``triangle_ids`` (m,)
     global ids (int64 >= 0, distinct on a rank); ``vertex_owned`` (n,) and ``triangle_owned``
     (m,) booleans: whether this rank owns each. ``vt`` and ``ee`` pick the queries the scene answers; ``drop_incident`` drops pairs that
-    share a vertex. ``device`` is this rank's device spec ("cpu", "cuda:N"). Collective.
+    share a vertex. ``device``: this rank's device ("cpu", "cuda:N", a ``torch.device``, a Warp
+    device or a :class:`minkq.Device`; None: the vertices' device, the CPU for host arrays;
+    :func:`local_device` picks one GPU per rank). Collective.
     """
 
     def __init__(self, comm: Any, vertices: Any, triangles: Any, vertex_ids: Any, triangle_ids: Any,
                  vertex_owned: Any, triangle_owned: Any, *, vt: bool = True, ee: bool = True,
-                 drop_incident: bool = True, device: str = "cpu") -> None:
+                 drop_incident: bool = True, device: Any = None) -> None:
+        spec = (array_device(vertices) or "cpu") if device is None else device_spec(device)
         v = _vertices(vertices, "vertices")  # before anything is allocated
         lib = _load()
         self._scene = ctypes.c_void_p()
@@ -263,16 +283,15 @@ class Scene:
         self._comm = comm
         # Arrays this rank checks (shape, the vertices' dtype: every rank must pass the same
         # kinds, as for any collective call); the library checks the rest, collectively.
-        t = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
         arrays: Dict[str, np.ndarray] = {
-            "vertices": v, "triangles": t,
-            "vertex_ids": np.ascontiguousarray(vertex_ids, dtype=np.int64).reshape(-1),
-            "triangle_ids": np.ascontiguousarray(triangle_ids, dtype=np.int64).reshape(-1),
+            "vertices": v, "triangles": _indices(triangles, "triangles", np.int32, (3,)),
+            "vertex_ids": _indices(vertex_ids, "vertex_ids", np.int64, ()),
+            "triangle_ids": _indices(triangle_ids, "triangle_ids", np.int64, ()),
             "vertex_owned": np.ascontiguousarray(vertex_owned, dtype=np.uint8).reshape(-1),
             "triangle_owned": np.ascontiguousarray(triangle_owned, dtype=np.uint8).reshape(-1),
         }
         assert _core is not None
-        _check(_core.minkq_device_create(device.encode(), ctypes.byref(self._device)), _core.minkq_last_error_message())
+        _check(_core.minkq_device_create(spec.encode(), ctypes.byref(self._device)), _core.minkq_last_error_message())
         desc = _Desc(flags=(_SCENE_VT if vt else 0) | (_SCENE_EE if ee else 0)
                      | (_SCENE_DROP_INCIDENT if drop_incident else 0))
         for name, array in arrays.items():
@@ -333,20 +352,25 @@ class Scene:
         _check(_lib.minkq_mpi_scene_query(self._scene, ctypes.byref(q), self._result),
                _lib.minkq_mpi_last_error_message())
 
-    def query(self, kind: str, mode: str, radius: float, *, leaf_exact: bool = False,
-              canonical: bool = False) -> np.ndarray:
+    def query(self, kind: str, radius: Any, *_deprecated: Any, mode: str = "box", leaf_exact: bool = False,
+              canonical: bool = False, out: Any = None) -> np.ndarray:
         """This rank's pairs, a (k, 2) int64 array of global ids: (vertex, triangle) for "vt",
         (e, f) with e < f for "ee". Modes and ``leaf_exact`` as :meth:`minkq.Scene.query`;
-        ``canonical`` sorts this rank's pairs. Collective (the same arguments on every rank)."""
+        ``canonical`` sorts this rank's pairs. ``out``: a writable C-contiguous (capacity, 2)
+        int64 numpy array (:class:`CapacityError` when short; every rank has its pairs then) or
+        a :class:`minkq.PairBuffer` (grown as needed); the result is then ``out[:k]``.
+        Collective (the same arguments on every rank)."""
+        mode, radius = old_mode_form("query", radius, _deprecated, mode)
         self._run(kind, mode, radius, (_LEAF_EXACT if leaf_exact else 0) | (_CANONICAL if canonical else 0))
         n = int(_lib.minkq_mpi_result_count(self._result))
-        if n == 0:
-            return np.zeros((0, 2), dtype=np.int64)
-        pointer = _lib.minkq_mpi_result_pairs(self._result)
-        return np.ctypeslib.as_array(pointer, shape=(n, 2)).copy()
+        target = _target(out, n)
+        if n:
+            target[:n] = np.ctypeslib.as_array(_lib.minkq_mpi_result_pairs(self._result), shape=(n, 2))
+        return target if out is None else target[:n]
 
-    def count(self, kind: str, mode: str, radius: float, *, leaf_exact: bool = False) -> int:
+    def count(self, kind: str, radius: Any, *_deprecated: Any, mode: str = "box", leaf_exact: bool = False) -> int:
         """The number of this rank's pairs, without keeping them. Collective."""
+        mode, radius = old_mode_form("count", radius, _deprecated, mode)
         self._run(kind, mode, radius, _COUNT | (_LEAF_EXACT if leaf_exact else 0))
         return int(_lib.minkq_mpi_result_count(self._result))
 
@@ -358,3 +382,22 @@ class Scene:
         info = _RankInfo()
         _check(_lib.minkq_mpi_scene_rank_info(self._scene, ctypes.byref(info)), _lib.minkq_mpi_last_error_message())
         return {name: getattr(info, name) for name, _ in _RankInfo._fields_}
+
+
+def _target(out: Any, count: int) -> np.ndarray:
+    """The int64 array ``count`` pairs go to: a new one, the caller's (checked), or a
+    PairBuffer's (grown with an eighth more room when short)."""
+    if out is None:
+        return np.empty((count, 2), np.int64)
+    if isinstance(out, PairBuffer):
+        if out.array is None or len(out.array) < count:
+            out.array = np.empty((count + count // 8 + 64, 2), np.int64)
+        out = out.array
+    if not isinstance(out, np.ndarray) or out.dtype != np.int64 or out.ndim != 2 or out.shape[1] != 2:
+        raise TypeError(f"out: expected a (capacity, 2) int64 numpy array or a minkq.PairBuffer, got {type(out).__name__}"
+                        f"{'' if not isinstance(out, np.ndarray) else f' of {out.dtype} {out.shape}'}")
+    if not (out.flags.c_contiguous and out.flags.writeable):
+        raise ValueError("out: expected a writable C-contiguous array")
+    if len(out) < count:
+        raise CapacityError(f"out: {count} pairs do not fit in {len(out)} rows", needed=count)
+    return out

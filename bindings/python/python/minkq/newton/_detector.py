@@ -246,7 +246,8 @@ class TriMeshCollisionDetector(_NewtonDetector):
         # them in place (16-byte records). Triangles and edges are copied into the scene once.
         edges = model.edge_indices[:, 2:4] if ee else np.zeros((0, 2), np.int32)
         triangles = model.tri_indices if vt else np.zeros((0, 3), np.int32)
-        self._scene = _api.Scene(self.minkq_device, self.vertex_positions, triangles, edges, vt=vt, ee=ee, drop_incident=True)
+        self._scene = _api.Scene(self.vertex_positions, triangles, edges, device=self.minkq_device, vt=vt, ee=ee,
+                                 drop_incident=True)
         if self.device.is_cuda:  # the scratch of the stream-ordered refits and rebuilds of CUDA captures
             self._scene.reserve(refit=True, rebuild=True)
 
@@ -303,19 +304,19 @@ class TriMeshCollisionDetector(_NewtonDetector):
         found = self._found[kind]
         if self._in_cuda_capture:
             pairs = self._scratch.get(name, wp.int32, self._capture_capacity(kind), (2,))
-            self._scene.query_async(pairs, found, kind, mode, radius, leaf_exact=True)
+            self._scene.query_async(pairs, found, kind, radius, mode=mode, leaf_exact=True)
             flag = VERTEX_OVERFLOW if kind == "vt" else EDGE_OVERFLOW
             wp.launch(_flag_lost_pairs_kernel, dim=1, inputs=[found, pairs.shape[0], flag], outputs=[self.resize_flags],
                       device=self.device)
             return pairs, found, pairs.shape[0]
         pairs = self._scratch.get(name, wp.int32, 0, (2,))
         try:
-            info = self._scene.query_into(pairs, kind, mode, radius, leaf_exact=True)
+            count = len(self._scene.query(kind, radius, mode=mode, leaf_exact=True, out=pairs))
         except CapacityError as e:
             pairs = self._scratch.get(name, wp.int32, e.needed + e.needed // 4, (2,))
-            info = self._scene.query_into(pairs, kind, mode, radius, leaf_exact=True)
-        found.fill_(info.count)
-        return pairs[: info.count], found, info.count
+            count = len(self._scene.query(kind, radius, mode=mode, leaf_exact=True, out=pairs))
+        found.fill_(count)
+        return pairs[:count], found, count
 
     def _capture_capacity(self, kind: str) -> int:
         """Pairs a captured query's buffer holds at least: as many as Newton's rows of that kind
