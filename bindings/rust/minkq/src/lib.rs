@@ -173,9 +173,11 @@ mod bvh;
 mod device;
 mod error;
 mod geometry;
+mod inputs;
 mod pairs;
 mod query;
 mod scene;
+mod sink;
 mod stream;
 
 /// The raw FFI bindings (`minkq-sys`), for what the safe API does not cover.
@@ -191,9 +193,11 @@ pub use bvh::{Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
 pub use geometry::{Element, GeometryDesc, GeometryFlags, Kinds};
+pub use inputs::{Boxes, Vertices};
 pub use pairs::PairBuffer;
 pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, Reserve, SceneFlags, WorkStats};
 pub use scene::{Scene, SceneBuffers, SceneDesc};
+pub use sink::PairSink;
 pub use stream::{CountOut, Stream};
 
 /// The ABI version this crate was generated against (`MINKQ_ABI_VERSION`).
