@@ -8,8 +8,8 @@ use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
 use crate::inputs::Boxes;
-use crate::sink::{write_pairs, PairSink};
 use crate::query::{Mode, QueryFlags, QueryInfo};
+use crate::sink::{write_pairs, PairSink};
 use crate::sys;
 
 /// The query shapes of a [`BvhQuery`] (`minkq_shape` with its buffers).
@@ -20,6 +20,7 @@ use crate::sys;
 /// let shapes = Shapes::Spheres(&centres);
 /// assert!(matches!(shapes, Shapes::Spheres(c) if c.len() == 1));
 /// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug)]
 pub enum Shapes<'a> {
     /// Spheres of the query's radius around these centres; modes `Box`, `Sphere`.
@@ -131,6 +132,7 @@ impl<'a> From<&BvhQuery<'a>> for BvhBufferQuery<'a> {
 /// ```
 /// assert_ne!(minkq::ShapeKind::Sphere, minkq::ShapeKind::Capsule);
 /// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ShapeKind {
     /// `first`: centres (3 floats); modes `Box`, `Sphere`.
@@ -471,7 +473,11 @@ impl Bvh {
     /// assert_eq!(&out[..info.count as usize], &[[0, 0]]);
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn query_into<'q, 'o>(&self, query: impl Into<BvhBufferQuery<'q>>, out: impl PairSink<'o>) -> Result<QueryInfo> {
+    pub fn query_into<'q, 'o>(
+        &self,
+        query: impl Into<BvhBufferQuery<'q>>,
+        out: impl PairSink<'o>,
+    ) -> Result<QueryInfo> {
         let query = query.into();
         write_pairs(out, |pairs, capacity, memory| self.query_raw(&query, pairs, capacity, memory))
     }

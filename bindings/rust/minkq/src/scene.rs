@@ -7,10 +7,10 @@ use std::sync::Arc;
 
 use crate::buffer::sealed::Precision;
 use crate::buffer::{Buffer, Vertex};
-use crate::inputs::Vertices;
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
 use crate::geometry::GeometryFlags;
+use crate::inputs::Vertices;
 use crate::query::SceneFlags;
 use crate::sys;
 

@@ -54,9 +54,7 @@ fn strided_buffers_give_the_pairs_of_packed_slices() {
     // Refit from strided records: lift every vertex; the pairs stay those of a packed refit.
     let lifted: Vec<[f32; 4]> = vec4.iter().map(|v| [v[0] * 0.5, v[1], v[2] * 0.5, 0.0]).collect();
     // SAFETY: as above.
-    strided
-        .refit(unsafe { Buffer::from_raw_parts(lifted.as_ptr().cast(), 16, lifted.len(), Memory::Host) })
-        .unwrap();
+    strided.refit(unsafe { Buffer::from_raw_parts(lifted.as_ptr().cast(), 16, lifted.len(), Memory::Host) }).unwrap();
     let mut packed = packed;
     packed.refit(&lifted.iter().map(|v| [v[0], v[1], v[2]]).collect::<Vec<_>>()).unwrap();
     let query = Query::ee(Mode::CapsuleExact, r).with_flags(QueryFlags::LEAF_EXACT);
@@ -85,10 +83,10 @@ fn bvh_buffer_queries_equal_slice_queries() {
         BvhBufferQuery::capsules(Buffer::from_slice(&starts), Buffer::from_slice(&ends), Mode::CapsuleExact, 0.05)
             .with_flags(QueryFlags::CANONICAL);
     let mut out = vec![[0; 2]; expected.len()];
-    let info = bvh.query_into(&split, PairsOut::from_slice(&mut out)).unwrap();
+    let info = bvh.query_into(split, PairsOut::from_slice(&mut out)).unwrap();
     assert_eq!((info.count as usize, out), (expected.len(), expected.clone()));
     let mut small = vec![[0; 2]; 1];
-    match bvh.query_into(&split, PairsOut::from_slice(&mut small)) {
+    match bvh.query_into(split, PairsOut::from_slice(&mut small)) {
         Err(Error::Capacity { needed, .. }) => assert_eq!(needed as usize, expected.len()),
         other => panic!("{other:?}"),
     }

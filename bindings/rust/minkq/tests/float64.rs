@@ -357,7 +357,7 @@ fn a_bvh_refuses_doubles() {
     let spheres = BvhBufferQuery::spheres(Buffer::from_slice(&doubles), Mode::Sphere, 0.1);
     let mut out = Vec::new();
     assert_eq!(
-        bvh.query_into(&spheres, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
+        bvh.query_into(spheres, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
         expected("query: first")
     );
     let capsules = BvhBufferQuery::capsules(
@@ -367,14 +367,14 @@ fn a_bvh_refuses_doubles() {
         0.1,
     );
     assert_eq!(
-        bvh.query_into(&capsules, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
+        bvh.query_into(capsules, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
         expected("query: second")
     );
     // Floats still pass.
     let centres = [[0.5f32; 3]];
     let ok = BvhBufferQuery::spheres(Buffer::from_slice(&centres), Mode::Sphere, 0.1);
     out.resize(4, [0; 2]);
-    assert_eq!(bvh.query_into(&ok, minkq::PairsOut::from_slice(&mut out)).unwrap().count, 1);
+    assert_eq!(bvh.query_into(ok, minkq::PairsOut::from_slice(&mut out)).unwrap().count, 1);
 }
 
 #[test]

@@ -159,8 +159,7 @@ fn float64_geometries_keep_the_double_truth_beside_float_ones() {
     let err = mixed.refit_geometry(1, &near).unwrap_err();
     let message = "geometry 1: refit: [f64; 3] vertices, but a geometry without GeometryFlags::FLOAT64 reads [f32; 3]";
     assert_eq!(err, Error::InvalidArgument(message.into()));
-    let err =
-        mixed.refit_geometry_swept(0, Buffer::from_slice(&triangle), Buffer::from_slice(&tri32)).unwrap_err();
+    let err = mixed.refit_geometry_swept(0, Buffer::from_slice(&triangle), Buffer::from_slice(&tri32)).unwrap_err();
     let message =
         "geometry 0: refit_swept: x1: [f32; 3] vertices, but a geometry with GeometryFlags::FLOAT64 reads [f64; 3]";
     assert_eq!(err, Error::InvalidArgument(message.into()));

@@ -2,9 +2,9 @@
 //! forms): the other geometries, static or not, are not touched.
 use super::{vertex_buffer, Holder, Scene};
 use crate::buffer::Buffer;
-use crate::inputs::Vertices;
 use crate::error::{check, Result};
 use crate::geometry::GeometryFlags;
+use crate::inputs::Vertices;
 use crate::sys;
 
 impl Scene {

@@ -6,9 +6,12 @@ use super::Scene;
 use crate::buffer::{Memory, PairsOut};
 use crate::error::{check, Error, Result};
 use crate::pairs::PairBuffer;
-use crate::sink::{write_pairs, PairSink};
 use crate::query::{Query, QueryFlags, QueryInfo, WorkStats};
+use crate::sink::{write_pairs, PairSink};
 use crate::sys;
+
+/// The VT and the EE pairs of [`Scene::query_vt_ee`].
+type VtEePairs<'r> = (&'r [[i32; 2]], &'r [[i32; 2]]);
 
 impl Scene {
     /// Runs a query into a library-owned buffer that grows as needed and is reused from one
@@ -151,7 +154,7 @@ impl Scene {
         ee: &Query,
         vt_out: &'r mut PairBuffer,
         ee_out: &'r mut PairBuffer,
-    ) -> Result<(&'r [[i32; 2]], &'r [[i32; 2]])> {
+    ) -> Result<VtEePairs<'r>> {
         let (vt_desc, ee_desc) = (vt.raw(), ee.raw());
         // SAFETY: a live scene, two distinct live results (two `&mut`), valid descriptions.
         check(unsafe {
