@@ -7,6 +7,10 @@ use crate::geometry::GeometryFlags;
 use crate::inputs::Vertices;
 use crate::sys;
 
+/// `minkq_scene_geometry_refit_swept` or `minkq_scene_geometry_rebuild_swept`.
+type SweepCall =
+    unsafe extern "C" fn(*mut sys::minkq_scene, u32, sys::minkq_buffer, sys::minkq_buffer) -> sys::minkq_status;
+
 impl Scene {
     /// Moves geometry `geometry`'s vertices (its count, `[f32; 3]` or, for a float64 geometry,
     /// `[f64; 3]`) and refits its trees, as [`Scene::refit`] does for a whole scene. The other
@@ -126,11 +130,8 @@ impl Scene {
         x0: impl Vertices<'v>,
         x1: impl Vertices<'v>,
     ) -> Result<()> {
-        let (x0, x1) = (x0.into_buffer(), x1.into_buffer());
-        let (x0, x1) = self.geometry_swept_buffers(geometry, "refit_swept", &x0, &x1)?;
-        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
-        // geometry's precision where the buffers know it (checked above).
-        check(unsafe { sys::minkq_scene_geometry_refit_swept(self.raw.as_ptr(), geometry, x0, x1) })
+        let call = sys::minkq_scene_geometry_refit_swept;
+        self.sweep_geometry(geometry, "refit_swept", x0.into_buffer(), x1.into_buffer(), call)
     }
 
     /// [`Scene::refit_geometry_swept`] from two [`Buffer`]s, as
@@ -167,11 +168,8 @@ impl Scene {
         x0: impl Vertices<'v>,
         x1: impl Vertices<'v>,
     ) -> Result<()> {
-        let (x0, x1) = (x0.into_buffer(), x1.into_buffer());
-        let (x0, x1) = self.geometry_swept_buffers(geometry, "rebuild_swept", &x0, &x1)?;
-        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
-        // geometry's precision where the buffers know it (checked above).
-        check(unsafe { sys::minkq_scene_geometry_rebuild_swept(self.raw.as_ptr(), geometry, x0, x1) })
+        let call = sys::minkq_scene_geometry_rebuild_swept;
+        self.sweep_geometry(geometry, "rebuild_swept", x0.into_buffer(), x1.into_buffer(), call)
     }
 
     /// [`Scene::rebuild_geometry_swept`] from two [`Buffer`]s.
@@ -205,16 +203,13 @@ impl Scene {
     }
 
     /// The C buffers of `call`'s two positions for geometry `g`, each checked.
-    fn geometry_swept_buffers(
-        &self,
-        g: u32,
-        call: &str,
-        x0: &Buffer<'_>,
-        x1: &Buffer<'_>,
-    ) -> Result<(sys::minkq_buffer, sys::minkq_buffer)> {
-        Ok((
-            self.geometry_vertex_buffer(g, &format!("{call}: x0"), x0)?,
-            self.geometry_vertex_buffer(g, &format!("{call}: x1"), x1)?,
-        ))
+    /// Moves geometry `g` to the swept positions `x0` -> `x1` through `call`, the C
+    /// refit_swept or rebuild_swept of `name`, once both buffers pass the precision check.
+    fn sweep_geometry(&mut self, g: u32, name: &str, x0: Buffer<'_>, x1: Buffer<'_>, call: SweepCall) -> Result<()> {
+        let x0 = self.geometry_vertex_buffer(g, &format!("{name}: x0"), &x0)?;
+        let x1 = self.geometry_vertex_buffer(g, &format!("{name}: x1"), &x1)?;
+        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
+        // geometry's precision where the buffers know it (checked above).
+        check(unsafe { call(self.raw.as_ptr(), g, x0, x1) })
     }
 }
