@@ -33,7 +33,7 @@ impl PyBvh {
         // SAFETY: as in new.
         let boxes = unsafe { boxes.buffer() };
         let bvh = &self.inner;
-        py.allow_threads(|| lock(bvh).refit_buffer(boxes)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(bvh).refit(boxes)).map_err(|e| to_py_err(py, e))
     }
 
     fn rebuild(&self, py: Python<'_>, boxes: &PyAny) -> PyResult<()> {
@@ -41,7 +41,7 @@ impl PyBvh {
         // SAFETY: as in new.
         let boxes = unsafe { boxes.buffer() };
         let bvh = &self.inner;
-        py.allow_threads(|| lock(bvh).rebuild_buffer(boxes)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(bvh).rebuild(boxes)).map_err(|e| to_py_err(py, e))
     }
 
     /// The tree's area cost now over its value at the last build (minkq_bvh_tree_growth).
@@ -70,7 +70,7 @@ impl PyBvh {
         let (query, pairs) = unsafe { (bvh_query(&rows, shape, mode, radius)?, out.pairs_out()) };
         let query = query.with_flags(query_flags(false, canonical, digest));
         let bvh = &self.inner;
-        let info = py.allow_threads(|| lock(bvh).query_to(&query, pairs)).map_err(|e| to_py_err(py, e))?;
+        let info = py.allow_threads(|| lock(bvh).query_into(query, pairs)).map_err(|e| to_py_err(py, e))?;
         Ok((info.count, info.digest))
     }
     /// The exact number of pairs of sphere, capsule or box queries (as `query_into`), none

@@ -81,10 +81,7 @@ impl PyDevice {
     fn new(py: Python<'_>, spec: &str) -> PyResult<Self> {
         let device = Device::new(spec).map_err(|e| to_py_err(py, e))?;
         let name = device.name().to_string();
-        let backend = match device.backend() {
-            minkq::Backend::Cpu => "cpu",
-            minkq::Backend::Cuda => "cuda",
-        };
+        let backend = device.backend().name();
         Ok(PyDevice { inner: Mutex::new(device), name, backend })
     }
 }

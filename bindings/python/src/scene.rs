@@ -110,7 +110,7 @@ impl PyScene {
         // SAFETY: rows of 3 floats (doubles for a float64 geometry), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
-        py.allow_threads(|| lock(scene).refit_geometry_buffer(g, vertices)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(scene).refit_geometry(g, vertices)).map_err(|e| to_py_err(py, e))
     }
 
     /// Moves geometry `g` and builds its trees afresh (minkq_scene_geometry_rebuild).
@@ -119,18 +119,18 @@ impl PyScene {
         // SAFETY: as in refit_geometry.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
-        py.allow_threads(|| lock(scene).rebuild_geometry_buffer(g, vertices)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(scene).rebuild_geometry(g, vertices)).map_err(|e| to_py_err(py, e))
     }
 
     /// Swept positions of geometry `g`, its trees refitted (minkq_scene_geometry_refit_swept).
     fn refit_geometry_swept(&self, py: Python<'_>, g: u32, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
-        self.sweep_at(py, self.is_float64(g), x0, x1, |scene, x0, x1| scene.refit_geometry_swept_buffers(g, x0, x1))
+        self.sweep_at(py, self.is_float64(g), x0, x1, |scene, x0, x1| scene.refit_geometry_swept(g, x0, x1))
     }
 
     /// Swept positions of geometry `g`, its trees built afresh
     /// (minkq_scene_geometry_rebuild_swept).
     fn rebuild_geometry_swept(&self, py: Python<'_>, g: u32, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
-        self.sweep_at(py, self.is_float64(g), x0, x1, |scene, x0, x1| scene.rebuild_geometry_swept_buffers(g, x0, x1))
+        self.sweep_at(py, self.is_float64(g), x0, x1, |scene, x0, x1| scene.rebuild_geometry_swept(g, x0, x1))
     }
 
     fn refit(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
@@ -138,7 +138,7 @@ impl PyScene {
         // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
-        py.allow_threads(|| lock(scene).refit_buffer(vertices)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(scene).refit(vertices)).map_err(|e| to_py_err(py, e))
     }
 
     fn rebuild(&self, py: Python<'_>, vertices: &PyAny) -> PyResult<()> {
@@ -146,17 +146,17 @@ impl PyScene {
         // SAFETY: rows of 3 floats (doubles in a float64 scene), alive in this frame.
         let vertices = unsafe { vertices.buffer() };
         let scene = &self.inner;
-        py.allow_threads(|| lock(scene).rebuild_buffer(vertices)).map_err(|e| to_py_err(py, e))
+        py.allow_threads(|| lock(scene).rebuild(vertices)).map_err(|e| to_py_err(py, e))
     }
 
     /// Swept positions x0 -> x1, the trees refitted to the swept boxes (minkq_scene_refit_swept).
     fn refit_swept(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
-        self.sweep(py, x0, x1, |scene, x0, x1| scene.refit_swept_buffers(x0, x1))
+        self.sweep(py, x0, x1, |scene, x0, x1| scene.refit_swept(x0, x1))
     }
 
     /// Swept positions x0 -> x1, the trees built afresh (minkq_scene_rebuild_swept).
     fn rebuild_swept(&self, py: Python<'_>, x0: &PyAny, x1: &PyAny) -> PyResult<()> {
-        self.sweep(py, x0, x1, |scene, x0, x1| scene.rebuild_swept_buffers(x0, x1))
+        self.sweep(py, x0, x1, |scene, x0, x1| scene.rebuild_swept(x0, x1))
     }
 
     /// Whether the scene's positions are swept ones (minkq_scene_is_swept).
@@ -205,7 +205,7 @@ impl PyScene {
         // SAFETY: rows of 2 int32, writable, packed, used only here.
         let pairs = unsafe { out.pairs_out() };
         let scene = &self.inner;
-        let info = py.allow_threads(|| lock(scene).query_to(&query, pairs)).map_err(|e| to_py_err(py, e))?;
+        let info = py.allow_threads(|| lock(scene).query_into(&query, pairs)).map_err(|e| to_py_err(py, e))?;
         Ok((info.count, info.digest))
     }
 

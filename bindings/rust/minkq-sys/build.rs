@@ -1,6 +1,6 @@
 //! Links libminkq.so: from `MINKQ_LIB_DIR` when set (the CMake build's `capi/` folder or an
 //! install's `lib/`), else built here with CMake from the repository this crate lives in (CPU
-//! backend unless `MINKQ_WITH_CUDA` says otherwise), else, outside the repository (a packaged
+//! backend unless the `cuda` feature is on or `MINKQ_WITH_CUDA` says otherwise), else, outside the repository (a packaged
 //! crate), from an installed minkq that `pkg-config minkq` finds. Dependents get the folder as
 //! `DEP_MINKQ_LIB_DIR` and the library's SONAME, `libminkq.so.<MINKQ_ABI_VERSION>`, which the
 //! folder must hold, as `DEP_MINKQ_SONAME`.
@@ -68,7 +68,9 @@ fn build_with_cmake() -> PathBuf {
         println!("cargo:rerun-if-changed={}", root.join(dir).display());
     }
     let build = PathBuf::from(env::var_os("OUT_DIR").unwrap()).join("cmake-build");
-    let cuda = env::var("MINKQ_WITH_CUDA").unwrap_or_else(|_| "OFF".into());
+    // The `cuda` feature asks for the CUDA backend; MINKQ_WITH_CUDA, when set, decides.
+    let feature = if env::var_os("CARGO_FEATURE_CUDA").is_some() { "ON" } else { "OFF" };
+    let cuda = env::var("MINKQ_WITH_CUDA").unwrap_or_else(|_| feature.into());
     run(Command::new("cmake").arg("-S").arg(&root).arg("-B").arg(&build).args([
         "-DCMAKE_BUILD_TYPE=Release",
         &format!("-DMINKQ_WITH_CUDA={cuda}"),

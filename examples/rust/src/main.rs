@@ -153,12 +153,15 @@ fn run(options: &Options) -> Result<bool, minkq::Error> {
     println!("scene build {:.1} ms", start.elapsed().as_secs_f64() * 1e3);
     assert_eq!(scene.edges()?, edges, "the library's edge numbering differs from derive_edges");
 
-    let mut buffer = PairBuffer::new()?;
     let leaf = QueryFlags::LEAF_EXACT;
-    let true_vt: HashSet<[i32; 2]> =
-        scene.query(&Query::vt(Mode::Sphere, r).with_flags(leaf), &mut buffer)?.iter().copied().collect();
-    let true_ee: HashSet<[i32; 2]> =
-        scene.query(&Query::ee(Mode::CapsuleExact, r).with_flags(leaf), &mut buffer)?.iter().copied().collect();
+    // query_into writes memory of ours: a Vec grows to the pairs (a slice would be a fixed
+    // capacity, a PairsOut device memory); query below reuses the library's PairBuffer.
+    let mut contacts = Vec::new();
+    scene.query_into(&Query::vt(Mode::Sphere, r).with_flags(leaf), &mut contacts)?;
+    let true_vt: HashSet<[i32; 2]> = contacts.iter().copied().collect();
+    scene.query_into(&Query::ee(Mode::CapsuleExact, r).with_flags(leaf), &mut contacts)?;
+    let true_ee: HashSet<[i32; 2]> = contacts.iter().copied().collect();
+    let mut buffer = PairBuffer::new()?;
     println!("true contacts: the leaf_exact pairs, {} VT and {} EE\n", true_vt.len(), true_ee.len());
 
     let modes = [

@@ -18,6 +18,7 @@ use crate::sys;
 /// assert_ne!(Memory::Host, Memory::Device);
 /// assert_eq!(Memory::Device.name(), "device");
 /// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Memory {
     /// Ordinary host memory.

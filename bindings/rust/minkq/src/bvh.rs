@@ -7,8 +7,9 @@ use crate::buffer::sealed::Precision;
 use crate::buffer::{Buffer, Memory, PairsOut};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
-use crate::pairs::query_vec;
+use crate::inputs::Boxes;
 use crate::query::{Mode, QueryFlags, QueryInfo};
+use crate::sink::{write_pairs, PairSink};
 use crate::sys;
 
 /// The query shapes of a [`BvhQuery`] (`minkq_shape` with its buffers).
@@ -19,6 +20,7 @@ use crate::sys;
 /// let shapes = Shapes::Spheres(&centres);
 /// assert!(matches!(shapes, Shapes::Spheres(c) if c.len() == 1));
 /// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug)]
 pub enum Shapes<'a> {
     /// Spheres of the query's radius around these centres; modes `Box`, `Sphere`.
@@ -113,6 +115,12 @@ impl<'a> BvhQuery<'a> {
     }
 }
 
+impl<'a> From<&BvhBufferQuery<'a>> for BvhBufferQuery<'a> {
+    fn from(query: &BvhBufferQuery<'a>) -> BvhBufferQuery<'a> {
+        *query
+    }
+}
+
 impl<'a> From<&BvhQuery<'a>> for BvhBufferQuery<'a> {
     fn from(query: &BvhQuery<'a>) -> BvhBufferQuery<'a> {
         query.buffers()
@@ -124,6 +132,7 @@ impl<'a> From<&BvhQuery<'a>> for BvhBufferQuery<'a> {
 /// ```
 /// assert_ne!(minkq::ShapeKind::Sphere, minkq::ShapeKind::Capsule);
 /// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ShapeKind {
     /// `first`: centres (3 floats); modes `Box`, `Sphere`.
@@ -264,7 +273,7 @@ impl<'a> BvhBufferQuery<'a> {
 /// let bvh = Bvh::new(&device, &boxes)?;
 /// let centres = [[1.5f32, 1.5, 1.5], [0.5, 0.5, 0.5]];
 /// let mut pairs = Vec::new();
-/// bvh.query_vec(&BvhQuery::spheres(&centres, Mode::Sphere, 0.5).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
+/// bvh.query_into(&BvhQuery::spheres(&centres, Mode::Sphere, 0.5).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
 /// assert_eq!(pairs, vec![[1, 0]]); // (query, box): only the second centre is inside a box
 /// # Ok::<(), minkq::Error>(())
 /// ```
@@ -320,7 +329,8 @@ impl Bvh {
         Ok(Bvh { raw, len: boxes.len(), _device: Arc::clone(&device.handle) })
     }
 
-    /// New boxes (same count); refits in place. The tree keeps the grouping of its last build
+    /// New boxes (same count): a slice, `Vec` or array of [`Aabb`], or a [`Buffer`] of them in
+    /// host or (on a CUDA device) device memory (any [`Boxes`]); refits in place. The tree keeps the grouping of its last build
     /// ([`Bvh::tree_growth`] measures how much that costs, [`Bvh::rebuild`] resets it).
     ///
     /// ```
@@ -330,31 +340,32 @@ impl Bvh {
     /// boxes[0] = Aabb::new([5.0; 3], [6.0; 3]);
     /// bvh.refit(&boxes)?;
     /// let mut pairs = Vec::new();
-    /// bvh.query_vec(&BvhQuery::spheres(&[[5.5; 3]], Mode::Sphere, 0.0), &mut pairs)?;
+    /// bvh.query_into(&BvhQuery::spheres(&[[5.5; 3]], Mode::Sphere, 0.0), &mut pairs)?;
     /// assert_eq!(pairs, vec![[0, 0]]);
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn refit(&mut self, boxes: &[Aabb]) -> Result<()> {
-        self.refit_buffer(Buffer::from_slice(boxes))
+    pub fn refit<'b>(&mut self, boxes: impl Boxes<'b>) -> Result<()> {
+        let boxes = float_buffer("refit: boxes", &boxes.into_buffer())?;
+        // SAFETY: a live BVH; the buffer's constructor promised readable records.
+        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), boxes) })
     }
 
-    /// [`Bvh::refit`] from a [`Buffer`] of boxes, host or (on a CUDA device) device memory.
+    /// Deprecated: [`Bvh::refit`] takes any [`Boxes`]. [`Bvh::refit`] from a [`Buffer`] of boxes, host or (on a CUDA device) device memory.
     ///
     /// ```
     /// # use minkq::*;
     /// let mut bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
-    /// bvh.refit_buffer(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
-    /// let err = bvh.refit_buffer(Buffer::from_slice::<Aabb>(&[])).unwrap_err();
+    /// bvh.refit(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
+    /// let err = bvh.refit(Buffer::from_slice::<Aabb>(&[])).unwrap_err();
     /// assert!(matches!(err, Error::InvalidArgument(_)));
     /// // Doubles are refused: a Bvh reads floats.
-    /// let err = bvh.refit_buffer(Buffer::from_slice(&[[0.0f64; 3], [1.0; 3]])).unwrap_err();
+    /// let err = bvh.refit(Buffer::from_slice(&[[0.0f64; 3], [1.0; 3]])).unwrap_err();
     /// assert_eq!(err, Error::InvalidArgument("refit: boxes: [f64; 3] records, but a Bvh reads floats".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Bvh::refit`, which takes a `Buffer` too")]
     pub fn refit_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
-        let boxes = float_buffer("refit: boxes", &boxes)?;
-        // SAFETY: a live BVH; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_bvh_refit(self.raw.as_ptr(), boxes) })
+        self.refit(boxes)
     }
 
     /// New boxes (same count); builds the tree afresh, as [`Bvh::new`] would. The pairs are the
@@ -370,30 +381,31 @@ impl Bvh {
     /// bvh.rebuild(&boxes)?;
     /// assert_eq!(bvh.tree_growth()?, 1.0);
     /// let mut pairs = Vec::new();
-    /// bvh.query_vec(&BvhQuery::spheres(&[[2.5; 3]], Mode::Sphere, 0.0), &mut pairs)?;
+    /// bvh.query_into(&BvhQuery::spheres(&[[2.5; 3]], Mode::Sphere, 0.0), &mut pairs)?;
     /// assert_eq!(pairs, vec![[0, 0]]);
     /// let err = bvh.rebuild(&boxes[..1]).unwrap_err();
     /// assert_eq!(err, Error::InvalidArgument("rebuild with 1 boxes but the bvh has 2".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn rebuild(&mut self, boxes: &[Aabb]) -> Result<()> {
-        self.rebuild_buffer(Buffer::from_slice(boxes))
+    pub fn rebuild<'b>(&mut self, boxes: impl Boxes<'b>) -> Result<()> {
+        let boxes = float_buffer("rebuild: boxes", &boxes.into_buffer())?;
+        // SAFETY: a live BVH; the buffer's constructor promised readable records.
+        check(unsafe { sys::minkq_bvh_rebuild(self.raw.as_ptr(), boxes) })
     }
 
-    /// [`Bvh::rebuild`] from a [`Buffer`] of boxes, host or (on a CUDA device) device memory.
+    /// Deprecated: [`Bvh::rebuild`] takes any [`Boxes`]. [`Bvh::rebuild`] from a [`Buffer`] of boxes, host or (on a CUDA device) device memory.
     ///
     /// ```
     /// # use minkq::*;
     /// let mut bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3])])?;
-    /// bvh.rebuild_buffer(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
-    /// let err = bvh.rebuild_buffer(Buffer::from_slice(&[Aabb::new([3.0; 3], [2.0; 3])])).unwrap_err();
+    /// bvh.rebuild(Buffer::from_slice(&[Aabb::new([2.0; 3], [3.0; 3])]))?;
+    /// let err = bvh.rebuild(Buffer::from_slice(&[Aabb::new([3.0; 3], [2.0; 3])])).unwrap_err();
     /// assert_eq!(err, Error::InvalidArgument("box 0 has lo > hi".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Bvh::rebuild`, which takes a `Buffer` too")]
     pub fn rebuild_buffer(&mut self, boxes: Buffer<'_>) -> Result<()> {
-        let boxes = float_buffer("rebuild: boxes", &boxes)?;
-        // SAFETY: a live BVH; the buffer's constructor promised readable records.
-        check(unsafe { sys::minkq_bvh_rebuild(self.raw.as_ptr(), boxes) })
+        self.rebuild(boxes)
     }
 
     /// How much the refits since the last build (creation or [`Bvh::rebuild`]) have degraded
@@ -446,8 +458,11 @@ impl Bvh {
         self.len == 0
     }
 
-    /// Pairs (query, box) for every query shape overlapping a box, into the caller's buffer;
-    /// [`Error::Capacity`] with the exact count when it is too small.
+    /// Pairs (query, box) for every query shape overlapping a box, into caller-owned memory
+    /// chosen by the type of `out` (a [`PairSink`]: a `Vec` grows, a slice, an array or a
+    /// [`PairsOut`] has a fixed capacity and gives [`Error::Capacity`] with the exact count when
+    /// it is too small). The query is a [`BvhQuery`] over slices or a [`BvhBufferQuery`] over
+    /// [`Buffer`]s (host or, on a CUDA device, device memory).
     ///
     /// ```
     /// # use minkq::*;
@@ -458,11 +473,16 @@ impl Bvh {
     /// assert_eq!(&out[..info.count as usize], &[[0, 0]]);
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn query_into(&self, query: &BvhQuery<'_>, out: &mut [[i32; 2]]) -> Result<QueryInfo> {
-        self.query_to(&BvhBufferQuery::from(query), PairsOut::from_slice(out))
+    pub fn query_into<'q, 'o>(
+        &self,
+        query: impl Into<BvhBufferQuery<'q>>,
+        out: impl PairSink<'o>,
+    ) -> Result<QueryInfo> {
+        let query = query.into();
+        write_pairs(out, |pairs, capacity, memory| self.query_raw(&query, pairs, capacity, memory))
     }
 
-    /// Queries over [`Buffer`]s into a [`PairsOut`], host or (on a CUDA device) device
+    /// Deprecated: [`Bvh::query_into`] takes both. Queries over [`Buffer`]s into a [`PairsOut`], host or (on a CUDA device) device
     /// memory; [`Error::Capacity`] with the exact count when `out` is too small.
     ///
     /// ```
@@ -473,29 +493,30 @@ impl Bvh {
     /// // SAFETY: two 16-byte records starting with x, y, z, borrowed from `points`.
     /// let centres = unsafe { Buffer::from_raw_parts(points.as_ptr().cast(), 16, 2, Memory::Host) };
     /// let mut out = [[0; 2]; 2];
-    /// let info = bvh.query_to(&BvhBufferQuery::spheres(centres, Mode::Sphere, 0.1), PairsOut::from_slice(&mut out))?;
+    /// let info = bvh.query_into(&BvhBufferQuery::spheres(centres, Mode::Sphere, 0.1), PairsOut::from_slice(&mut out))?;
     /// assert_eq!(&out[..info.count as usize], &[[0, 0]]);
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Bvh::query_into`, which takes a `BvhBufferQuery` and a `PairsOut` too")]
     pub fn query_to(&self, query: &BvhBufferQuery<'_>, out: PairsOut<'_>) -> Result<QueryInfo> {
-        self.query_raw(query, out.data(), out.capacity(), out.memory())
+        self.query_into(query, out)
     }
 
-    /// Pairs (query, box) into a `Vec`, grown when too small to the exact count and an eighth
-    /// more (as [`Scene::query_vec`](crate::Scene::query_vec)).
+    /// Deprecated: [`Bvh::query_into`] takes a `Vec`. Pairs (query, box) into a `Vec`, grown when too small to the exact count and an eighth
+    /// more (as [`PairSink`] says).
     ///
     /// ```
     /// # use minkq::*;
     /// let bvh = Bvh::new(&Device::cpu()?, &[Aabb::new([0.0; 3], [1.0; 3]), Aabb::new([0.5; 3], [2.0; 3])])?;
     /// let mut pairs = Vec::new();
-    /// let info = bvh.query_vec(&BvhQuery::boxes(&[Aabb::new([0.9; 3], [1.1; 3])]).with_flags(QueryFlags::DIGEST), &mut pairs)?;
+    /// let info = bvh.query_into(&BvhQuery::boxes(&[Aabb::new([0.9; 3], [1.1; 3])]).with_flags(QueryFlags::DIGEST), &mut pairs)?;
     /// assert_eq!(pairs, vec![[0, 0], [0, 1]]);
     /// assert!(info.digest.is_some());
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Bvh::query_into`, which takes a `Vec` too")]
     pub fn query_vec(&self, query: &BvhQuery<'_>, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
-        let query = BvhBufferQuery::from(query);
-        query_vec(out, |pairs, capacity| self.query_raw(&query, pairs, capacity, Memory::Host))
+        self.query_into(query, out)
     }
 
     /// The exact number of pairs a query finds, without writing them ([`QueryFlags::COUNT`]

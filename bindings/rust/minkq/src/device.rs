@@ -15,12 +15,28 @@ use crate::sys;
 /// assert_eq!(device.backend(), minkq::Backend::Cpu);
 /// # Ok::<(), minkq::Error>(())
 /// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Backend {
     /// All cores, through a thread pool.
     Cpu,
     /// An NVIDIA GPU.
     Cuda,
+}
+
+impl Backend {
+    /// The backend's name, as a device spec starts: `"cpu"` or `"cuda"`.
+    ///
+    /// ```
+    /// assert_eq!(minkq::Device::cpu()?.backend().name(), "cpu");
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Cuda => "cuda",
+        }
+    }
 }
 
 /// The C device handle, shared by the [`Device`] and every scene and BVH made on it, so that
@@ -108,6 +124,22 @@ impl Device {
     /// ```
     pub fn cpu() -> Result<Device> {
         Device::new("cpu")
+    }
+
+    /// CUDA GPU `ordinal` (0 for the first): `Device::new("cuda:N")`. [`Error::Unsupported`]
+    /// where minkq was built without CUDA or has no such GPU ([`cuda_device_count`]).
+    ///
+    /// ```
+    /// use minkq::{Device, Error};
+    /// let gpus = minkq::cuda_device_count();
+    /// if gpus > 0 {
+    ///     assert!(Device::cuda(0)?.name().starts_with("cuda:0"));
+    /// }
+    /// assert!(matches!(Device::cuda(gpus), Err(Error::Unsupported(_)))); // one past the last GPU
+    /// # Ok::<(), minkq::Error>(())
+    /// ```
+    pub fn cuda(ordinal: usize) -> Result<Device> {
+        Device::new(&format!("cuda:{ordinal}"))
     }
 
     /// A description such as `"cpu (8 threads)"` or `"cuda:0 (NVIDIA H100 80GB HBM3)"`.

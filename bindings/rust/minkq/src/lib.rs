@@ -11,7 +11,11 @@
 //!
 //! This crate wraps the C ABI (`capi/minkq.h`, bound raw in [`sys`]): every handle is owned by
 //! a type that releases it in `Drop`, every call returns [`Result`] with the library's message,
-//! and pairs come back as slices of `[i32; 2]`.
+//! and pairs come back as slices of `[i32; 2]`: [`Scene::query`] into a library-owned
+//! [`PairBuffer`], [`Scene::query_into`] into memory of the caller's (a [`PairSink`]: a `Vec`
+//! that grows, a slice, or a [`PairsOut`] in device memory). One [`Scene::refit`] (and
+//! `rebuild`, `refit_swept`, `rebuild_swept`) takes every kind of [`Vertices`]: `[f32; 3]` or
+//! `[f64; 3]` slices, `Vec`s and arrays, and [`Buffer`]s.
 //!
 //! ```
 //! use minkq::{Device, Mode, PairBuffer, Query, QueryFlags, Scene, SceneDesc};
@@ -92,15 +96,14 @@
 //! [`SceneBuffers`]) rounds them to float, the precision of its trees and tests, and widens
 //! every query radius by twice the farthest the rounding moved a vertex, so that every pair
 //! within r in double is reported, in every mode. Its refits and rebuilds take `[f64; 3]`
-//! ([`Scene::refit_f64`], [`Scene::rebuild_f64`], or buffers of doubles); vertices of the other
+//! (slices of doubles or buffers of them: every [`Vertices`]); vertices of the other
 //! precision are refused with [`Error::InvalidArgument`], and a double beyond the float range
 //! is [`Error::NonFinite`].
 //!
 //! # Swept positions
 //! For continuous collision detection, [`Scene::refit_swept`] and [`Scene::rebuild_swept`]
-//! take the positions at the start and the end of a step (`[f64; 3]`:
-//! [`Scene::refit_swept_f64`], [`Scene::rebuild_swept_f64`]; [`Buffer`]s:
-//! [`Scene::refit_swept_buffers`], [`Scene::rebuild_swept_buffers`]). Every vertex moves
+//! take the positions at the start and the end of a step (any [`Vertices`], as
+//! [`Scene::refit`] does: `[f32; 3]`, `[f64; 3]` or [`Buffer`]s). Every vertex moves
 //! linearly between them, and the queries report every pair whose elements come within r at
 //! some time of the step: the candidates a narrow phase then decides. VT tests the vertex's
 //! path, EE runs [`Mode::Box`] only, and [`QueryFlags::LEAF_EXACT`] is [`Error::Unsupported`].
@@ -119,8 +122,8 @@
 //! # Device memory and strided arrays
 //! Besides slices, scenes and BVHs take [`Buffer`]s: records at any byte stride, in host
 //! memory or, on a CUDA device, in device memory read in place ([`Scene::from_buffers`],
-//! [`Scene::refit_buffer`], [`Scene::rebuild_buffer`], [`Scene::query_to`] with a
-//! [`PairsOut`], and the same on [`Bvh`]). A buffer over a raw pointer is built with the
+//! [`Scene::refit`] and [`Scene::rebuild`] (a buffer is a [`Vertices`]),
+//! [`Scene::query_into`] with a [`PairsOut`] (a [`PairSink`]), and the same on [`Bvh`]). A buffer over a raw pointer is built with the
 //! `unsafe` [`Buffer::from_raw_parts`]; every call taking it is safe. The blocking calls take
 //! no stream: on a CUDA device the library works on the calling thread's per-thread default
 //! stream and synchronises it before each call returns, so inputs must be ready (or ordered
@@ -165,6 +168,15 @@
 //! # Linking
 //! `minkq-sys` links `libminkq.so` from `MINKQ_LIB_DIR` (the CMake build's `capi/` folder) or
 //! builds it with CMake; this crate's tests and examples find it at run time through an rpath.
+//!
+//! # Cargo features
+//! `cuda`: where `minkq-sys` builds `libminkq.so` itself (no `MINKQ_LIB_DIR`, in the source
+//! tree), it builds it with the CUDA backend (`MINKQ_WITH_CUDA=ON`, which needs the CUDA
+//! toolkit; the variable, when set, decides). Off by default: the default build needs no CUDA.
+//! The feature gates no API: [`Device::cuda`], device-memory [`Buffer`]s and [`PairsOut`], and
+//! [`Stream`]s exist in every build, and without a usable GPU they are refused with
+//! [`Error::Unsupported`] or [`Error::InvalidArgument`], so that one program serves both
+//! backends ([`Device::new`]`("auto")` picks).
 #![deny(missing_docs)]
 
 mod aabb;
@@ -173,9 +185,11 @@ mod bvh;
 mod device;
 mod error;
 mod geometry;
+mod inputs;
 mod pairs;
 mod query;
 mod scene;
+mod sink;
 mod stream;
 
 /// The raw FFI bindings (`minkq-sys`), for what the safe API does not cover.
@@ -191,9 +205,11 @@ pub use bvh::{Bvh, BvhBufferQuery, BvhQuery, ShapeKind, Shapes};
 pub use device::{cuda_device_count, Backend, Device};
 pub use error::{Error, Result};
 pub use geometry::{Element, GeometryDesc, GeometryFlags, Kinds};
+pub use inputs::{Boxes, Vertices};
 pub use pairs::PairBuffer;
 pub use query::{Mode, Query, QueryFlags, QueryInfo, QueryKind, Reserve, SceneFlags, WorkStats};
 pub use scene::{Scene, SceneBuffers, SceneDesc};
+pub use sink::PairSink;
 pub use stream::{CountOut, Stream};
 
 /// The ABI version this crate was generated against (`MINKQ_ABI_VERSION`).

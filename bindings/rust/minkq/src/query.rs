@@ -17,6 +17,19 @@ use crate::sys;
 /// assert_eq!(QueryKind::ALL.map(|k| k.name()), ["vt", "ee", "vv", "ev"]);
 /// # Ok::<(), minkq::Error>(())
 /// ```
+///
+/// Non-exhaustive: kinds may be added (VV and EV came after VT and EE), so a `match` on a
+/// kind needs a wildcard arm.
+///
+/// ```compile_fail
+/// fn pairs_up(kind: minkq::QueryKind) -> &'static str {
+///     match kind {
+///         minkq::QueryKind::Vt | minkq::QueryKind::Vv | minkq::QueryKind::Ev => "a vertex and an element",
+///         minkq::QueryKind::Ee => "two edges",
+///     } // error: non-exhaustive patterns
+/// }
+/// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum QueryKind {
     /// Pairs (vertex, triangle): the vertex lies within r of the triangle (a sphere query).
@@ -43,6 +56,18 @@ pub enum QueryKind {
 /// assert_eq!(Mode::ALL.map(|m| m.name()), ["box", "sphere", "capsule_ray", "capsule_exact"]);
 /// # Ok::<(), minkq::Error>(())
 /// ```
+///
+/// Non-exhaustive: modes may be added, so a `match` on a mode needs a wildcard arm.
+///
+/// ```compile_fail
+/// fn tight(mode: minkq::Mode) -> bool {
+///     match mode {
+///         minkq::Mode::Box | minkq::Mode::CapsuleRay => false,
+///         minkq::Mode::Sphere | minkq::Mode::CapsuleExact => true,
+///     } // error: non-exhaustive patterns
+/// }
+/// ```
+#[non_exhaustive]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Mode {
     /// The r-padded box of the query element against node boxes.

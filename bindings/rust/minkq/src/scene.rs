@@ -10,6 +10,7 @@ use crate::buffer::{Buffer, Vertex};
 use crate::device::{Device, DeviceHandle};
 use crate::error::{check, Error, Result};
 use crate::geometry::GeometryFlags;
+use crate::inputs::Vertices;
 use crate::query::SceneFlags;
 use crate::sys;
 
@@ -35,7 +36,7 @@ use geometries::Layout;
 ///
 /// Precision: a scene's vertices are `[f32; 3]` ([`SceneDesc::new`], [`Scene::refit`],
 /// [`Scene::rebuild`]) or, for a [`SceneFlags::FLOAT64`] scene, `[f64; 3]`
-/// ([`SceneDesc::new_f64`], [`Scene::refit_f64`], [`Scene::rebuild_f64`]); the scene remembers
+/// ([`SceneDesc::new_f64`], [`Scene::refit`], [`Scene::rebuild`]); the scene remembers
 /// which ([`Scene::is_float64`]) and refuses vertices of the other precision.
 ///
 /// ```
@@ -147,8 +148,15 @@ impl Scene {
     /// simulation. On error the scene keeps its previous positions. A refit keeps the grouping
     /// of the last build: after large deformations the boxes overlap more and queries visit
     /// more nodes ([`Scene::tree_growth`] measures it, [`Scene::rebuild`] resets it); the pairs
-    /// found never change. A [`SceneFlags::FLOAT64`] scene takes [`Scene::refit_f64`] and
-    /// refuses these `[f32; 3]` vertices with [`Error::InvalidArgument`].
+    /// found never change.
+    ///
+    /// The vertices are any [`Vertices`]: `[f32; 3]`, or `[f64; 3]` for a
+    /// [`SceneFlags::FLOAT64`] scene (rounded to float, the query radii widened by twice the
+    /// farthest the rounding moved a vertex, so that every pair within r in double is
+    /// reported), as a slice, `Vec`, array or [`Buffer`] (strided records, host or, on a CUDA
+    /// device, device memory read in place). Vertices of the other precision are
+    /// [`Error::InvalidArgument`] (a raw buffer is read as the scene's flag says); a double
+    /// beyond the float range is [`Error::NonFinite`], as a NaN is.
     ///
     /// ```
     /// # use minkq::*;
@@ -168,8 +176,11 @@ impl Scene {
     /// assert!(matches!(scene.refit(&vertices[..5]), Err(Error::InvalidArgument(_))));
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn refit(&mut self, vertices: &[[f32; 3]]) -> Result<()> {
-        self.refit_buffer(Buffer::from_slice(vertices))
+    pub fn refit<'v>(&mut self, vertices: impl Vertices<'v>) -> Result<()> {
+        let vertices = self.vertex_buffer("refit", &vertices.into_buffer())?;
+        // SAFETY: a live scene; the buffer's constructor promised readable records, of the
+        // scene's precision where the buffer knows it (checked above).
+        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), vertices) })
     }
 
     /// [`Scene::refit`] with `[f64; 3]` vertices, for a [`SceneFlags::FLOAT64`] scene
@@ -190,7 +201,7 @@ impl Scene {
     /// assert!(scene.query(&query, &mut pairs)?.is_empty());
     /// vertices[3][0] = point; // 0.95e-3 from the triangle in double, 2^-9 in float
     /// assert!(point as f32 - plane as f32 > 1e-3);
-    /// scene.refit_f64(&vertices)?;
+    /// scene.refit(&vertices)?;
     /// assert_eq!(scene.query(&query, &mut pairs)?, &[[3, 0]]);
     ///
     /// // Floats are refused: the scene reads 3 doubles per vertex.
@@ -199,14 +210,15 @@ impl Scene {
     /// assert_eq!(err, Error::InvalidArgument("refit: [f32; 3] vertices, but a scene with SceneFlags::FLOAT64 reads [f64; 3]".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::refit`, which takes `[f64; 3]` vertices too")]
     pub fn refit_f64(&mut self, vertices: &[[f64; 3]]) -> Result<()> {
-        self.refit_buffer(Buffer::from_slice(vertices))
+        self.refit(vertices)
     }
 
     /// [`Scene::refit`] from a [`Buffer`]: strided records, host or (on a CUDA device) device
     /// memory, read in place on the device. On error the scene keeps its previous positions.
     /// The records are 3 floats, or 3 doubles on a [`SceneFlags::FLOAT64`] scene
-    /// ([`Scene::refit_f64`]); a buffer made from a slice of the other precision is
+    /// (`[f64; 3]`); a buffer made from a slice of the other precision is
     /// [`Error::InvalidArgument`], a raw buffer is read as the scene's flag says.
     ///
     /// ```
@@ -216,14 +228,12 @@ impl Scene {
     /// // x, y, z and a fourth float per vertex (16-byte records), as a vec4 array holds them.
     /// let moved = [[0.0f32, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 0.0]];
     /// // SAFETY: three 16-byte records starting with x, y, z, borrowed from `moved`.
-    /// scene.refit_buffer(unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) })?;
+    /// scene.refit(unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) })?;
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::refit`, which takes a `Buffer` too")]
     pub fn refit_buffer(&mut self, vertices: Buffer<'_>) -> Result<()> {
-        let vertices = self.vertex_buffer("refit", &vertices)?;
-        // SAFETY: a live scene; the buffer's constructor promised readable records, of the
-        // scene's precision where the buffer knows it (checked above).
-        check(unsafe { sys::minkq_scene_refit(self.raw.as_ptr(), vertices) })
+        self.refit(vertices)
     }
 
     /// Moves the vertices (same count) like [`Scene::refit`] and builds the trees afresh for
@@ -231,8 +241,8 @@ impl Scene {
     /// and edge numbering. The pairs are the same as after a refit; only the speed of later
     /// queries differs. Worth it once large motions have raised [`Scene::tree_growth`] (above
     /// about 1.5), and every so many steps when the mesh changes shape a lot. Same errors as
-    /// [`Scene::refit`]; on error the scene keeps its positions and trees. A
-    /// [`SceneFlags::FLOAT64`] scene takes [`Scene::rebuild_f64`].
+    /// [`Scene::refit`]; on error the scene keeps its positions and trees. Takes the same
+    /// [`Vertices`] as [`Scene::refit`].
     ///
     /// ```
     /// # use minkq::*;
@@ -253,12 +263,14 @@ impl Scene {
     /// assert_eq!(err, Error::InvalidArgument("rebuild with 5 vertices but the scene has 6".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn rebuild(&mut self, vertices: &[[f32; 3]]) -> Result<()> {
-        self.rebuild_buffer(Buffer::from_slice(vertices))
+    pub fn rebuild<'v>(&mut self, vertices: impl Vertices<'v>) -> Result<()> {
+        let vertices = self.vertex_buffer("rebuild", &vertices.into_buffer())?;
+        // SAFETY: as in refit.
+        check(unsafe { sys::minkq_scene_rebuild(self.raw.as_ptr(), vertices) })
     }
 
     /// [`Scene::rebuild`] with `[f64; 3]` vertices, for a [`SceneFlags::FLOAT64`] scene: the
-    /// trees [`Scene::new`] would build for them. Same errors as [`Scene::refit_f64`]; on
+    /// trees [`Scene::new`] would build for them. Same errors as [`Scene::refit`]; on
     /// error the scene keeps its positions and trees.
     ///
     /// ```
@@ -270,21 +282,22 @@ impl Scene {
     /// for v in &mut vertices[3..] {
     ///     v[2] = 1.0; // lift the upper triangle away
     /// }
-    /// scene.rebuild_f64(&vertices)?;
+    /// scene.rebuild(&vertices)?;
     /// assert!(scene.query(&Query::vt(Mode::Sphere, 0.2), &mut PairBuffer::new()?)?.is_empty());
     /// assert_eq!(scene.tree_growth()?, 1.0);
     /// // A double beyond the float range cannot be rounded to a float: non-finite.
     /// vertices[4][0] = 1e39;
-    /// assert!(matches!(scene.rebuild_f64(&vertices), Err(Error::NonFinite(m)) if m.contains("vertex 4")));
+    /// assert!(matches!(scene.rebuild(&vertices), Err(Error::NonFinite(m)) if m.contains("vertex 4")));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::rebuild`, which takes `[f64; 3]` vertices too")]
     pub fn rebuild_f64(&mut self, vertices: &[[f64; 3]]) -> Result<()> {
-        self.rebuild_buffer(Buffer::from_slice(vertices))
+        self.rebuild(vertices)
     }
 
     /// [`Scene::rebuild`] from a [`Buffer`]: strided records, host or (on a CUDA device)
     /// device memory, read in place on the device. On error the scene keeps its positions and
-    /// trees. Records and precision as for [`Scene::refit_buffer`].
+    /// trees. Records and precision as for [`Scene::refit`].
     ///
     /// ```
     /// # use minkq::*;
@@ -293,18 +306,17 @@ impl Scene {
     /// // x, y, z and a fourth float per vertex (16-byte records), as a vec4 array holds them.
     /// let moved = [[0.0f32, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0], [0.0, f32::NAN, 1.0, 0.0]];
     /// // SAFETY: three 16-byte records starting with x, y, z, borrowed from `moved`.
-    /// let err = scene.rebuild_buffer(unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) });
+    /// let err = scene.rebuild(unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) });
     /// assert!(matches!(err, Err(Error::NonFinite(m)) if m.starts_with("vertex 2 ")));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::rebuild`, which takes a `Buffer` too")]
     pub fn rebuild_buffer(&mut self, vertices: Buffer<'_>) -> Result<()> {
-        let vertices = self.vertex_buffer("rebuild", &vertices)?;
-        // SAFETY: as in refit_buffer.
-        check(unsafe { sys::minkq_scene_rebuild(self.raw.as_ptr(), vertices) })
+        self.rebuild(vertices)
     }
 
     /// Whether the scene was created with [`SceneFlags::FLOAT64`]: its vertices are
-    /// `[f64; 3]` ([`Scene::refit_f64`], [`Scene::rebuild_f64`]) rather than `[f32; 3]`. For a
+    /// `[f64; 3]` ([`Scene::refit`], [`Scene::rebuild`]) rather than `[f32; 3]`. For a
     /// scene of geometries: whether every moving geometry is float64 (and there is one), so
     /// that whole-scene refits and rebuilds take `[f64; 3]`.
     ///

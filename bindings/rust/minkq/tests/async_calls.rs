@@ -22,7 +22,7 @@ fn scene_at(vertices: &[[f32; 3]]) -> Scene {
 
 fn blocking(scene: &Scene, query: &Query) -> Vec<[i32; 2]> {
     let mut pairs = Vec::new();
-    scene.query_vec(&query.with_flags(QueryFlags::CANONICAL), &mut pairs).unwrap();
+    scene.query_into(&query.with_flags(QueryFlags::CANONICAL), &mut pairs).unwrap();
     pairs
 }
 

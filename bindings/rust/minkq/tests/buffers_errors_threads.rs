@@ -47,16 +47,14 @@ fn strided_buffers_give_the_pairs_of_packed_slices() {
     ] {
         let expected = pairs_of(&packed, query);
         let mut storage = vec![[0i32; 2]; expected.len() + 3];
-        let info = strided.query_to(&query, PairsOut::from_slice(&mut storage)).unwrap();
+        let info = strided.query_into(&query, PairsOut::from_slice(&mut storage)).unwrap();
         let got: Pairs = storage[..info.count as usize].iter().map(|p| (p[0], p[1])).collect();
         assert_eq!(got, expected, "{:?}", query.kind);
     }
     // Refit from strided records: lift every vertex; the pairs stay those of a packed refit.
     let lifted: Vec<[f32; 4]> = vec4.iter().map(|v| [v[0] * 0.5, v[1], v[2] * 0.5, 0.0]).collect();
     // SAFETY: as above.
-    strided
-        .refit_buffer(unsafe { Buffer::from_raw_parts(lifted.as_ptr().cast(), 16, lifted.len(), Memory::Host) })
-        .unwrap();
+    strided.refit(unsafe { Buffer::from_raw_parts(lifted.as_ptr().cast(), 16, lifted.len(), Memory::Host) }).unwrap();
     let mut packed = packed;
     packed.refit(&lifted.iter().map(|v| [v[0], v[1], v[2]]).collect::<Vec<_>>()).unwrap();
     let query = Query::ee(Mode::CapsuleExact, r).with_flags(QueryFlags::LEAF_EXACT);
@@ -64,7 +62,7 @@ fn strided_buffers_give_the_pairs_of_packed_slices() {
     // Device memory on the CPU backend: refused, the scene unchanged.
     // SAFETY: never read: the CPU device rejects device memory before reading.
     let on_gpu = unsafe { Buffer::from_raw_parts(vec4.as_ptr().cast(), 16, vec4.len(), Memory::Device) };
-    assert!(matches!(strided.refit_buffer(on_gpu), Err(Error::InvalidArgument(m)) if m.contains("device memory")));
+    assert!(matches!(strided.refit(on_gpu), Err(Error::InvalidArgument(m)) if m.contains("device memory")));
     assert_eq!(pairs_of(&strided, query), pairs_of(&packed, query));
 }
 
@@ -77,7 +75,7 @@ fn bvh_buffer_queries_equal_slice_queries() {
         (0..30).map(|i| [[i as f32 * 0.13, 0.5, 0.5], [1.0, i as f32 * 0.1, 2.0]]).collect();
     let mut expected = Vec::new();
     let query = BvhQuery::capsules(&segments, Mode::CapsuleExact, 0.05).with_flags(QueryFlags::CANONICAL);
-    bvh.query_vec(&query, &mut expected).unwrap();
+    bvh.query_into(&query, &mut expected).unwrap();
     assert!(!expected.is_empty());
     let starts: Vec<[f32; 3]> = segments.iter().map(|s| s[0]).collect();
     let ends: Vec<[f32; 3]> = segments.iter().map(|s| s[1]).collect();
@@ -85,10 +83,10 @@ fn bvh_buffer_queries_equal_slice_queries() {
         BvhBufferQuery::capsules(Buffer::from_slice(&starts), Buffer::from_slice(&ends), Mode::CapsuleExact, 0.05)
             .with_flags(QueryFlags::CANONICAL);
     let mut out = vec![[0; 2]; expected.len()];
-    let info = bvh.query_to(&split, PairsOut::from_slice(&mut out)).unwrap();
+    let info = bvh.query_into(split, PairsOut::from_slice(&mut out)).unwrap();
     assert_eq!((info.count as usize, out), (expected.len(), expected.clone()));
     let mut small = vec![[0; 2]; 1];
-    match bvh.query_to(&split, PairsOut::from_slice(&mut small)) {
+    match bvh.query_into(split, PairsOut::from_slice(&mut small)) {
         Err(Error::Capacity { needed, .. }) => assert_eq!(needed as usize, expected.len()),
         other => panic!("{other:?}"),
     }
@@ -101,7 +99,7 @@ fn capacity_reports_the_exact_count_and_writes_nothing_past_the_buffer() {
     let scene = Scene::new(&device, &SceneDesc::new(&mesh.vertices, &mesh.triangles)).unwrap();
     let q = Query::ee(Mode::Box, 0.05).with_flags(QueryFlags::CANONICAL);
     let mut all = Vec::new();
-    let info = scene.query_vec(&q, &mut all).unwrap();
+    let info = scene.query_into(&q, &mut all).unwrap();
     assert_eq!(info.count as usize, all.len());
     assert!(all.len() > 10);
     let mut small = vec![[-7, -7]; all.len()];
@@ -118,7 +116,7 @@ fn capacity_reports_the_exact_count_and_writes_nothing_past_the_buffer() {
     assert_eq!((info.count as usize, small), (all.len(), all.clone()));
     // query_vec reuses and regrows its Vec.
     let mut reused = Vec::with_capacity(2);
-    scene.query_vec(&q, &mut reused).unwrap();
+    scene.query_into(&q, &mut reused).unwrap();
     assert_eq!(reused, all);
 }
 
@@ -138,10 +136,10 @@ fn digest_is_xxh64_of_the_canonical_little_endian_pairs() {
         let bytes: Vec<u8> = pairs.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
         assert_eq!(buffer.digest(), xxh64(&bytes), "{q:?}");
         let mut out = Vec::new();
-        assert_eq!(scene.query_vec(&q, &mut out).unwrap().digest, Some(buffer.digest()));
+        assert_eq!(scene.query_into(&q, &mut out).unwrap().digest, Some(buffer.digest()));
         // Without DIGEST, the info carries none.
         let plain = Query { flags: QueryFlags::empty(), ..q };
-        assert_eq!(scene.query_vec(&plain, &mut out).unwrap().digest, None);
+        assert_eq!(scene.query_into(&plain, &mut out).unwrap().digest, None);
     }
 }
 
@@ -203,7 +201,7 @@ fn scenes_move_to_other_threads_and_share_their_device() {
                 // Queries run concurrently with other threads' scenes on the same device.
                 let q = Query::ee(Mode::CapsuleExact, 0.03).with_flags(QueryFlags::DIGEST);
                 let mut out = Vec::new();
-                (scene.query_vec(&q, &mut out).unwrap(), scene)
+                (scene.query_into(&q, &mut out).unwrap(), scene)
             })
         })
         .collect();
@@ -213,7 +211,7 @@ fn scenes_move_to_other_threads_and_share_their_device() {
         // Moved back to this thread, still usable; the same answer as a fresh query.
         let moved = thread::spawn(move || {
             let q = Query::ee(Mode::CapsuleExact, 0.03).with_flags(QueryFlags::DIGEST);
-            scene.query_vec(&q, &mut Vec::new()).unwrap()
+            scene.query_into(&q, &mut Vec::new()).unwrap()
         })
         .join()
         .unwrap();

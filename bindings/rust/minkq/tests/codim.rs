@@ -97,7 +97,7 @@ fn widened(vertices: &[[f32; 3]]) -> Vec<V> {
 /// A query's pairs, sorted.
 fn pairs(scene: &Scene, query: Query) -> Pairs {
     let mut out = Vec::new();
-    scene.query_vec(&query.with_flags(query.flags | QueryFlags::CANONICAL), &mut out).unwrap();
+    scene.query_into(&query.with_flags(query.flags | QueryFlags::CANONICAL), &mut out).unwrap();
     out
 }
 
@@ -256,7 +256,7 @@ fn float64_scenes_find_pairs_that_rounding_pulls_apart() {
     // Floats are refused by a float64 scene's refit.
     let mut scene = scene;
     assert!(matches!(scene.refit(&rounded), Err(Error::InvalidArgument(_))));
-    scene.refit_f64(&vertices).unwrap();
+    scene.refit(&vertices).unwrap();
     assert_eq!(pairs(&scene, Query::vv(Mode::Sphere, r)), [[0, 1]]);
 }
 
@@ -277,7 +277,7 @@ fn float64_rods_keep_the_double_truth() {
     let slack = 3f64.sqrt() * ulp(1001.0) + 1e-5;
     check_codim(&scene, &mesh.vertices, &mesh.edges, 0.05, slack, "float64");
     let mut scene = scene;
-    scene.rebuild_f64(&mesh.vertices).unwrap();
+    scene.rebuild(&mesh.vertices).unwrap();
     check_codim(&scene, &mesh.vertices, &mesh.edges, 0.05, slack, "float64 rebuilt");
 }
 
@@ -323,9 +323,9 @@ fn swept_steps_contain_every_sampled_contact_in_every_mode() {
             let mut scene = if float64 {
                 let mut scene = Scene::new(&device, &SceneDesc::codim(&x0, &mesh.edges)).unwrap();
                 if rebuild {
-                    scene.rebuild_swept_f64(&x0, &x1).unwrap();
+                    scene.rebuild_swept(&x0, &x1).unwrap();
                 } else {
-                    scene.refit_swept_f64(&x0, &x1).unwrap();
+                    scene.refit_swept(&x0, &x1).unwrap();
                 }
                 scene
             } else {
@@ -359,7 +359,7 @@ fn swept_steps_contain_every_sampled_contact_in_every_mode() {
             }
             // A plain refit makes the scene static again: leaf-exact runs and finds the truth at x0.
             if float64 {
-                scene.refit_f64(&x0).unwrap();
+                scene.refit(&x0).unwrap();
             } else {
                 scene.refit(&floats(&x0)).unwrap();
             }
@@ -453,12 +453,12 @@ fn every_entry_point_takes_vv_and_ev() {
 
         // query_into: exact count on CAPACITY, then the pairs.
         let mut small = vec![[0; 2]; n - 1];
-        match scene.query_into(&query, &mut small) {
+        match scene.query_into(&query, &mut small[..]) {
             Err(Error::Capacity { needed, .. }) => assert_eq!(needed, n as u64, "{kind}"),
             other => panic!("{kind}: {other:?}"),
         }
         let mut exact = vec![[0; 2]; n];
-        let info = scene.query_to(&query.with_flags(QueryFlags::DIGEST), PairsOut::from_slice(&mut exact)).unwrap();
+        let info = scene.query_into(&query.with_flags(QueryFlags::DIGEST), PairsOut::from_slice(&mut exact)).unwrap();
         assert_eq!((info.count, exact.clone()), (n as u64, want.clone()), "{kind}: digest implies canonical");
         let digest = info.digest.unwrap();
         let mut buffer = PairBuffer::new().unwrap();

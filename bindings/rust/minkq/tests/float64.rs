@@ -61,7 +61,7 @@ fn rounded(vertices: &[[f64; 3]]) -> Vec<[f32; 3]> {
 
 fn pairs(scene: &Scene, query: Query) -> Vec<[i32; 2]> {
     let mut out = Vec::new();
-    scene.query_vec(&query.with_flags(QueryFlags::CANONICAL), &mut out).unwrap();
+    scene.query_into(&query.with_flags(QueryFlags::CANONICAL), &mut out).unwrap();
     out
 }
 
@@ -164,22 +164,22 @@ fn refit_and_rebuild_take_f64_vertices() {
     let mut scene = vt_scene(&device, &far);
     assert!(pairs(&scene, leaf_exact_vt()).is_empty());
 
-    scene.refit_f64(&near).unwrap();
+    scene.refit(&near).unwrap();
     assert_vt_found(&scene, "refit_f64");
-    scene.refit_f64(&far).unwrap();
+    scene.refit(&far).unwrap();
     assert!(pairs(&scene, leaf_exact_vt()).is_empty());
-    scene.rebuild_f64(&near).unwrap();
+    scene.rebuild(&near).unwrap();
     assert_vt_found(&scene, "rebuild_f64");
     assert_eq!(scene.tree_growth().unwrap(), 1.0);
 
     // Through buffers: slices and a raw strided buffer.
-    scene.refit_buffer(Buffer::from_slice(&far)).unwrap();
+    scene.refit(Buffer::from_slice(&far)).unwrap();
     assert!(pairs(&scene, leaf_exact_vt()).is_empty());
-    scene.rebuild_buffer(Buffer::from_slice(&near)).unwrap();
+    scene.rebuild(Buffer::from_slice(&near)).unwrap();
     assert_vt_found(&scene, "rebuild_buffer");
     let padded: Vec<[f64; 4]> = far.iter().map(|v| [v[0], v[1], v[2], 0.0]).collect();
     // SAFETY: four 32-byte records starting with x, y, z, borrowed from `padded`.
-    scene.refit_buffer(unsafe { Buffer::from_raw_parts(padded.as_ptr().cast(), 32, 4, Memory::Host) }).unwrap();
+    scene.refit(unsafe { Buffer::from_raw_parts(padded.as_ptr().cast(), 32, 4, Memory::Host) }).unwrap();
     assert!(pairs(&scene, leaf_exact_vt()).is_empty());
 
     // Stream-ordered (on the CPU they have run when they return).
@@ -202,7 +202,7 @@ fn refit_and_rebuild_take_f64_vertices() {
     far[3][0] += 0.5;
     let mut scene = ee_scene(&device, &far);
     assert!(pairs(&scene, leaf_exact_ee()).is_empty());
-    scene.refit_f64(&near).unwrap();
+    scene.refit(&near).unwrap();
     assert_ee_found(&scene, "EE refit_f64");
 }
 
@@ -250,7 +250,7 @@ fn doubles_that_are_floats_give_the_float_scene_pairs_and_digests() {
     for query in every_query(0.15) {
         let q = query.with_flags(QueryFlags::DIGEST);
         let (mut a, mut b) = (Vec::new(), Vec::new());
-        let (ia, ib) = (float_scene.query_vec(&q, &mut a).unwrap(), double_scene.query_vec(&q, &mut b).unwrap());
+        let (ia, ib) = (float_scene.query_into(&q, &mut a).unwrap(), double_scene.query_into(&q, &mut b).unwrap());
         assert!(!a.is_empty(), "{query:?}");
         assert_eq!(a, b, "{query:?}");
         assert_eq!(ia.digest, ib.digest, "{query:?}");
@@ -274,9 +274,9 @@ fn a_float64_scene_keeps_every_pair_of_its_rounded_float_scene() {
             }
         };
         check(&scene, "created");
-        scene.refit_f64(&doubles).unwrap();
+        scene.refit(&doubles).unwrap();
         check(&scene, "refit");
-        scene.rebuild_f64(&doubles).unwrap();
+        scene.rebuild(&doubles).unwrap();
         check(&scene, "rebuilt");
     }
 }
@@ -304,8 +304,8 @@ fn vertices_of_the_other_precision_are_refused() {
     scene.reserve(Reserve::REBUILD, 0).unwrap();
     assert_precision_refused(scene.refit(&floats), "refit", f32s, f64s);
     assert_precision_refused(scene.rebuild(&floats), "rebuild", f32s, f64s);
-    assert_precision_refused(scene.refit_buffer(Buffer::from_slice(&floats)), "refit", f32s, f64s);
-    assert_precision_refused(scene.rebuild_buffer(Buffer::from_slice(&floats)), "rebuild", f32s, f64s);
+    assert_precision_refused(scene.refit(Buffer::from_slice(&floats)), "refit", f32s, f64s);
+    assert_precision_refused(scene.rebuild(Buffer::from_slice(&floats)), "rebuild", f32s, f64s);
     let async_refit = scene.refit_async(Buffer::from_slice(&floats), Stream::null());
     assert_precision_refused(async_refit, "refit_async", f32s, f64s);
     let async_rebuild = scene.rebuild_async(Buffer::from_slice(&floats), Stream::null());
@@ -316,16 +316,16 @@ fn vertices_of_the_other_precision_are_refused() {
     // A float scene refuses doubles in every call.
     let mut scene = Scene::new(&device, &SceneDesc::new(&floats, &TRIANGLE)).unwrap();
     scene.reserve(Reserve::REBUILD, 0).unwrap();
-    let err = scene.refit_f64(&doubles).unwrap_err();
+    let err = scene.refit(&doubles).unwrap_err();
     assert_eq!(
         err,
         Error::InvalidArgument(
             "refit: [f64; 3] vertices, but a scene without SceneFlags::FLOAT64 reads [f32; 3]".into()
         )
     );
-    assert_precision_refused(scene.rebuild_f64(&doubles), "rebuild", f64s, f32s);
-    assert_precision_refused(scene.refit_buffer(Buffer::from_slice(&doubles)), "refit", f64s, f32s);
-    assert_precision_refused(scene.rebuild_buffer(Buffer::from_slice(&doubles)), "rebuild", f64s, f32s);
+    assert_precision_refused(scene.rebuild(&doubles), "rebuild", f64s, f32s);
+    assert_precision_refused(scene.refit(Buffer::from_slice(&doubles)), "refit", f64s, f32s);
+    assert_precision_refused(scene.rebuild(Buffer::from_slice(&doubles)), "rebuild", f64s, f32s);
     let async_refit = scene.refit_async(Buffer::from_slice(&doubles), Stream::null());
     assert_precision_refused(async_refit, "refit_async", f64s, f32s);
     let async_rebuild = scene.rebuild_async(Buffer::from_slice(&doubles), Stream::null());
@@ -341,7 +341,7 @@ fn vertices_of_the_other_precision_are_refused() {
     // Raw buffers carry no precision: the scene's flag decides (here: doubles, read as such).
     let mut scene = vt_scene(&device, &doubles);
     // SAFETY: four packed 24-byte records of 3 doubles, borrowed from `doubles`.
-    scene.refit_buffer(unsafe { Buffer::from_raw_parts(doubles.as_ptr().cast(), 0, 4, Memory::Host) }).unwrap();
+    scene.refit(unsafe { Buffer::from_raw_parts(doubles.as_ptr().cast(), 0, 4, Memory::Host) }).unwrap();
     assert_vt_found(&scene, "raw packed doubles");
 }
 
@@ -352,12 +352,12 @@ fn a_bvh_refuses_doubles() {
     let expected = |call: &str| Error::InvalidArgument(format!("{call}: [f64; 3] records, but a Bvh reads floats"));
     assert_eq!(Bvh::from_buffer(&device, Buffer::from_slice(&doubles)).unwrap_err(), expected("create: boxes"));
     let mut bvh = Bvh::new(&device, &[Aabb::new([0.0; 3], [1.0; 3])]).unwrap();
-    assert_eq!(bvh.refit_buffer(Buffer::from_slice(&doubles)).unwrap_err(), expected("refit: boxes"));
-    assert_eq!(bvh.rebuild_buffer(Buffer::from_slice(&doubles)).unwrap_err(), expected("rebuild: boxes"));
+    assert_eq!(bvh.refit(Buffer::from_slice(&doubles)).unwrap_err(), expected("refit: boxes"));
+    assert_eq!(bvh.rebuild(Buffer::from_slice(&doubles)).unwrap_err(), expected("rebuild: boxes"));
     let spheres = BvhBufferQuery::spheres(Buffer::from_slice(&doubles), Mode::Sphere, 0.1);
     let mut out = Vec::new();
     assert_eq!(
-        bvh.query_to(&spheres, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
+        bvh.query_into(spheres, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
         expected("query: first")
     );
     let capsules = BvhBufferQuery::capsules(
@@ -367,14 +367,14 @@ fn a_bvh_refuses_doubles() {
         0.1,
     );
     assert_eq!(
-        bvh.query_to(&capsules, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
+        bvh.query_into(capsules, minkq::PairsOut::from_slice(&mut [[0; 2]; 4])).unwrap_err(),
         expected("query: second")
     );
     // Floats still pass.
     let centres = [[0.5f32; 3]];
     let ok = BvhBufferQuery::spheres(Buffer::from_slice(&centres), Mode::Sphere, 0.1);
     out.resize(4, [0; 2]);
-    assert_eq!(bvh.query_to(&ok, minkq::PairsOut::from_slice(&mut out)).unwrap().count, 1);
+    assert_eq!(bvh.query_into(ok, minkq::PairsOut::from_slice(&mut out)).unwrap().count, 1);
 }
 
 #[test]
@@ -391,8 +391,8 @@ fn a_double_beyond_the_float_range_is_non_finite() {
         };
         non_finite(Scene::new(&device, &SceneDesc::new_f64(&bad, &TRIANGLE)).map(drop), "create");
         let mut scene = vt_scene(&device, &good);
-        non_finite(scene.refit_f64(&bad), "refit_f64");
-        non_finite(scene.rebuild_f64(&bad), "rebuild_f64");
+        non_finite(scene.refit(&bad), "refit_f64");
+        non_finite(scene.rebuild(&bad), "rebuild_f64");
         assert_vt_found(&scene, "kept its positions");
         scene.reserve(Reserve::REBUILD, 0).unwrap();
         scene.refit_async(Buffer::from_slice(&bad), Stream::null()).unwrap();

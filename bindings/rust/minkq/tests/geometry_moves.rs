@@ -53,7 +53,7 @@ fn moving_one_geometry_gives_a_fresh_scene_pairs() {
     // A whole-scene refit moves the moving geometries: the cloth's vertices alone.
     scene.refit(&lowered).unwrap();
     assert_same_pairs(&scene, &fresh, r, "whole-scene refit");
-    scene.rebuild_buffer(Buffer::from_slice(&draped.cloth)).unwrap();
+    scene.rebuild(Buffer::from_slice(&draped.cloth)).unwrap();
     assert_same_pairs(&scene, &draped.scene(), r, "whole-scene rebuild");
     let all: Vec<[f32; 3]> = draped.cloth.iter().chain(&draped.body).copied().collect();
     let err = scene.refit(&all).unwrap_err();
@@ -140,7 +140,7 @@ fn float64_geometries_keep_the_double_truth_beside_float_ones() {
     assert_eq!(pairs_of(&scene, &query).into_iter().collect::<Vec<_>>(), [[3, 0]]);
     // Whole-scene refits of an all-double scene take doubles.
     let all: Vec<[f64; 3]> = triangle.iter().chain(&far).copied().collect();
-    scene.refit_f64(&all).unwrap();
+    scene.refit(&all).unwrap();
     assert!(pairs_of(&scene, &query).is_empty());
     let (tri32, near32) = (round(&triangle), round(&near));
     let floats = Scene::from_geometries(
@@ -159,13 +159,12 @@ fn float64_geometries_keep_the_double_truth_beside_float_ones() {
     let err = mixed.refit_geometry(1, &near).unwrap_err();
     let message = "geometry 1: refit: [f64; 3] vertices, but a geometry without GeometryFlags::FLOAT64 reads [f32; 3]";
     assert_eq!(err, Error::InvalidArgument(message.into()));
-    let err =
-        mixed.refit_geometry_swept_buffers(0, Buffer::from_slice(&triangle), Buffer::from_slice(&tri32)).unwrap_err();
+    let err = mixed.refit_geometry_swept(0, Buffer::from_slice(&triangle), Buffer::from_slice(&tri32)).unwrap_err();
     let message =
         "geometry 0: refit_swept: x1: [f32; 3] vertices, but a geometry with GeometryFlags::FLOAT64 reads [f64; 3]";
     assert_eq!(err, Error::InvalidArgument(message.into()));
     // The library's message, whichever precision the slice has.
-    for err in [mixed.refit(&round(&all)).unwrap_err(), mixed.rebuild_f64(&all).unwrap_err()] {
+    for err in [mixed.refit(&round(&all)).unwrap_err(), mixed.rebuild(&all).unwrap_err()] {
         assert!(matches!(&err, Error::InvalidArgument(m) if m.contains("mix float32 and float64")), "{err:?}");
     }
 

@@ -83,9 +83,9 @@ fn bvh_queries_match_brute_force() {
         })
         .collect();
     let mut out = Vec::new();
-    bvh.query_vec(&BvhQuery::spheres(&centres, Mode::Sphere, r), &mut out).unwrap();
+    bvh.query_into(&BvhQuery::spheres(&centres, Mode::Sphere, r), &mut out).unwrap();
     let sphere: Pairs = out.iter().map(|p| (p[0], p[1])).collect();
-    bvh.query_vec(&BvhQuery::spheres(&centres, Mode::Box, r), &mut out).unwrap();
+    bvh.query_into(&BvhQuery::spheres(&centres, Mode::Box, r), &mut out).unwrap();
     let padded: Pairs = out.iter().map(|p| (p[0], p[1])).collect();
     assert_subset(&brute, &sphere, "spheres");
     assert_subset(&sphere, &padded, "sphere in box");
@@ -93,7 +93,7 @@ fn bvh_queries_match_brute_force() {
     let segments: Vec<[[f32; 3]; 2]> = centres.iter().map(|&c| [c, [c[0] + 0.1, c[1], c[2] + 0.05]]).collect();
     let capsules = |mode| {
         let mut out = Vec::new();
-        bvh.query_vec(&BvhQuery::capsules(&segments, mode, r), &mut out).unwrap();
+        bvh.query_into(&BvhQuery::capsules(&segments, mode, r), &mut out).unwrap();
         out.iter().map(|p| (p[0], p[1])).collect::<Pairs>()
     };
     let (exact, ray, padded) = (capsules(Mode::CapsuleExact), capsules(Mode::CapsuleRay), capsules(Mode::Box));
@@ -122,7 +122,7 @@ fn bvh_queries_match_brute_force() {
     bvh.refit(&shifted).unwrap();
     let queries: Vec<Aabb> =
         centres.iter().map(|c| Aabb::new([c[0] + 1.0, c[1], c[2]], [c[0] + 1.05, c[1] + 0.05, c[2] + 0.05])).collect();
-    bvh.query_vec(&BvhQuery::boxes(&queries).with_flags(QueryFlags::CANONICAL), &mut out).unwrap();
+    bvh.query_into(&BvhQuery::boxes(&queries).with_flags(QueryFlags::CANONICAL), &mut out).unwrap();
     let overlaps = |a: &Aabb, b: &Aabb| (0..3).all(|k| a.lo[k] <= b.hi[k] && b.lo[k] <= a.hi[k]);
     let expected: Vec<[i32; 2]> = queries
         .iter()
@@ -133,6 +133,6 @@ fn bvh_queries_match_brute_force() {
         .collect();
     assert_eq!(out, expected);
     assert!(matches!(bvh.refit(&shifted[1..]), Err(Error::InvalidArgument(_))));
-    let err = bvh.query_vec(&BvhQuery::boxes(&queries).with_flags(QueryFlags::LEAF_EXACT), &mut out).unwrap_err();
+    let err = bvh.query_into(&BvhQuery::boxes(&queries).with_flags(QueryFlags::LEAF_EXACT), &mut out).unwrap_err();
     assert!(matches!(err, Error::InvalidArgument(_)), "{err}");
 }

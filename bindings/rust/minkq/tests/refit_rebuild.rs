@@ -123,8 +123,8 @@ fn bvh_rebuild_gives_the_pairs_of_refit_and_resets_the_tree_growth() {
     for query in queries {
         let query = query.with_flags(QueryFlags::DIGEST);
         let (mut a, mut b) = (Vec::new(), Vec::new());
-        let info_a = refitted.query_vec(&query, &mut a).unwrap();
-        let info_b = rebuilt.query_vec(&query, &mut b).unwrap();
+        let info_a = refitted.query_into(&query, &mut a).unwrap();
+        let info_b = rebuilt.query_into(&query, &mut b).unwrap();
         assert!(!a.is_empty());
         assert_eq!((a, info_a.digest), (b, info_b.digest), "{:?} {:?}", query.mode, query.shapes);
     }
@@ -151,7 +151,7 @@ fn a_failed_rebuild_names_rebuild_and_keeps_the_positions_and_trees() {
     assert!(matches!(&err, Error::NonFinite(m) if m.starts_with("vertex 7 has a non-finite coordinate")), "{err}");
     // SAFETY: never read: the CPU device rejects device memory before reading.
     let on_gpu = unsafe { Buffer::from_raw_parts(flat.vertices.as_ptr().cast(), 12, 36, Memory::Device) };
-    assert!(matches!(scene.rebuild_buffer(on_gpu), Err(Error::InvalidArgument(m)) if m.contains("device memory")));
+    assert!(matches!(scene.rebuild(on_gpu), Err(Error::InvalidArgument(m)) if m.contains("device memory")));
     assert_eq!(scene.tree_growth().unwrap(), growth, "a failed rebuild keeps the trees");
     assert_eq!(pairs_of(&scene, q), before, "a failed rebuild keeps the positions");
 
@@ -164,6 +164,6 @@ fn a_failed_rebuild_names_rebuild_and_keeps_the_positions_and_trees() {
     let err = bvh.rebuild(&[boxes[0], Aabb::new([1.0; 3], [0.0; 3])]).unwrap_err();
     assert_eq!(err, Error::InvalidArgument("box 1 has lo > hi".into()));
     let mut out = Vec::new();
-    bvh.query_vec(&BvhQuery::spheres(&[[2.5; 3]], Mode::Sphere, 0.0), &mut out).unwrap();
+    bvh.query_into(&BvhQuery::spheres(&[[2.5; 3]], Mode::Sphere, 0.0), &mut out).unwrap();
     assert_eq!(out, vec![[0, 1]], "a failed rebuild keeps the boxes");
 }

@@ -21,13 +21,13 @@ const R: f32 = 0.05;
 
 fn pairs(scene: &Scene, query: Query) -> Vec<[i32; 2]> {
     let mut out = Vec::new();
-    scene.query_vec(&query.with_flags(query.flags | QueryFlags::CANONICAL), &mut out).unwrap();
+    scene.query_into(&query.with_flags(query.flags | QueryFlags::CANONICAL), &mut out).unwrap();
     out
 }
 
 fn pairs_and_digest(scene: &Scene, query: Query) -> (Vec<[i32; 2]>, Option<u64>) {
     let mut out = Vec::new();
-    let info = scene.query_vec(&query.with_flags(QueryFlags::CANONICAL | QueryFlags::DIGEST), &mut out).unwrap();
+    let info = scene.query_into(&query.with_flags(QueryFlags::CANONICAL | QueryFlags::DIGEST), &mut out).unwrap();
     (out, info.digest)
 }
 
@@ -175,7 +175,7 @@ fn swept_box_mode_is_its_definition_and_the_finer_vt_modes_nest() {
         let mut from_buffers = Scene::new(&device, &SceneDesc::new(&x0, &triangles)).unwrap();
         // SAFETY: x1.len() 16-byte records starting with x, y, z, borrowed from `padded`.
         let x1_buffer = unsafe { Buffer::from_raw_parts(padded.as_ptr().cast(), 16, padded.len(), Memory::Host) };
-        from_buffers.refit_swept_buffers(Buffer::from_slice(&x0), x1_buffer).unwrap();
+        from_buffers.refit_swept(Buffer::from_slice(&x0), x1_buffer).unwrap();
 
         let ee = pairs(&refitted, Query::ee(Mode::Box, R));
         assert_eq!(ee, pairs(&rebuilt, Query::ee(Mode::Box, R)));
@@ -308,7 +308,7 @@ fn leaf_exact_and_the_ee_segment_modes_are_refused() {
     for mode in VT_MODES {
         let query = Query::vt(mode, 0.01).with_flags(QueryFlags::LEAF_EXACT);
         assert_unsupported(scene.query(&query, &mut out), leaf, &format!("VT {mode:?}"));
-        assert_unsupported(scene.query_vec(&query, &mut Vec::new()), leaf, "query_vec");
+        assert_unsupported(scene.query_into(&query, &mut Vec::new()), leaf, "query_into");
         assert_unsupported(scene.work(&query), leaf, "work");
     }
     assert_unsupported(
@@ -364,16 +364,16 @@ fn float64_steps() {
     for rebuild in [false, true] {
         assert!(pairs(&scene, Query::vt(Mode::Box, r)).is_empty());
         if rebuild {
-            scene.rebuild_swept_f64(&x0, &x1).unwrap();
+            scene.rebuild_swept(&x0, &x1).unwrap();
         } else {
-            scene.refit_swept_f64(&x0, &x1).unwrap();
+            scene.refit_swept(&x0, &x1).unwrap();
         }
         assert!(scene.is_swept() && scene.is_float64());
         for mode in VT_MODES {
             assert_eq!(pairs(&scene, Query::vt(mode, r)), vec![[3, 0]], "rebuild {rebuild} {mode:?}");
             assert!(pairs(&float_scene, Query::vt(mode, r)).is_empty(), "{mode:?}: rounding pulls them apart");
         }
-        scene.refit_f64(&x0).unwrap();
+        scene.refit(&x0).unwrap();
         assert!(!scene.is_swept());
     }
 
@@ -386,8 +386,8 @@ fn float64_steps() {
     floats.refit_swept(&f0, &f1).unwrap();
     let mut doubles = Scene::new(&device, &SceneDesc::new_f64(&d0, &triangles)).unwrap();
     let mut from_buffers = Scene::new(&device, &SceneDesc::new_f64(&d0, &triangles)).unwrap();
-    doubles.refit_swept_f64(&d0, &d1).unwrap();
-    from_buffers.rebuild_swept_buffers(Buffer::from_slice(&d0), Buffer::from_slice(&d1)).unwrap();
+    doubles.refit_swept(&d0, &d1).unwrap();
+    from_buffers.rebuild_swept(Buffer::from_slice(&d0), Buffer::from_slice(&d1)).unwrap();
     let queries = VT_MODES.iter().map(|&m| Query::vt(m, R)).chain([Query::ee(Mode::Box, R)]);
     for query in queries {
         let want = pairs_and_digest(&floats, query);
@@ -422,11 +422,11 @@ fn positions_of_the_other_precision_are_refused_and_the_scene_keeps_its_state() 
     fn d(v: &[[f64; 3]]) -> Buffer<'_> {
         Buffer::from_slice(v)
     }
-    assert_precision_refused(scene.refit_swept_f64(&d0, &d1), "refit_swept", "x0", f64s, f32s);
-    assert_precision_refused(scene.rebuild_swept_f64(&d0, &d1), "rebuild_swept", "x0", f64s, f32s);
-    assert_precision_refused(scene.refit_swept_buffers(f(&x0), d(&d1)), "refit_swept", "x1", f64s, f32s);
-    assert_precision_refused(scene.rebuild_swept_buffers(d(&d0), f(&x1)), "rebuild_swept", "x0", f64s, f32s);
-    assert_precision_refused(scene.rebuild_swept_buffers(f(&x0), d(&d1)), "rebuild_swept", "x1", f64s, f32s);
+    assert_precision_refused(scene.refit_swept(&d0, &d1), "refit_swept", "x0", f64s, f32s);
+    assert_precision_refused(scene.rebuild_swept(&d0, &d1), "rebuild_swept", "x0", f64s, f32s);
+    assert_precision_refused(scene.refit_swept(f(&x0), d(&d1)), "refit_swept", "x1", f64s, f32s);
+    assert_precision_refused(scene.rebuild_swept(d(&d0), f(&x1)), "rebuild_swept", "x0", f64s, f32s);
+    assert_precision_refused(scene.rebuild_swept(f(&x0), d(&d1)), "rebuild_swept", "x1", f64s, f32s);
     assert!(scene.is_swept());
     assert_eq!(pairs(&scene, sphere), vec![[3, 0]]);
 
@@ -434,8 +434,8 @@ fn positions_of_the_other_precision_are_refused_and_the_scene_keeps_its_state() 
     let mut scene = Scene::new(&device, &SceneDesc::new_f64(&d0, &FLYING_TRIANGLES)).unwrap();
     assert_precision_refused(scene.refit_swept(&x0, &x1), "refit_swept", "x0", f32s, f64s);
     assert_precision_refused(scene.rebuild_swept(&x0, &x1), "rebuild_swept", "x0", f32s, f64s);
-    assert_precision_refused(scene.refit_swept_buffers(d(&d0), f(&x1)), "refit_swept", "x1", f32s, f64s);
-    assert_precision_refused(scene.rebuild_swept_buffers(d(&d0), f(&x1)), "rebuild_swept", "x1", f32s, f64s);
+    assert_precision_refused(scene.refit_swept(d(&d0), f(&x1)), "refit_swept", "x1", f32s, f64s);
+    assert_precision_refused(scene.rebuild_swept(d(&d0), f(&x1)), "rebuild_swept", "x1", f32s, f64s);
     assert!(!scene.is_swept());
     assert!(pairs(&scene, sphere.with_flags(QueryFlags::LEAF_EXACT)).is_empty());
 
@@ -468,8 +468,8 @@ fn every_plain_refit_or_rebuild_ends_the_swept_state() {
     let plain: [(&str, PlainCall); 6] = [
         ("refit", &|s| s.refit(&x1)),
         ("rebuild", &|s| s.rebuild(&x1)),
-        ("refit_buffer", &|s| s.refit_buffer(Buffer::from_slice(&x1))),
-        ("rebuild_buffer", &|s| s.rebuild_buffer(Buffer::from_slice(&x1))),
+        ("refit_buffer", &|s| s.refit(Buffer::from_slice(&x1))),
+        ("rebuild_buffer", &|s| s.rebuild(Buffer::from_slice(&x1))),
         ("refit_async", &|s| {
             s.refit_async(Buffer::from_slice(&x1), Stream::null())?;
             s.async_status(Stream::null())

@@ -66,7 +66,7 @@ fn queries() -> Vec<Query> {
 
 fn pairs_and_digest(scene: &Scene, query: &Query) -> (Vec<[i32; 2]>, Option<u64>) {
     let mut out = Vec::new();
-    let info = scene.query_vec(&query.with_flags(QueryFlags::CANONICAL | QueryFlags::DIGEST), &mut out).unwrap();
+    let info = scene.query_into(&query.with_flags(QueryFlags::CANONICAL | QueryFlags::DIGEST), &mut out).unwrap();
     (out, info.digest)
 }
 
@@ -106,8 +106,8 @@ fn assert_at_rest(scene: &Scene, fixed: &Scene, what: &str) {
 /// Runs a swept step on `scene`, stream-ordered or blocking.
 fn step(scene: &mut Scene, rebuild: bool, stream_ordered: bool, x0: Buffer<'_>, x1: Buffer<'_>) -> minkq::Result<()> {
     match (rebuild, stream_ordered) {
-        (false, false) => scene.refit_swept_buffers(x0, x1),
-        (true, false) => scene.rebuild_swept_buffers(x0, x1),
+        (false, false) => scene.refit_swept(x0, x1),
+        (true, false) => scene.rebuild_swept(x0, x1),
         (false, true) => scene.refit_swept_async(x0, x1, Stream::null()),
         (true, true) => scene.rebuild_swept_async(x0, x1, Stream::null()),
     }
@@ -154,7 +154,7 @@ fn async_swept_steps_equal_the_blocking_swept_steps() {
         }
         // A plain stream-ordered refit makes it static again, as the blocking one does.
         stepped.refit_async(buffer(4), Stream::null()).unwrap();
-        blocking.refit_buffer(buffer(4)).unwrap();
+        blocking.refit(buffer(4)).unwrap();
         stepped.async_status(Stream::null()).unwrap();
         assert!(!stepped.is_swept() && !blocking.is_swept());
         assert_same_pairs(&stepped, &blocking, &format!("float64 {float64} static again"));
@@ -181,7 +181,7 @@ fn a_non_finite_coordinate_leaves_the_scene_at_rest_at_its_kept_start() {
     assert_at_rest(&scene, &static_at(&p1), "from static");
     // Swept but at rest: leaf-exact is still refused.
     let leaf_exact = Query::vt(Mode::Box, R).with_flags(QueryFlags::LEAF_EXACT);
-    assert!(matches!(scene.query_vec(&leaf_exact, &mut Vec::new()), Err(Error::Unsupported(_))));
+    assert!(matches!(scene.query_into(&leaf_exact, &mut Vec::new()), Err(Error::Unsupported(_))));
 
     // After an accepted step p1 -> p2, bad steps p3 -> p4 keep its start p1, as both ends.
     let mut scene = static_at(&p1);

@@ -1,10 +1,15 @@
 //! Moving one geometry of a scene (`minkq_scene_geometry_refit`, `_rebuild` and their swept
 //! forms): the other geometries, static or not, are not touched.
 use super::{vertex_buffer, Holder, Scene};
-use crate::buffer::{Buffer, Vertex};
+use crate::buffer::Buffer;
 use crate::error::{check, Result};
 use crate::geometry::GeometryFlags;
+use crate::inputs::Vertices;
 use crate::sys;
+
+/// `minkq_scene_geometry_refit_swept` or `minkq_scene_geometry_rebuild_swept`.
+type SweepCall =
+    unsafe extern "C" fn(*mut sys::minkq_scene, u32, sys::minkq_buffer, sys::minkq_buffer) -> sys::minkq_status;
 
 impl Scene {
     /// Moves geometry `geometry`'s vertices (its count, `[f32; 3]` or, for a float64 geometry,
@@ -31,8 +36,11 @@ impl Scene {
     ///
     /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
     /// [`Error::NonFinite`]: crate::Error::NonFinite
-    pub fn refit_geometry<V: Vertex>(&mut self, geometry: u32, vertices: &[V]) -> Result<()> {
-        self.refit_geometry_buffer(geometry, Buffer::from_slice(vertices))
+    pub fn refit_geometry<'v>(&mut self, geometry: u32, vertices: impl Vertices<'v>) -> Result<()> {
+        let vertices = self.geometry_vertex_buffer(geometry, "refit", &vertices.into_buffer())?;
+        // SAFETY: a live scene; the buffer's constructor promised readable records, of the
+        // geometry's precision where the buffer knows it (checked above).
+        check(unsafe { sys::minkq_scene_geometry_refit(self.raw.as_ptr(), geometry, vertices) })
     }
 
     /// [`Scene::refit_geometry`] from a [`Buffer`]: strided records, host or (on a CUDA
@@ -44,15 +52,13 @@ impl Scene {
     /// let mut scene = Scene::from_geometries(&Device::cpu()?, &[GeometryDesc::mesh(&a, &[[0, 1, 2]]); 2])?;
     /// let moved = [[0.0f32, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0], [0.0, f32::NAN, 1.0, 0.0]];
     /// // SAFETY: three 16-byte records starting with x, y, z, borrowed from `moved`.
-    /// let err = scene.refit_geometry_buffer(0, unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) });
+    /// let err = scene.refit_geometry(0, unsafe { Buffer::from_raw_parts(moved.as_ptr().cast(), 16, 3, Memory::Host) });
     /// assert!(matches!(err, Err(Error::NonFinite(m)) if m.starts_with("geometry 0: vertex 2 ")));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::refit_geometry`, which takes a `Buffer` too")]
     pub fn refit_geometry_buffer(&mut self, geometry: u32, vertices: Buffer<'_>) -> Result<()> {
-        let vertices = self.geometry_vertex_buffer(geometry, "refit", &vertices)?;
-        // SAFETY: a live scene; the buffer's constructor promised readable records, of the
-        // geometry's precision where the buffer knows it (checked above).
-        check(unsafe { sys::minkq_scene_geometry_refit(self.raw.as_ptr(), geometry, vertices) })
+        self.refit_geometry(geometry, vertices)
     }
 
     /// Moves geometry `geometry`'s vertices and builds its trees afresh, as [`Scene::rebuild`]
@@ -69,8 +75,11 @@ impl Scene {
     /// assert_eq!(scene.query(&vt, &mut PairBuffer::new()?)?.len(), 6);
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn rebuild_geometry<V: Vertex>(&mut self, geometry: u32, vertices: &[V]) -> Result<()> {
-        self.rebuild_geometry_buffer(geometry, Buffer::from_slice(vertices))
+    pub fn rebuild_geometry<'v>(&mut self, geometry: u32, vertices: impl Vertices<'v>) -> Result<()> {
+        let vertices = self.geometry_vertex_buffer(geometry, "rebuild", &vertices.into_buffer())?;
+        // SAFETY: a live scene; the buffer's constructor promised readable records, of the
+        // geometry's precision where the buffer knows it (checked above).
+        check(unsafe { sys::minkq_scene_geometry_rebuild(self.raw.as_ptr(), geometry, vertices) })
     }
 
     /// [`Scene::rebuild_geometry`] from a [`Buffer`], as [`Scene::refit_geometry_buffer`].
@@ -79,14 +88,13 @@ impl Scene {
     /// # use minkq::*;
     /// let a = [[0.0f32; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     /// let mut scene = Scene::from_geometries(&Device::cpu()?, &[GeometryDesc::mesh(&a, &[[0, 1, 2]])])?;
-    /// scene.rebuild_geometry_buffer(0, Buffer::from_slice(&a))?;
+    /// scene.rebuild_geometry(0, Buffer::from_slice(&a))?;
     /// assert_eq!(scene.tree_growth()?, 1.0);
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::rebuild_geometry`, which takes a `Buffer` too")]
     pub fn rebuild_geometry_buffer(&mut self, geometry: u32, vertices: Buffer<'_>) -> Result<()> {
-        let vertices = self.geometry_vertex_buffer(geometry, "rebuild", &vertices)?;
-        // SAFETY: as in refit_geometry_buffer.
-        check(unsafe { sys::minkq_scene_geometry_rebuild(self.raw.as_ptr(), geometry, vertices) })
+        self.rebuild_geometry(geometry, vertices)
     }
 
     /// Swept positions for geometry `geometry`, as [`Scene::refit_swept`] gives them to a
@@ -116,8 +124,14 @@ impl Scene {
     /// assert!(!scene.is_swept() && scene.query(&query, &mut pairs)?.is_empty());
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn refit_geometry_swept<V: Vertex>(&mut self, geometry: u32, x0: &[V], x1: &[V]) -> Result<()> {
-        self.refit_geometry_swept_buffers(geometry, Buffer::from_slice(x0), Buffer::from_slice(x1))
+    pub fn refit_geometry_swept<'v>(
+        &mut self,
+        geometry: u32,
+        x0: impl Vertices<'v>,
+        x1: impl Vertices<'v>,
+    ) -> Result<()> {
+        let call = sys::minkq_scene_geometry_refit_swept;
+        self.sweep_geometry(geometry, "refit_swept", x0.into_buffer(), x1.into_buffer(), call)
     }
 
     /// [`Scene::refit_geometry_swept`] from two [`Buffer`]s, as
@@ -127,14 +141,13 @@ impl Scene {
     /// # use minkq::*;
     /// let a = [[0.0f32; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     /// let mut scene = Scene::from_geometries(&Device::cpu()?, &[GeometryDesc::mesh(&a, &[[0, 1, 2]])])?;
-    /// let err = scene.refit_geometry_swept_buffers(0, Buffer::from_slice(&a), Buffer::from_slice(&a[..1])).unwrap_err();
+    /// let err = scene.refit_geometry_swept(0, Buffer::from_slice(&a), Buffer::from_slice(&a[..1])).unwrap_err();
     /// assert_eq!(err.message(), "refit_swept of geometry 0 with 1 x1 vertices but the geometry has 3");
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::refit_geometry_swept`, which takes `Buffer`s too")]
     pub fn refit_geometry_swept_buffers(&mut self, geometry: u32, x0: Buffer<'_>, x1: Buffer<'_>) -> Result<()> {
-        let (x0, x1) = self.geometry_swept_buffers(geometry, "refit_swept", &x0, &x1)?;
-        // SAFETY: as in refit_geometry_buffer, for both buffers.
-        check(unsafe { sys::minkq_scene_geometry_refit_swept(self.raw.as_ptr(), geometry, x0, x1) })
+        self.refit_geometry_swept(geometry, x0, x1)
     }
 
     /// Swept positions for one geometry like [`Scene::refit_geometry_swept`], with its trees
@@ -149,8 +162,14 @@ impl Scene {
     /// assert!(scene.is_swept());
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn rebuild_geometry_swept<V: Vertex>(&mut self, geometry: u32, x0: &[V], x1: &[V]) -> Result<()> {
-        self.rebuild_geometry_swept_buffers(geometry, Buffer::from_slice(x0), Buffer::from_slice(x1))
+    pub fn rebuild_geometry_swept<'v>(
+        &mut self,
+        geometry: u32,
+        x0: impl Vertices<'v>,
+        x1: impl Vertices<'v>,
+    ) -> Result<()> {
+        let call = sys::minkq_scene_geometry_rebuild_swept;
+        self.sweep_geometry(geometry, "rebuild_swept", x0.into_buffer(), x1.into_buffer(), call)
     }
 
     /// [`Scene::rebuild_geometry_swept`] from two [`Buffer`]s.
@@ -159,14 +178,13 @@ impl Scene {
     /// # use minkq::*;
     /// let a = [[0.0f32; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     /// let mut scene = Scene::from_geometries(&Device::cpu()?, &[GeometryDesc::mesh(&a, &[[0, 1, 2]])])?;
-    /// let err = scene.rebuild_geometry_swept_buffers(1, Buffer::from_slice(&a), Buffer::from_slice(&a)).unwrap_err();
+    /// let err = scene.rebuild_geometry_swept(1, Buffer::from_slice(&a), Buffer::from_slice(&a)).unwrap_err();
     /// assert_eq!(err.message(), "geometry 1 is out of range: the scene has 1 geometries");
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::rebuild_geometry_swept`, which takes `Buffer`s too")]
     pub fn rebuild_geometry_swept_buffers(&mut self, geometry: u32, x0: Buffer<'_>, x1: Buffer<'_>) -> Result<()> {
-        let (x0, x1) = self.geometry_swept_buffers(geometry, "rebuild_swept", &x0, &x1)?;
-        // SAFETY: as in refit_geometry_buffer, for both buffers.
-        check(unsafe { sys::minkq_scene_geometry_rebuild_swept(self.raw.as_ptr(), geometry, x0, x1) })
+        self.rebuild_geometry_swept(geometry, x0, x1)
     }
 
     /// The C buffer of `call`'s vertices for geometry `g`, checked for its precision. A
@@ -185,16 +203,13 @@ impl Scene {
     }
 
     /// The C buffers of `call`'s two positions for geometry `g`, each checked.
-    fn geometry_swept_buffers(
-        &self,
-        g: u32,
-        call: &str,
-        x0: &Buffer<'_>,
-        x1: &Buffer<'_>,
-    ) -> Result<(sys::minkq_buffer, sys::minkq_buffer)> {
-        Ok((
-            self.geometry_vertex_buffer(g, &format!("{call}: x0"), x0)?,
-            self.geometry_vertex_buffer(g, &format!("{call}: x1"), x1)?,
-        ))
+    /// Moves geometry `g` to the swept positions `x0` -> `x1` through `call`, the C
+    /// refit_swept or rebuild_swept of `name`, once both buffers pass the precision check.
+    fn sweep_geometry(&mut self, g: u32, name: &str, x0: Buffer<'_>, x1: Buffer<'_>, call: SweepCall) -> Result<()> {
+        let x0 = self.geometry_vertex_buffer(g, &format!("{name}: x0"), &x0)?;
+        let x1 = self.geometry_vertex_buffer(g, &format!("{name}: x1"), &x1)?;
+        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
+        // geometry's precision where the buffers know it (checked above).
+        check(unsafe { call(self.raw.as_ptr(), g, x0, x1) })
     }
 }

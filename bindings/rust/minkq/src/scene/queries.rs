@@ -1,16 +1,21 @@
-//! A scene's blocking queries: into a [`PairBuffer`], a slice, a [`PairsOut`] or a `Vec`; VT and
+//! A scene's blocking queries: into a [`PairBuffer`] or any [`PairSink`]; VT and
 //! EE in one pass; the work a query does.
 use std::ptr;
 
 use super::Scene;
 use crate::buffer::{Memory, PairsOut};
 use crate::error::{check, Error, Result};
-use crate::pairs::{query_vec, PairBuffer};
+use crate::pairs::PairBuffer;
 use crate::query::{Query, QueryFlags, QueryInfo, WorkStats};
+use crate::sink::{write_pairs, PairSink};
 use crate::sys;
 
+/// The VT and the EE pairs of [`Scene::query_vt_ee`].
+type VtEePairs<'r> = (&'r [[i32; 2]], &'r [[i32; 2]]);
+
 impl Scene {
-    /// Runs a query into a library-owned buffer that grows as needed; returns its pairs,
+    /// Runs a query into a library-owned buffer that grows as needed and is reused from one
+    /// call to the next ([`Scene::query_into`] writes caller-owned memory); returns its pairs,
     /// (vertex, triangle) for VT, (e, f) with e < f for EE, (v, w) with v < w for VV and
     /// (vertex, edge) for EV.
     ///
@@ -39,8 +44,12 @@ impl Scene {
         Ok(out.pairs())
     }
 
-    /// Runs a query into the caller's buffer. If more pairs exist than `out` holds, nothing is
-    /// written past it and the error is [`Error::Capacity`] with the exact count needed.
+    /// Runs a query into caller-owned memory, chosen by the type of `out` (a [`PairSink`]): a
+    /// `Vec` grows to the pairs; a slice, an array or a [`PairsOut`] (host or, on a CUDA
+    /// device, device memory) has a fixed capacity, and if more pairs exist than it holds,
+    /// nothing is written past it and the error is [`Error::Capacity`] with the exact count
+    /// needed. Returns the count (and the digest and work stats the query's flags ask for).
+    /// Errors as for [`Scene::query`].
     ///
     /// ```
     /// # use minkq::*;
@@ -55,14 +64,17 @@ impl Scene {
     ///     other => panic!("{other:?}"),
     /// }
     /// let mut enough = vec![[0; 2]; 6];
-    /// assert_eq!(scene.query_into(&query, &mut enough)?.count, 6);
+    /// assert_eq!(scene.query_into(&query, &mut enough[..])?.count, 6);
+    /// let mut grown = Vec::new();
+    /// assert_eq!(scene.query_into(&query, &mut grown)?.count, 6);
+    /// assert_eq!(grown.len(), 6);
     /// # Ok::<(), minkq::Error>(())
     /// ```
-    pub fn query_into(&self, query: &Query, out: &mut [[i32; 2]]) -> Result<QueryInfo> {
-        self.query_to(query, PairsOut::from_slice(out))
+    pub fn query_into<'o>(&self, query: &Query, out: impl PairSink<'o>) -> Result<QueryInfo> {
+        write_pairs(out, |pairs, capacity, memory| self.query_raw(query, pairs, capacity, memory))
     }
 
-    /// Runs a query into a [`PairsOut`]: host memory, or (on a CUDA device) device memory
+    /// Deprecated: [`Scene::query_into`] takes a [`PairsOut`]. Runs a query into a [`PairsOut`]: host memory, or (on a CUDA device) device memory
     /// written in place, ready for any stream when this returns. [`Error::Capacity`] with the
     /// exact count when it is too small; nothing is written past it.
     ///
@@ -73,19 +85,20 @@ impl Scene {
     /// # let triangles = [[0, 1, 2], [3, 4, 5]];
     /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
     /// let mut pairs = [[0; 2]; 8];
-    /// let info = scene.query_to(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::CANONICAL), PairsOut::from_slice(&mut pairs))?;
+    /// let info = scene.query_into(&Query::vt(Mode::Sphere, 0.2).with_flags(QueryFlags::CANONICAL), PairsOut::from_slice(&mut pairs))?;
     /// assert_eq!(&pairs[..info.count as usize], &[[0, 1], [1, 1], [2, 1], [3, 0], [4, 0], [5, 0]]);
     /// // Device memory on a CPU device is refused before it is written.
     /// // SAFETY: never written: the CPU device rejects device memory.
     /// let on_gpu = unsafe { PairsOut::from_raw_parts(pairs.as_mut_ptr().cast(), 8, Memory::Device) };
-    /// assert!(matches!(scene.query_to(&Query::vt(Mode::Sphere, 0.2), on_gpu), Err(Error::InvalidArgument(_))));
+    /// assert!(matches!(scene.query_into(&Query::vt(Mode::Sphere, 0.2), on_gpu), Err(Error::InvalidArgument(_))));
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::query_into`, which takes a `PairsOut` too")]
     pub fn query_to(&self, query: &Query, out: PairsOut<'_>) -> Result<QueryInfo> {
-        self.query_raw(query, out.data(), out.capacity(), out.memory())
+        self.query_into(query, out)
     }
 
-    /// Runs a query into a `Vec`, growing it when it is too small (the query then runs twice)
+    /// Deprecated: [`Scene::query_into`] takes a `Vec`. Runs a query into a `Vec`, growing it when it is too small (the query then runs twice)
     /// to the exact count and an eighth more, so that a count that grows a little from one step
     /// to the next fits; on success the `Vec` holds exactly the pairs.
     ///
@@ -96,14 +109,15 @@ impl Scene {
     /// # let triangles = [[0, 1, 2], [3, 4, 5]];
     /// # let scene = Scene::new(&device, &SceneDesc::new(&vertices, &triangles))?;
     /// let mut pairs = Vec::new();
-    /// let info = scene.query_vec(&Query::ee(Mode::Box, 0.2).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
+    /// let info = scene.query_into(&Query::ee(Mode::Box, 0.2).with_flags(QueryFlags::CANONICAL), &mut pairs)?;
     /// assert_eq!(info.count as usize, pairs.len());
     /// assert!(pairs.windows(2).all(|w| w[0] < w[1]));
     /// assert!(pairs.capacity() >= pairs.len() + pairs.len() / 8 + 64); // room to grow
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::query_into`, which takes a `Vec` too")]
     pub fn query_vec(&self, query: &Query, out: &mut Vec<[i32; 2]>) -> Result<QueryInfo> {
-        query_vec(out, |pairs, capacity| self.query_raw(query, pairs, capacity, Memory::Host))
+        self.query_into(query, out)
     }
 
     /// Runs a VT and an EE query in one pass (`minkq_scene_query_vt_ee`: one parallel loop on
@@ -140,7 +154,7 @@ impl Scene {
         ee: &Query,
         vt_out: &'r mut PairBuffer,
         ee_out: &'r mut PairBuffer,
-    ) -> Result<(&'r [[i32; 2]], &'r [[i32; 2]])> {
+    ) -> Result<VtEePairs<'r>> {
         let (vt_desc, ee_desc) = (vt.raw(), ee.raw());
         // SAFETY: a live scene, two distinct live results (two `&mut`), valid descriptions.
         check(unsafe {

@@ -6,6 +6,7 @@
 use super::Scene;
 use crate::buffer::Buffer;
 use crate::error::{check, Result};
+use crate::inputs::Vertices;
 use crate::stream::Stream;
 use crate::sys;
 
@@ -106,8 +107,12 @@ impl Scene {
     /// [`QueryFlags::LEAF_EXACT`]: crate::QueryFlags::LEAF_EXACT
     /// [`SceneFlags::DROP_INCIDENT`]: crate::SceneFlags::DROP_INCIDENT
     /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
-    pub fn refit_swept(&mut self, x0: &[[f32; 3]], x1: &[[f32; 3]]) -> Result<()> {
-        self.refit_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+    pub fn refit_swept<'v>(&mut self, x0: impl Vertices<'v>, x1: impl Vertices<'v>) -> Result<()> {
+        let (x0, x1) = (x0.into_buffer(), x1.into_buffer());
+        let (x0, x1) = self.swept_buffers("refit_swept", &x0, &x1)?;
+        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
+        // scene's precision where the buffers know it (checked above).
+        check(unsafe { sys::minkq_scene_refit_swept(self.raw.as_ptr(), x0, x1) })
     }
 
     /// [`Scene::refit_swept`] with `[f64; 3]` positions, for a [`SceneFlags::FLOAT64`] scene
@@ -124,12 +129,12 @@ impl Scene {
     /// let mut x1 = x0;
     /// x1[3][0] = base + 1.0;
     /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&x0, &[[0, 1, 2]]))?;
-    /// scene.refit_swept_f64(&x0, &x1)?;
+    /// scene.refit_swept(&x0, &x1)?;
     /// assert!(scene.is_swept());
     /// assert_eq!(scene.query(&Query::vt(Mode::Sphere, 1e-3), &mut PairBuffer::new()?)?, &[[3, 0]]);
     /// // Floats are refused, for either end: the scene reads 3 doubles per vertex.
     /// let floats: Vec<[f32; 3]> = x1.iter().map(|v| v.map(|x| x as f32)).collect();
-    /// let err = scene.refit_swept_buffers(Buffer::from_slice(&x0), Buffer::from_slice(&floats)).unwrap_err();
+    /// let err = scene.refit_swept(Buffer::from_slice(&x0), Buffer::from_slice(&floats)).unwrap_err();
     /// assert_eq!(err, Error::InvalidArgument("refit_swept: x1: [f32; 3] vertices, but a scene with SceneFlags::FLOAT64 reads [f64; 3]".into()));
     /// # Ok::<(), minkq::Error>(())
     /// ```
@@ -137,8 +142,9 @@ impl Scene {
     /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
     /// [`Error::NonFinite`]: crate::Error::NonFinite
     /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
+    #[deprecated(note = "use `Scene::refit_swept`, which takes `[f64; 3]` vertices too")]
     pub fn refit_swept_f64(&mut self, x0: &[[f64; 3]], x1: &[[f64; 3]]) -> Result<()> {
-        self.refit_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+        self.refit_swept(x0, x1)
     }
 
     /// [`Scene::refit_swept`] from two [`Buffer`]s: strided records, host or (on a CUDA
@@ -155,21 +161,19 @@ impl Scene {
     /// let x1 = [[0.0f32, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 0.0]];
     /// // SAFETY: three 16-byte records starting with x, y, z, borrowed from `x1`.
     /// let x1 = unsafe { Buffer::from_raw_parts(x1.as_ptr().cast(), 16, 3, Memory::Host) };
-    /// scene.refit_swept_buffers(Buffer::from_slice(&x0), x1)?;
+    /// scene.refit_swept(Buffer::from_slice(&x0), x1)?;
     /// assert!(scene.is_swept());
     /// // Doubles on a float scene are refused before the library could misread them.
     /// let doubles = [[0.0f64; 3]; 3];
-    /// let err = scene.refit_swept_buffers(Buffer::from_slice(&doubles), x1).unwrap_err();
+    /// let err = scene.refit_swept(Buffer::from_slice(&doubles), x1).unwrap_err();
     /// assert!(matches!(err, Error::InvalidArgument(m) if m.starts_with("refit_swept: x0: [f64; 3] vertices")));
     /// # Ok::<(), minkq::Error>(())
     /// ```
     ///
     /// [`Error::InvalidArgument`]: crate::Error::InvalidArgument
+    #[deprecated(note = "use `Scene::refit_swept`, which takes `Buffer`s too")]
     pub fn refit_swept_buffers(&mut self, x0: Buffer<'_>, x1: Buffer<'_>) -> Result<()> {
-        let (x0, x1) = self.swept_buffers("refit_swept", &x0, &x1)?;
-        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
-        // scene's precision where the buffers know it (checked above).
-        check(unsafe { sys::minkq_scene_refit_swept(self.raw.as_ptr(), x0, x1) })
+        self.refit_swept(x0, x1)
     }
 
     /// Swept positions like [`Scene::refit_swept`], with the trees built afresh for the
@@ -201,8 +205,12 @@ impl Scene {
     /// ```
     ///
     /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
-    pub fn rebuild_swept(&mut self, x0: &[[f32; 3]], x1: &[[f32; 3]]) -> Result<()> {
-        self.rebuild_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+    pub fn rebuild_swept<'v>(&mut self, x0: impl Vertices<'v>, x1: impl Vertices<'v>) -> Result<()> {
+        let (x0, x1) = (x0.into_buffer(), x1.into_buffer());
+        let (x0, x1) = self.swept_buffers("rebuild_swept", &x0, &x1)?;
+        // SAFETY: a live scene; the buffers' constructors promised readable records, of the
+        // scene's precision where the buffers know it (checked above).
+        check(unsafe { sys::minkq_scene_rebuild_swept(self.raw.as_ptr(), x0, x1) })
     }
 
     /// [`Scene::rebuild_swept`] with `[f64; 3]` positions, for a [`SceneFlags::FLOAT64`]
@@ -215,17 +223,18 @@ impl Scene {
     /// let mut x1 = x0;
     /// x1[3][0] = 1.0;
     /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new_f64(&x0, &[[0, 1, 2]]))?;
-    /// scene.rebuild_swept_f64(&x0, &x1)?;
+    /// scene.rebuild_swept(&x0, &x1)?;
     /// assert_eq!(scene.query(&Query::vt(Mode::CapsuleRay, 0.01), &mut PairBuffer::new()?)?, &[[3, 0]]);
     /// // A double beyond the float range cannot be rounded to a float: non-finite.
     /// x1[1][2] = 1e39;
-    /// assert!(matches!(scene.rebuild_swept_f64(&x0, &x1), Err(Error::NonFinite(m)) if m.contains("vertex 1")));
+    /// assert!(matches!(scene.rebuild_swept(&x0, &x1), Err(Error::NonFinite(m)) if m.contains("vertex 1")));
     /// # Ok::<(), minkq::Error>(())
     /// ```
     ///
     /// [`SceneFlags::FLOAT64`]: crate::SceneFlags::FLOAT64
+    #[deprecated(note = "use `Scene::rebuild_swept`, which takes `[f64; 3]` vertices too")]
     pub fn rebuild_swept_f64(&mut self, x0: &[[f64; 3]], x1: &[[f64; 3]]) -> Result<()> {
-        self.rebuild_swept_buffers(Buffer::from_slice(x0), Buffer::from_slice(x1))
+        self.rebuild_swept(x0, x1)
     }
 
     /// [`Scene::rebuild_swept`] from two [`Buffer`]s: records, memory and precision as for
@@ -237,15 +246,14 @@ impl Scene {
     /// let x0 = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     /// let mut scene = Scene::new(&Device::cpu()?, &SceneDesc::new(&x0, &[[0, 1, 2]]))?;
     /// let x1 = [[0.0f32, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, f32::NAN, 1.0]];
-    /// let err = scene.rebuild_swept_buffers(Buffer::from_slice(&x0), Buffer::from_slice(&x1)).unwrap_err();
+    /// let err = scene.rebuild_swept(Buffer::from_slice(&x0), Buffer::from_slice(&x1)).unwrap_err();
     /// assert!(matches!(err, Error::NonFinite(m) if m.starts_with("x1 vertex 2 ")));
     /// assert!(!scene.is_swept()); // kept its static positions
     /// # Ok::<(), minkq::Error>(())
     /// ```
+    #[deprecated(note = "use `Scene::rebuild_swept`, which takes `Buffer`s too")]
     pub fn rebuild_swept_buffers(&mut self, x0: Buffer<'_>, x1: Buffer<'_>) -> Result<()> {
-        let (x0, x1) = self.swept_buffers("rebuild_swept", &x0, &x1)?;
-        // SAFETY: as in refit_swept_buffers.
-        check(unsafe { sys::minkq_scene_rebuild_swept(self.raw.as_ptr(), x0, x1) })
+        self.rebuild_swept(x0, x1)
     }
 
     /// [`Scene::refit_swept_buffers`], enqueued on `stream` (`minkq_scene_refit_swept_async`)
