@@ -148,7 +148,7 @@ class ClothBodyContacts:
         self._shape_world = (model.shape_world.numpy()[self.shapes] if model.shape_world is not None
                              else np.full(len(self.shapes), -1))
         state = model.state() if state is None else state
-        self.scene = _api.Scene.from_geometries(_api.Device("cpu"), self._geometries(state))
+        self.scene = _api.Scene.from_geometries(self._geometries(state), device="cpu")
 
     # ---- Building ------------------------------------------------------------------------
 
@@ -257,8 +257,8 @@ class ClothBodyContacts:
         if not (math.isfinite(radius) and radius >= 0):
             raise ValueError(f"radius: expected a finite number >= 0, got {radius}")
         r = float(radius)
-        vt = self.scene.query("vt", self.mode, r, leaf_exact=True, canonical=True)
-        ee = self.scene.query("ee", self.mode, r, leaf_exact=True, canonical=True)
+        vt = self.scene.query("vt", r, mode=self.mode, leaf_exact=True, canonical=True)
+        ee = self.scene.query("ee", r, mode=self.mode, leaf_exact=True, canonical=True)
         vt_g, vt_local = self.scene.geometry_of_pairs("vt", vt)
         ee_g, ee_local = self.scene.geometry_of_pairs("ee", ee)
         cloth_v, cloth_t = vt_g[:, 0] == _CLOTH, vt_g[:, 1] == _CLOTH
