@@ -52,9 +52,10 @@ void print_stats(const char* when) {
   const GeometryStats& g = harness->geometry;
   std::fprintf(stderr,
                "minkq_fuzz_differential %s: geometry scenes %llu (steps %llu, of which swept %llu; refused %llu; "
-               "one-mesh equalities %llu; oracle contacts at sampled times %llu)\n",
+               "one-mesh equalities %llu; oracle contacts %llu, at swept steps' sampled times %llu)\n",
                when, (unsigned long long)g.scenes, (unsigned long long)g.steps, (unsigned long long)g.swept,
-               (unsigned long long)g.refused, (unsigned long long)g.one_mesh, (unsigned long long)g.sampled);
+               (unsigned long long)g.refused, (unsigned long long)g.one_mesh, (unsigned long long)g.contacts,
+               (unsigned long long)g.sampled);
 }
 
 void at_exit() { print_stats("at exit"); }

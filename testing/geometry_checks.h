@@ -196,15 +196,18 @@ inline Pairs check_geometry_kind(minkq_scene* scene, const std::vector<ref::Geom
 }
 
 // check_geometry_kind for every kind the scene answers; `sets` (when given) receives each
-// kind's sets, indexed by ref::Kind.
-inline void check_geometry_scene(minkq_scene* scene, const std::vector<ref::Geometry>& geometries, float r,
+// kind's sets, indexed by ref::Kind. Returns the number of the oracle's contacts.
+inline size_t check_geometry_scene(minkq_scene* scene, const std::vector<ref::Geometry>& geometries, float r,
                                  uint32_t variant, Report& report, const std::string& what,
                                  KindSets (*sets)[4] = nullptr) {
   const uint32_t kinds = scene_kinds(geometries);
+  size_t contacts = 0;
   for (int k = 0; k < 4; ++k)
     if (kinds & kKindBits[k])
-      check_geometry_kind(scene, geometries, kAllQueryKinds[k], r, variant + uint32_t(k), report, what,
-                          sets ? &(*sets)[k] : nullptr);
+      contacts += check_geometry_kind(scene, geometries, kAllQueryKinds[k], r, variant + uint32_t(k), report, what,
+                                      sets ? &(*sets)[k] : nullptr)
+                      .size();
+  return contacts;
 }
 
 }  // namespace minkq::fuzz

@@ -248,7 +248,7 @@ inline void check_geometry_fuzz_scene(minkq_device* device, const GeometryScene&
         report.fail("minkq_scene_geometry_range(" + std::to_string(i) + ", " + std::to_string(e) + ") differs from the oracle's");
     }
   KindSets before[4];
-  check_geometry_scene(raw, s.geometries, s.r, s.variant, report, "static", &before);
+  stats.contacts += check_geometry_scene(raw, s.geometries, s.r, s.variant, report, "static", &before);
   check_one_mesh_equality(device, s, report, stats);
   if (s.step == GeometryStep::kNone || !report.ok()) return;
 
@@ -277,7 +277,7 @@ inline void check_geometry_fuzz_scene(minkq_device* device, const GeometryScene&
   stats.steps++;
   if (s.step == GeometryStep::kRefit || s.step == GeometryStep::kRebuild) {
     if (minkq_scene_is_swept(raw) != 0) report.fail("plain step: minkq_scene_is_swept is not 0");
-    check_geometry_scene(raw, after, s.r, s.variant >> 3, report, "after the step");
+    stats.contacts += check_geometry_scene(raw, after, s.r, s.variant >> 3, report, "after the step");
     return;
   }
   stats.swept++;
