@@ -87,7 +87,8 @@ minkq_status Session::create_geometries(std::vector<GeometryArgs>& args, minkq_s
       x.add(a.thickness.count != a.vertices.count, MINKQ_ERROR_INVALID_ARGUMENT, name + "thickness count");
       x.merge(a.thickness.misuse);
       for (size_t v = 0; a.thickness.honest && a.thickness.stride >= 4 && v < a.thickness.count; ++v) {
-        const float t = *a.thickness.floats(v);
+        float t;  // records may be unaligned (an odd stride is allowed)
+        std::memcpy(&t, a.thickness.floats(v), sizeof t);
         x.add(!std::isfinite(t), MINKQ_ERROR_NON_FINITE, name + "non-finite thickness");
         x.add(t < 0, MINKQ_ERROR_INVALID_ARGUMENT, name + "negative thickness");
       }
