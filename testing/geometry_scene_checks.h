@@ -33,24 +33,24 @@ struct GeometryStats {
 
 inline std::string describe(const GeometryScene& s) {
   static const char* steps[] = {"kNone", "kRefit", "kRebuild", "kSwept", "kSweptRebuild"};
-  std::string out = "// " + s.label + "\nGeometryScene s;\ns.r = " + hex_float(s.r) + ";\ns.variant = " +
-                    std::to_string(s.variant) + ";\ns.step = GeometryStep::" + steps[int(s.step)] +
+  std::string out = "// " + s.label + "\nfuzz::GeometryScene s;\ns.r = " + hex_float(s.r) + ";\ns.variant = " +
+                    std::to_string(s.variant) + ";\ns.step = fuzz::GeometryStep::" + steps[int(s.step)] +
                     ";\ns.moving = " + std::to_string(s.moving) + ";\n";
   auto mesh = [&](const std::string& name, const ref::Mesh& m) {
-    out += name + ".xyz = {" + float_list(m.xyz) + "};\n";
-    if (!m.xyz64.empty()) out += "ref::set_float64(" + name + ", {" + double_list(m.xyz64) + "});\n";
+    out += name + ".xyz = " + float_list(m.xyz) + ";\n";
+    if (!m.xyz64.empty()) out += "reference::set_float64(" + name + ", " + double_list(m.xyz64) + ");\n";
   };
   for (size_t i = 0; i < s.geometries.size(); ++i) {
     const ref::Geometry& g = s.geometries[i];
     const std::string n = "s.geometries[" + std::to_string(i) + "]";
     out += "s.geometries.emplace_back();\n";
     mesh(n + ".mesh", g.mesh);
-    out += n + ".mesh.tris = {" + int_list(g.mesh.tris) + "};\n" + n + ".mesh.edges = {" + int_list(g.mesh.edges) +
-           "};\n";
+    out += n + ".mesh.tris = " + int_list(g.mesh.tris) + ";\n" + n + ".mesh.edges = " + int_list(g.mesh.edges) +
+           ";\n";
     out += n + ".kinds = " + std::to_string(g.kinds) + ", " + n + ".flags = " + std::to_string(g.flags) + ", " + n +
            ".world = " + std::to_string(g.world) + ", " + n + ".group = " + std::to_string(g.group) + "u, " + n +
            ".mask = " + std::to_string(g.mask) + "u;\n";
-    if (!g.thickness.empty()) out += n + ".thickness = {" + double_list(g.thickness) + "};\n";
+    if (!g.thickness.empty()) out += n + ".thickness = " + double_list(g.thickness) + ";\n";
   }
   for (size_t i = 0; i < s.moved.size(); ++i) {
     out += "s.moved.emplace_back();\n";
