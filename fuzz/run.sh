@@ -68,7 +68,8 @@ for fuzzer in $fuzzers; do
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1 || true)
   cov=$(grep -E "^#[0-9]+[[:space:]]+(DONE|INITED|pulse|NEW|REDUCE)" "$log" | tail -1 |
         sed -n 's/.*cov: \([0-9]*\) ft: \([0-9]*\).*/cov \1, ft \2/p' || true)
-  counts=$(grep "at exit" "$log" | tail -1 | sed 's/^[a-z_]* at exit: //' || true)
+  # The differential fuzzer prints two lines at exit (mesh and box scenes; geometry scenes).
+  counts=$(grep "at exit" "$log" | sed 's/^[a-z_]* at exit: //' | paste -sd ';' | sed 's/;/; /g' || true)
   if [ $rc -ne 0 ]; then
     status=1
     crash=$(ls -t "$artifacts"/crash-* "$artifacts"/leak-* "$artifacts"/timeout-* "$artifacts"/oom-* 2>/dev/null | head -1 || true)
