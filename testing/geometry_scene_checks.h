@@ -53,6 +53,11 @@ inline std::string describe(const GeometryScene& s) {
     if (!g.thickness.empty()) out += n + ".thickness = " + double_list(g.thickness) + ";\n";
   }
   for (size_t i = 0; i < s.moved.size(); ++i) {
+    const ref::Mesh& m = s.geometries[i].mesh;
+    if (s.moved[i].xyz == m.xyz && s.moved[i].xyz64 == m.xyz64) {  // unmoved: the geometry's own
+      out += "s.moved.push_back(s.geometries[" + std::to_string(i) + "].mesh);\n";
+      continue;
+    }
     out += "s.moved.emplace_back();\n";
     mesh("s.moved[" + std::to_string(i) + "]", s.moved[i]);
   }

@@ -534,16 +534,7 @@ TEST(FuzzRegressions, replay_geometry_scene_swept_as_a_whole) {
   s.geometries[1].mesh.tris = {4, 9, 7, 2, 4, 0, 0, 0, 0, 0, 0, 0};
   s.geometries[1].mesh.edges = {};
   s.geometries[1].kinds = 1, s.geometries[1].flags = 0, s.geometries[1].world = 0, s.geometries[1].group = 1u, s.geometries[1].mask = 4294967295u;
-  s.moved.emplace_back();
-  s.moved[0].xyz = {0x1.0ap+6f, 0x1.b4p+6f, 0x1.6cp+5f,
-      0x1.b8p+5f, 0x1.46p+6f, 0x1.44p+6f,
-      0x1.54p+6f, 0x1.9cp+5f, 0x1.84p+5f,
-      0x1.04p+5f, 0x1.18p+6f, 0x1.f4p+5f,
-      0x1.6cp+5f, 0x1.38p+5f, 0x1.fp+4f,
-      0x1.9cp+5f, 0x1.8p+4f, 0x1.dcp+6f,
-      0x1.bp+4f, 0x1.26p+6f, 0x1.2cp+6f,
-      0x1p+5f, 0x1.1cp+6f, 0x1.5ep+6f,
-      0x1.acp+6f, 0x1.0cp+5f, 0x1p+6f};
+  s.moved.push_back(s.geometries[0].mesh);
   s.moved.emplace_back();
   s.moved[1].xyz = {-0x1.128bp+7f, -0x1.1ae3p+7f, -0x1.d66dp+7f,
       -0x1.084bp+7f, -0x1.9169p+7f, -0x1.130ep+7f,
