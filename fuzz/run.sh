@@ -71,7 +71,7 @@ for fuzzer in $fuzzers; do
   cov=$(grep -E "^#[0-9]+[[:space:]]+(DONE|INITED|pulse|NEW|REDUCE)" "$log" | tail -1 |
         sed -n 's/.*cov: \([0-9]*\) ft: \([0-9]*\).*/cov \1, ft \2/p' || true)
   # The differential fuzzer prints two lines at exit (mesh and box scenes; geometry scenes).
-  counts=$(grep "at exit" "$log" | sed 's/^[a-z_]* at exit: //' | paste -sd ';' | sed 's/;/; /g' || true)
+  counts=$(grep "at exit" "$log" | sed 's/^[a-z_]* at exit: //' | awk 'NR > 1 {printf "; "} {printf "%s", $0}' || true)
   if [ $rc -ne 0 ]; then
     status=1
     crash=$(ls -t "$artifacts"/crash-* "$artifacts"/leak-* "$artifacts"/timeout-* "$artifacts"/oom-* 2>/dev/null | head -1 || true)
