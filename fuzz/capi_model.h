@@ -33,6 +33,8 @@ minkq_status shim_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* 
                                     int32_t* ee_pairs, size_t ee_capacity, int out_memory, minkq_query_info* vt_info,
                                     minkq_query_info* ee_info);
 const char* shim_status_name(int status);
+minkq_status shim_scene_geometry_range(const minkq_scene* scene, uint32_t geometry, int element, size_t* out_first,
+                                       size_t* out_count);
 }
 
 namespace minkq::capi_fuzz {

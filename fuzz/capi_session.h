@@ -17,6 +17,13 @@
 
 namespace minkq::capi_fuzz {
 
+// One geometry's description as drawn, with its buffers and the misuses they hold.
+struct GeometryArgs {
+  minkq_geometry_desc desc{};
+  Buffer vertices, triangles, edges, thickness;
+  Misuse misuse;
+};
+
 class Session {
  public:
   Session(FuzzedDataProvider& in) : in_(in), gen_(in) {}
@@ -118,6 +125,13 @@ class Session {
   void scene_query_vt_ee_async();
   void scene_async_status();
   void async_status_on(SceneSlot* s, bool null_scene);
+
+  // ---- Scenes of many geometries (capi_geometry_ops.cpp): a scene made, used and released
+  // within one op, so that the one-mesh ops' models never meet it
+  void geometry_scene();
+  minkq_status create_geometries(std::vector<GeometryArgs>& args, minkq_scene** out);
+  void geometry_ranges(minkq_scene* scene, const std::vector<GeometryArgs>& args);
+  void geometry_move(minkq_scene* scene, const std::vector<GeometryArgs>& args);
 
   // ---- The remaining calls: status names, NULL handles, results, versions, releases (fuzz_capi.cpp)
   void misc();

@@ -49,3 +49,8 @@ minkq_status shim_scene_query_vt_ee(minkq_scene* scene, const minkq_query_desc* 
 }
 
 const char* shim_status_name(int status) { return minkq_status_name(status); }
+
+minkq_status shim_scene_geometry_range(const minkq_scene* scene, uint32_t geometry, int element, size_t* out_first,
+                                       size_t* out_count) {
+  return minkq_scene_geometry_range(scene, geometry, (minkq_element)element, out_first, out_count);
+}

@@ -51,7 +51,9 @@ void Session::run() {
       case 8:
         if (gen_.choice(2)) scene_query_result(); else scene_query_vt_ee();
         break;
-      case 9: scene_edges(); break;
+      case 9:
+        if (gen_.choice(2)) scene_edges(); else geometry_scene();
+        break;
       case 10: bvh_create(); break;
       case 11: bvh_refit(); break;
       case 12: bvh_query(); break;

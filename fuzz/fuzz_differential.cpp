@@ -1,7 +1,8 @@
 // Differential fuzzer: decodes the input into a structured scene (scene_decoder.h), runs every
 // mode through the C API on the CPU backend (and every CUDA device, where one exists), and
 // checks it against the brute-force definition, the Embree reference and the long-double
-// oracle (scene_checks.h), float64 input and swept steps included. A mismatch prints the scene
+// oracle (scene_checks.h), float64 input and swept steps included; or decodes a scene of many
+// geometries (geometry_decoder.h) and checks it against the oracle (geometry_scene_checks.h). A mismatch prints the scene
 // as C++ and aborts, so libFuzzer keeps (and with -minimize_crash=1 shrinks) the input.
 //
 // Environment: MINKQ_FUZZ_THREADS (TBB threads, default 1: the campaign machine is shared),
@@ -15,6 +16,7 @@
 #include <memory>
 
 #include "embree_reference.h"
+#include "geometry_decoder.h"
 #include "scene_checks.h"
 #include "scene_decoder.h"
 
@@ -27,6 +29,7 @@ struct Harness {
   std::vector<minkq::cxx::Device> devices;
   std::unique_ptr<EmbreeReference> embree;
   Stats stats;
+  GeometryStats geometry;
   uint64_t inputs = 0;
   uint64_t every = 0;
   bool verbose = false;
@@ -46,6 +49,13 @@ void print_stats(const char* when) {
                (unsigned long long)s.still_steps, (unsigned long long)s.box_scenes, (unsigned long long)s.queries,
                (unsigned long long)s.independent, (unsigned long long)s.pairs, (unsigned long long)s.true_contacts,
                (unsigned long long)s.sampled_contacts);
+  const GeometryStats& g = harness->geometry;
+  std::fprintf(stderr,
+               "minkq_fuzz_differential %s: geometry scenes %llu (steps %llu, of which swept %llu; refused %llu; "
+               "one-mesh equalities %llu; oracle contacts %llu, at swept steps' sampled times %llu)\n",
+               when, (unsigned long long)g.scenes, (unsigned long long)g.steps, (unsigned long long)g.swept,
+               (unsigned long long)g.refused, (unsigned long long)g.one_mesh, (unsigned long long)g.contacts,
+               (unsigned long long)g.sampled);
 }
 
 void at_exit() { print_stats("at exit"); }
@@ -83,8 +93,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   Report report;
   std::string description;
   harness->inputs++;
-  // Three in four inputs are mesh scenes (VT and EE); the rest are user-box BVH scenes.
-  if (params.ConsumeIntegralInRange<int>(0, 3) != 0) {
+  // The parameters' first byte picks the kind of scene: by its value mod 4 (as before scenes
+  // of many geometries came, so the committed corpus keeps its kinds) a mesh scene (VT and EE)
+  // or, for 0, a user-box BVH scene; by its next bits, which that choice leaves unread, a scene
+  // of many geometries instead: 1 in 4 of the mesh inputs and 1 in 2 of the box inputs.
+  const uint8_t pick = header ? data[size - 1] : 0;
+  const bool geometries = pick % 4 != 0 ? (pick >> 2) % 4 == 3 : (pick >> 2) % 2 == 1;
+  const bool mesh = params.ConsumeIntegralInRange<int>(0, 3) != 0;
+  if (geometries) {
+    GeometryDecoder geometry_decoder(in, params);
+    const GeometryScene scene = geometry_decoder.scene();
+    if (harness->verbose) std::fprintf(stderr, "%s\n", describe(scene).c_str());
+    for (const auto& device : harness->devices) check_geometry_fuzz_scene(device.get(), scene, report, harness->geometry);
+    if (!report.ok()) description = describe(scene);
+  } else if (mesh) {
     const MeshScene scene = decoder.mesh();
     if (harness->verbose) std::fprintf(stderr, "%s\n", describe(scene).c_str());
     check_mesh_scene(harness->devices, scene, harness->embree.get(), report, harness->stats);

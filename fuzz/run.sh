@@ -10,19 +10,21 @@
 # Environment: MINKQ_FUZZERS="fuzz_differential fuzz_capi" (which to run),
 # MINKQ_FUZZ_BUILD (build folder, default build-fuzz; its corpus/ keeps what a run found, so
 # later runs continue from there), MINKQ_FUZZ_THREADS (TBB threads, default 1),
-# MINKQ_FUZZ_STATS_EVERY=N (a progress line every N inputs of the differential fuzzer).
+# MINKQ_FUZZ_STATS_EVERY=N (a progress line every N inputs of the differential fuzzer),
+# MINKQ_FUZZ_OSS_CHECK (seconds per fuzzer of fuzz/oss-fuzz/check.sh, the OSS-Fuzz-style build
+# run on its seed corpus zips, after the runs; default 10, 0 skips it).
 # Installs clang, libclang-rt-14-dev, libembree-dev and the build dependencies when missing and
 # run as root (or with sudo).
 set -euo pipefail
 seconds=${1:-60}
-[[ "$seconds" =~ ^[0-9]+$ ]] || { sed -n '2,16p' "$0"; exit 2; }
+[[ "$seconds" =~ ^[0-9]+$ ]] || { sed -n '2,17p' "$0"; exit 2; }
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(dirname "$here")
 build=${MINKQ_FUZZ_BUILD:-$root/build-fuzz}
 fuzzers=${MINKQ_FUZZERS:-fuzz_differential fuzz_capi}
 
 packages=(clang libclang-rt-14-dev libembree-dev cmake ninja-build pkg-config libtbb-dev libxxhash-dev
-          libtinyobjloader-dev)
+          libtinyobjloader-dev zip unzip)
 missing=()
 for p in "${packages[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then
@@ -68,7 +70,8 @@ for fuzzer in $fuzzers; do
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1 || true)
   cov=$(grep -E "^#[0-9]+[[:space:]]+(DONE|INITED|pulse|NEW|REDUCE)" "$log" | tail -1 |
         sed -n 's/.*cov: \([0-9]*\) ft: \([0-9]*\).*/cov \1, ft \2/p' || true)
-  counts=$(grep "at exit" "$log" | tail -1 | sed 's/^[a-z_]* at exit: //' || true)
+  # The differential fuzzer prints two lines at exit (mesh and box scenes; geometry scenes).
+  counts=$(grep "at exit" "$log" | sed 's/^[a-z_]* at exit: //' | awk 'NR > 1 {printf "; "} {printf "%s", $0}' || true)
   if [ $rc -ne 0 ]; then
     status=1
     crash=$(ls -t "$artifacts"/crash-* "$artifacts"/leak-* "$artifacts"/timeout-* "$artifacts"/oom-* 2>/dev/null | head -1 || true)
@@ -87,6 +90,16 @@ for fuzzer in $fuzzers; do
     summary+=("$fuzzer: ok, ${execs:-?} executions, ${cov}; ${counts}")
   fi
 done
+oss_seconds=${MINKQ_FUZZ_OSS_CHECK:-10}
+if [ "$oss_seconds" != 0 ]; then
+  echo "---- the OSS-Fuzz / ClusterFuzzLite build (fuzz/oss-fuzz/check.sh $oss_seconds)"
+  if MINKQ_FUZZ_BUILD=$build "$here/oss-fuzz/check.sh" "$oss_seconds"; then
+    summary+=("OSS-Fuzz build: ok (fuzz/oss-fuzz/build.sh; each fuzzer ran ${oss_seconds} s on its seed corpus zip)")
+  else
+    status=1
+    summary+=("OSS-Fuzz build: FAILED (fuzz/oss-fuzz/check.sh)")
+  fi
+fi
 echo "==== fuzz/run.sh summary ($(date -u +%Y-%m-%dT%H:%MZ), ${seconds} s each, total $(( $(date +%s) - start )) s)"
 printf '  %s\n' "${summary[@]}" | tee -a "$build/summary.txt"
 exit $status

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "capi_util.h"
+#include "geometry_scene_checks.h"
 #include "scene_checks.h"
 
 namespace minkq {
@@ -41,6 +42,17 @@ void replay(const fuzz::BoxScene& s) {
   fuzz::check_box_scene(devices, s, nullptr, report, stats);
   EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
   EXPECT_EQ(stats.box_scenes, 1u);
+}
+
+// The same for a scene of many geometries (testing/geometry_scene_checks.h) on every device.
+void replay(const fuzz::GeometryScene& s) {
+  const std::vector<cxx::Device> devices = fuzz::open_devices();
+  ASSERT_FALSE(devices.empty()) << minkq_last_error_message();
+  fuzz::Report report;
+  fuzz::GeometryStats stats;
+  for (const cxx::Device& device : devices) fuzz::check_geometry_fuzz_scene(device.get(), s, report, stats);
+  EXPECT_TRUE(report.ok()) << report.text() << fuzz::describe(s);
+  EXPECT_EQ(stats.scenes, devices.size());
 }
 
 using test::Device;
@@ -482,6 +494,59 @@ TEST(FuzzRegressions, replay_swept_steps_of_zero_motion_and_float64_steps) {
     d.variant = variant;
     EXPECT_GT(replay(d).sampled_contacts, 0u);
   }
+}
+
+// A scene of many geometries as the differential fuzzer prints it (a seed of its corpus): a
+// static rod set (SELF; EE, VV and EV) beside a mesh (VT), swept as a whole scene (the mesh
+// alone moves, far across the rods): every swept mode against the oracle at sampled times, the
+// refit back, and the first geometry alone against minkq_scene_create.
+TEST(FuzzRegressions, replay_geometry_scene_swept_as_a_whole) {
+  // soup rods, soup mesh, r 0.2421875, step 3 of -1, motion 4
+  fuzz::GeometryScene s;
+  s.r = 0x1.fp-3f;
+  s.variant = 1288703686;
+  s.step = fuzz::GeometryStep::kSwept;
+  s.moving = -1;
+  s.geometries.emplace_back();
+  s.geometries[0].mesh.xyz = {0x1.0ap+6f, 0x1.b4p+6f, 0x1.6cp+5f,
+      0x1.b8p+5f, 0x1.46p+6f, 0x1.44p+6f,
+      0x1.54p+6f, 0x1.9cp+5f, 0x1.84p+5f,
+      0x1.04p+5f, 0x1.18p+6f, 0x1.f4p+5f,
+      0x1.6cp+5f, 0x1.38p+5f, 0x1.fp+4f,
+      0x1.9cp+5f, 0x1.8p+4f, 0x1.dcp+6f,
+      0x1.bp+4f, 0x1.26p+6f, 0x1.2cp+6f,
+      0x1p+5f, 0x1.1cp+6f, 0x1.5ep+6f,
+      0x1.acp+6f, 0x1.0cp+5f, 0x1p+6f};
+  s.geometries[0].mesh.tris = {};
+  s.geometries[0].mesh.edges = {0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 4, 5, 6, 8, 7, 7};
+  s.geometries[0].kinds = 50, s.geometries[0].flags = 9, s.geometries[0].world = 0, s.geometries[0].group = 163u, s.geometries[0].mask = 4294967295u;
+  s.geometries.emplace_back();
+  s.geometries[1].mesh.xyz = {0x1.daeap+6f, 0x1.ca3ap+6f, 0x1.4c98p+4f,
+      0x1.ef6ap+6f, 0x1.ba5cp+5f, 0x1.d9e4p+6f,
+      0x1.374p+2f, 0x1.8db4p+6f, 0x1.ad92p+6f,
+      0x1.5cfp+6f, 0x1.f01p+6f, 0x1.f5e8p+5f,
+      0x1.c0b4p+6f, 0x1.85c8p+6f, 0x1.a834p+5f,
+      0x1.f308p+5f, 0x1.155cp+5f, 0x1.4eap+2f,
+      0x1.1p-2f, 0x1.720cp+6f, 0x1.8024p+6f,
+      0x1.c11cp+6f, 0x1.0a62p+6f, 0x1.222cp+5f,
+      0x1.a92cp+6f, 0x1.5c5cp+6f, 0x1.cffap+6f,
+      0x1.c66p+3f, 0x1.ab0cp+5f, 0x1.51c8p+6f};
+  s.geometries[1].mesh.tris = {4, 9, 7, 2, 4, 0, 0, 0, 0, 0, 0, 0};
+  s.geometries[1].mesh.edges = {};
+  s.geometries[1].kinds = 1, s.geometries[1].flags = 0, s.geometries[1].world = 0, s.geometries[1].group = 1u, s.geometries[1].mask = 4294967295u;
+  s.moved.push_back(s.geometries[0].mesh);
+  s.moved.emplace_back();
+  s.moved[1].xyz = {-0x1.128bp+7f, -0x1.1ae3p+7f, -0x1.d66dp+7f,
+      -0x1.084bp+7f, -0x1.9169p+7f, -0x1.130ep+7f,
+      -0x1.f646p+7f, -0x1.3926p+7f, -0x1.2937p+7f,
+      -0x1.5188p+7f, -0x1.07f8p+7f, -0x1.8286p+7f,
+      -0x1.1fa6p+7f, -0x1.3d1cp+7f, -0x1.95f3p+7f,
+      -0x1.833ep+7f, -0x1.baa9p+7f, -0x1.f58bp+7f,
+      -0x1.ff78p+7f, -0x1.46fap+7f, -0x1.3feep+7f,
+      -0x1.1f72p+7f, -0x1.7acfp+7f, -0x1.b775p+7f,
+      -0x1.2b6ap+7f, -0x1.51d2p+7f, -0x1.1803p+7f,
+      -0x1.e39ap+7f, -0x1.953dp+7f, -0x1.571cp+7f};
+  replay(s);
 }
 
 }  // namespace

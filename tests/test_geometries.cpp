@@ -488,7 +488,7 @@ TEST(Geometries, bad_descriptions_are_refused_naming_the_geometry) {
                                    test::make_geometry(ref::grid_sheet(2), kAllKinds, kSelfDrop),
                                    test::make_geometry(ref::grid_sheet(2), kAllKinds, kSelfDrop)};
   auto refused = [&](auto change, minkq_status want, const std::string& names) {
-    test::Descriptions d(g);
+    test::GeometryDescriptions d(g);
     std::vector<float> thickness;
     change(d.descs, thickness);
     minkq_scene* const unset = reinterpret_cast<minkq_scene*>(&thickness);  // the call must set NULL
@@ -521,7 +521,7 @@ TEST(Geometries, bad_descriptions_are_refused_naming_the_geometry) {
   refused([](Descs& d, auto&) { d[2].triangles = cxx::host_buffer(tris.data(), 2); }, MINKQ_ERROR_INDEX_OUT_OF_RANGE,
           "geometry 2: triangle 1 references vertex 9");
   // A NaN thickness: NON_FINITE or INVALID_ARGUMENT (minkq.h allows either), naming geometry 2.
-  test::Descriptions d(g);
+  test::GeometryDescriptions d(g);
   const std::vector<float> nan_thickness = {0, NAN, 0, 0};
   d.descs[2].thickness = cxx::host_buffer(nan_thickness.data(), 4);
   minkq_scene* scene = nullptr;
@@ -531,7 +531,7 @@ TEST(Geometries, bad_descriptions_are_refused_naming_the_geometry) {
   EXPECT_EQ(scene, nullptr);
   EXPECT_EQ(minkq_scene_create_geometries(cpu.get(), d.descs.data(), 0, &scene), MINKQ_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(minkq_scene_create_geometries(cpu.get(), nullptr, 1, &scene), MINKQ_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(minkq_scene_create_geometries(cpu.get(), test::Descriptions(g).descs.data(), 3, nullptr),
+  EXPECT_EQ(minkq_scene_create_geometries(cpu.get(), test::GeometryDescriptions(g).descs.data(), 3, nullptr),
             MINKQ_ERROR_INVALID_ARGUMENT);
   // The defaults.
   minkq_geometry_desc init;
