@@ -38,15 +38,22 @@ struct Box {
 // The box of k vertices ids[0..k) of xyz (3 doubles each). Widened, it is padded by `pad` and
 // stepped outward past rounding (two ulps, plus 2^-30 pad for the long double error of the
 // distances), so that every pair whose distance test accepts it at a reach up to the two
-// boxes' pads together survives the box prefilter and the grid, a reach of 0 included.
+// boxes' pads together survives the box prefilter and the grid, a reach of 0 included. Every
+// box, padded or not, also grows by 2^-50 of its largest coordinate magnitude: the distances'
+// rounding, relative to the coordinates of the pair, can accept two elements whose exact boxes
+// miss each other by that much (a gap of 2^-151 beside coordinates of 1/4 rounds to 0).
 inline Box box_of(const std::vector<double>& xyz, const int32_t* ids, int k, double pad, bool widen) {
   Box b;
-  const double inf = std::numeric_limits<double>::infinity(), p = pad + pad * 0x1p-30;
+  const double inf = std::numeric_limits<double>::infinity();
+  double magnitude = 0;
+  for (int i = 0; i < k; ++i)
+    for (int a = 0; a < 3; ++a) magnitude = std::max(magnitude, std::abs(xyz[3 * size_t(ids[i]) + a]));
+  const double p = (widen ? pad + pad * 0x1p-30 : 0.0) + magnitude * 0x1p-50;
   for (int a = 0; a < 3; ++a) {
     double lo = xyz[3 * size_t(ids[0]) + a], hi = lo;
     for (int i = 1; i < k; ++i) lo = std::min(lo, xyz[3 * size_t(ids[i]) + a]), hi = std::max(hi, xyz[3 * size_t(ids[i]) + a]);
-    b.lo[a] = widen ? std::nextafter(std::nextafter(lo - p, -inf), -inf) : lo;
-    b.hi[a] = widen ? std::nextafter(std::nextafter(hi + p, inf), inf) : hi;
+    b.lo[a] = std::nextafter(std::nextafter(lo - p, -inf), -inf);
+    b.hi[a] = std::nextafter(std::nextafter(hi + p, inf), inf);
   }
   return b;
 }

@@ -222,6 +222,23 @@ TEST(ReferenceContacts, GridEqualsBruteOnSheets) {
   EXPECT_EQ(ref::vt_contacts(s, 0.0625, true).size(), 2u * 2u * 3u * 242u);
 }
 
+// fuzz/RESULTS.md's oracle finding: at r = 0, two edges whose long double distance is 0 (their
+// coordinates mix 2^-151 with 1/4, so the computation rounds the gap away) while their boxes
+// miss each other by less than that rounding. The grid's boxes must be widened by the
+// distance's rounding, relative to the coordinates' size, to keep the brute force's pairs.
+TEST(ReferenceContacts, GridKeepsPairsTheDistanceRoundsToTouching) {
+  ref::Mesh m;
+  ref::set_float64(m, {-0x1.4e3f4e3f4e3f5p-151, -0x1.000000d2e5d2ep-2, -0x1.0b590b590b59p-153,
+                       0x1.ffffffba85ba8p-2, -0x1.000000f7b7f7bp-2, 0x1.1a62630320925p-54,
+                       -0x1.59eb59eb59eb6p-151, 0x1.8ed98ed98ed98p-153, 0x1.9a599a599a598p-153,
+                       0x1.941394139413ap-151, -0x1.8437843784378p-151, 0x1.3ee33ee33ee34p-151,
+                       0x1.e333e333e333ep-151, 0x1.000000ba33ba3p-2, -0x1.01bf01bf01bfp-151,
+                       0x1.fffffe0ebc0ecp-2, 0x1.fffffe8034803p-3, -0x1.1a626392e7221p-54});
+  m.tris = {0, 1, 3, 0, 3, 2, 2, 3, 5, 2, 5, 4};
+  m.edges = ref::derive_edges(m.tris);
+  EXPECT_GT(expect_grid_equals_brute(m, 0.0, "sub-float coordinates at r = 0"), 0u);
+}
+
 TEST(ReferenceContacts, DropIncidentAndClosedBound) {
   // Unit square: triangles (0,1,3), (0,3,2); edges 01 02 03 13 23. At r = 1 every pair is a
   // contact (distance <= r, the bound included); the opposite sides are exactly 1 apart.
