@@ -1,5 +1,6 @@
 """Runs the tutorials' code: every docs/tutorials/*.py (not the _helpers) as a script, with the
-interpreter running this one, and fails if one exits non-zero.
+interpreter running this one and `-W error::DeprecationWarning` (a spelling minkq has deprecated
+fails the tutorial, so the pages never teach one), and fails if one exits non-zero.
 
     python run_tutorials.py TUTORIALS_DIR
 
@@ -34,7 +35,7 @@ def main(folder: Path) -> int:
             print(f"tutorial {script.name}: SKIPPED: {'; '.join(reasons)}")
             continue
         started = time.monotonic()
-        run = subprocess.run([sys.executable, script.name], cwd=folder, capture_output=True, text=True, timeout=600)
+        run = subprocess.run([sys.executable, "-W", "error::DeprecationWarning", script.name], cwd=folder, capture_output=True, text=True, timeout=600)
         ran += 1
         status = "ok" if run.returncode == 0 else f"FAILED (exit {run.returncode})"
         print(f"tutorial {script.name}: {status} ({time.monotonic() - started:.1f} s)")

@@ -21,11 +21,11 @@ x0 = np.concatenate([floor, patch])
 x1 = x0.copy()
 x1[len(floor):] += np.float32([0.1, 0.05, -0.4])           # the patch ends 0.2 below the floor
 
-scene = minkq.Scene(minkq.Device("cpu"), x0, triangles)
+scene = minkq.Scene(x0, triangles)
 scene.refit_swept(x0, x1)                                  # x(t) = x0 + t (x1 - x0), t in [0, 1]
 r = 0.01
-vt = scene.query("vt", "box", r)   # (vertex, triangle) whose paths come within r: CCD candidates
-ee = scene.query("ee", "box", r)   # (e, f), each edge's swept box
+vt = scene.query("vt", r)   # (vertex, triangle) whose paths come within r: CCD candidates
+ee = scene.query("ee", r)   # (e, f), each edge's swept box
 print(f"swept candidates: {len(vt)} VT, {len(ee)} EE")
 
 
@@ -68,8 +68,8 @@ print(f"narrow phase: {hits.sum()} of {len(vt)} VT candidates touch, first at t 
 # drop over its 0.4 (t = 0.475), and no static query at either end of the step sees it.
 assert hits.any() and abs(toi.min() - (0.2 - r) / 0.4) < 1e-6, toi.min()
 for ends in (x0, x1):
-    static = minkq.Scene(minkq.Device("cpu"), ends, triangles)
-    static_vt = {tuple(p) for p in static.query("vt", "box", r).tolist()}
+    static = minkq.Scene(ends, triangles)
+    static_vt = {tuple(p) for p in static.query("vt", r).tolist()}
     assert not static_vt & {tuple(p) for p in vt[hits].tolist()}, "a static query saw an impact"
 # The guarantee: every (vertex, triangle) pair that touches during the step is a candidate.
 everything = np.array([(v, t) for v in range(len(x0)) for t in range(len(triangles))

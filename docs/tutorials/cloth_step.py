@@ -27,7 +27,7 @@ def folded(rest: np.ndarray, angle: float) -> np.ndarray:
 
 rest, triangles = grid_sheet(16)  # 256 vertices, 450 triangles
 r = 0.5 * mean_edge_length(rest, derive_edges(triangles))  # contact distance of the solver
-scene = minkq.Scene(minkq.Device("cpu"), rest, triangles)  # VT and EE trees, incident pairs dropped
+scene = minkq.Scene(rest, triangles)  # VT and EE trees, incident pairs dropped
 steps = 12
 for step in range(1, steps + 1):
     x = folded(rest, math.pi * 0.97 * step / steps)
@@ -40,9 +40,9 @@ for step in range(1, steps + 1):
     # ---- end
     # Checks: a scene built afresh at these positions reports the same contacts (refit or
     # rebuild never changes the pairs), and the VT contacts are those within r, in double.
-    fresh = minkq.Scene(minkq.Device("cpu"), x, triangles)
+    fresh = minkq.Scene(x, triangles)
     for kind, pairs in (("vt", vt), ("ee", ee)):
-        again = fresh.query(kind, "box", r, leaf_exact=True, canonical=True)
+        again = fresh.query(kind, r, leaf_exact=True, canonical=True)
         assert np.array_equal(np.unique(pairs, axis=0).reshape(-1, 2), again), f"step {step}: {kind} differs"
     truth = {tuple(p) for p in vt_within(x, triangles, r).tolist()}
     loose = {tuple(p) for p in vt_within(x, triangles, r * (1 + 1e-5)).tolist()}

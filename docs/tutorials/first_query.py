@@ -15,17 +15,16 @@ upper = lower + np.float32([0, 0, 0.05])      # the same sheet 0.05 above
 vertices = np.concatenate([lower, upper])
 triangles = np.concatenate([tris, tris + len(lower)])
 
-device = minkq.Device("cpu")                  # or "auto": GPU 0 when there is one
-scene = minkq.Scene(device, vertices, triangles)
+scene = minkq.Scene(vertices, triangles)      # numpy arrays: the CPU; device="auto" for GPU 0
 r = 0.06
-contacts = scene.query("vt", "box", r, leaf_exact=True, canonical=True)  # (k, 2): (vertex, triangle)
-candidates = scene.query("vt", "box", r)                                 # a superset, cheaper
+contacts = scene.query("vt", r, leaf_exact=True, canonical=True)         # (k, 2): (vertex, triangle)
+candidates = scene.query("vt", r)                                        # a superset, cheaper
 print(f"{len(contacts)} VT contacts within r = {r}, {len(candidates)} box candidates")
 
 # Every upper vertex touches the triangles below it, and every lower one those above.
 assert set(np.unique(contacts[:, 0])) == set(range(len(vertices)))
 # Below the gap there is nothing to report.
-assert len(scene.query("vt", "box", 0.04, leaf_exact=True)) == 0
+assert len(scene.query("vt", 0.04, leaf_exact=True)) == 0
 # ---- end
 
 # The guarantee, checked in double precision: every pair within r is reported, and the contacts

@@ -19,10 +19,10 @@ thickness = np.linspace(0.0, 0.02, len(cloth_v), dtype=np.float32)  # one per cl
 
 floor = minkq.Geometry(floor_v, floor_t, static=True, self_pairs=False, world=-1)  # every world
 cloths = [minkq.Geometry(cloth_v, cloth_t, thickness=thickness, world=w) for w in (0, 1)]
-scene = minkq.Scene.from_geometries(minkq.Device("cpu"), [floor] + cloths)
+scene = minkq.Scene.from_geometries([floor] + cloths)
 
 r = 0.005
-vt = scene.query("vt", "box", r, leaf_exact=True, canonical=True)  # one global numbering
+vt = scene.query("vt", r, leaf_exact=True, canonical=True)  # one global numbering
 geometry, local = scene.geometry_of_pairs("vt", vt)               # back to (geometry, local id)
 for g in (1, 2):
     mine = geometry[:, 0] == g
@@ -30,7 +30,7 @@ for g in (1, 2):
           f"{((geometry[:, 0] == 0) & (geometry[:, 1] == g)).sum()} of floor vertices with its triangles")
 # Moving the cloths: Scene.refit takes the moving geometries' vertices, concatenated.
 scene.refit(np.concatenate([cloth_v, cloth_v + np.float32([0, 0, 1])]))  # world 1's cloth lifts
-lifted = scene.query("vt", "box", r, leaf_exact=True)
+lifted = scene.query("vt", r, leaf_exact=True)
 print(f"after world 1's cloth lifted: {len(lifted)} contacts")
 # ---- end
 

@@ -41,7 +41,7 @@ capacity = 4 * len(rest_np)
 pairs = wp.zeros((capacity, 2), dtype=wp.int32, device=device)  # written on the device
 count = wp.zeros(1, dtype=wp.uint64, device=device)            # the exact count, on the device
 
-scene = minkq.Scene(minkq.Device(device), x, triangles)
+scene = minkq.Scene(x, triangles)  # on x's device
 scene.reserve(refit=True)            # the refit's scratch, allocated now: none inside the graph
 
 
@@ -49,7 +49,7 @@ def step():
     wp.launch(advance, 1, inputs=[time], device=device)
     wp.launch(wave, len(rest_np), inputs=[rest, time, x], device=device)
     scene.refit_async(x)                                      # on Warp's current stream
-    scene.query_async(pairs, count, "vt", "box", r, leaf_exact=True)
+    scene.query_async(pairs, count, "vt", r, leaf_exact=True)
 
 
 if on_gpu:
@@ -66,8 +66,8 @@ for k in range(5):
     print(f"step {k}: {n} VT contacts on {device}")
     # ---- end
     # Check: the same contacts as a blocking query on a scene built afresh on the host.
-    fresh = minkq.Scene(minkq.Device("cpu"), x.numpy(), triangles)
-    expected = fresh.query("vt", "box", r, leaf_exact=True, canonical=True)
+    fresh = minkq.Scene(x.numpy(), triangles)
+    expected = fresh.query("vt", r, leaf_exact=True, canonical=True)
     got = pairs.numpy()[:n]
     got = got[np.lexsort((got[:, 1], got[:, 0]))]
     assert np.array_equal(got, expected), f"step {k}: the captured step's pairs differ"

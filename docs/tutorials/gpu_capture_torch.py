@@ -22,7 +22,7 @@ capacity = 4 * len(rest_np)
 pairs = torch.zeros((capacity, 2), dtype=torch.int32, device="cuda:0")
 count = torch.zeros(1, dtype=torch.int64, device="cuda:0")
 
-scene = minkq.Scene(minkq.Device("cuda:0"), x, triangles)
+scene = minkq.Scene(x, triangles)  # on x's GPU
 scene.reserve(refit=True)
 
 
@@ -31,7 +31,7 @@ def step():
     x.copy_(rest)
     x[:, 2] += 0.03 * torch.sin(8.0 * rest[:, 0] + phase)
     scene.refit_async(x)                    # on torch's current stream: the capture stream
-    scene.query_async(pairs, count, "vt", "box", r, leaf_exact=True)
+    scene.query_async(pairs, count, "vt", r, leaf_exact=True)
 
 
 side = torch.cuda.Stream()                  # warm up outside the capture, as PyTorch asks
@@ -49,8 +49,8 @@ for k in range(5):
     assert n <= capacity
     print(f"step {k}: {n} VT contacts")
     # ---- end
-    fresh = minkq.Scene(minkq.Device("cpu"), x.cpu().numpy(), triangles)
-    expected = fresh.query("vt", "box", r, leaf_exact=True, canonical=True)
+    fresh = minkq.Scene(x.cpu().numpy(), triangles)
+    expected = fresh.query("vt", r, leaf_exact=True, canonical=True)
     got = pairs[:n].cpu().numpy()
     got = got[np.lexsort((got[:, 1], got[:, 0]))]
     assert np.array_equal(got, expected), f"step {k}: the captured step's pairs differ"
