@@ -170,8 +170,9 @@ class Scene(Closable, _StreamOrdered, _SceneQueries, _Geometries):
         Moving: :meth:`refit` and :meth:`rebuild` (and their swept forms) take the vertices of
         every geometry that is not static, concatenated in geometry order, all of one precision
         (:attr:`dtype`: float64 when every moving geometry is float64); :meth:`refit_geometry`
-        and its kin move one geometry. The stream-ordered calls serve scenes of one geometry
-        (they raise :class:`UnsupportedError` here): steps run through the blocking calls.
+        and its kin move one geometry. The stream-ordered calls take such scenes too (their
+        whole-scene moves take the moving geometries' vertices as :meth:`refit` does; a
+        geometry whose part holds a NaN keeps its positions and :meth:`async_status` names it).
 
         Errors: those of the constructor, messages naming the geometry (``"geometry 1: triangle 3
         references vertex 9 but the geometry has 8 vertices"``), TypeError / ValueError naming

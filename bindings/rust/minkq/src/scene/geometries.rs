@@ -86,8 +86,8 @@ impl Scene {
     /// numbers them. Whole-scene refits and rebuilds ([`Scene::refit`] and the others) take the
     /// vertices of the moving geometries one after another, all of one precision;
     /// [`Scene::refit_geometry`] and the others move one geometry. The stream-ordered calls
-    /// serve scenes of one geometry with [`GeometryFlags::SELF`] only (else
-    /// [`Error::Unsupported`]).
+    /// take such scenes too: their whole-scene moves take the moving geometries' vertices as
+    /// [`Scene::refit`] does (`minkq.h`, "Stream-ordered calls").
     ///
     /// Errors: those of [`Scene::new`], the library's messages naming the geometry
     /// (`"geometry 1: triangle 0 references vertex 7 but the geometry has 3 vertices"`);
