@@ -250,6 +250,7 @@ memcheck_tests=(
 capture_tests=(
   CudaAsync.captured_refit_and_queries_replay_over_moving_vertices
   CudaAsync.blocking_rebuilds_and_queries_between_replays_keep_a_captured_graph_valid
+  CudaGeometriesAsync.captured_step_replays_over_moving_geometries  # job passes, stream-ordered
 )
 # Each name must still name a test in test_cuda's sources (a renamed test fails here, also under
 # --smoke, whose CPU-only test_cuda lacks the tests that need the CUDA runtime), and each run
