@@ -134,6 +134,7 @@ class GeometryOn {
   // back (a host copy, refused in an asynchronous call), and a graph captured from such calls keeps
   // the nodes' addresses across later rebuilds that keep more nodes. Blocking-only scenes keep
   // the smaller room that their builds size (cuda/tree.cuh).
+  bool nodes_fixed() const { return nodes_fixed_; }
   void fix_nodes(X& x) {
     if (nodes_fixed_) return;
     if (has_triangle_tree_) x.reserve_nodes(triangle_tree_, num_triangles_);

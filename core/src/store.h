@@ -353,8 +353,7 @@ class MeshStoreOn final : public MeshStore {
   template <class Job>
   const JobTable<Job>& table(JobTables<Job>& tables, bool keep) {
     const std::vector<const void*> key = layout();
-    for (const auto& kept : tables.kept)
-      if (kept->layout == key) return *kept;
+    if (const JobTable<Job>* kept = kept_table(tables, key)) return *kept;
     if (!keep && tables.last.layout == key) return tables.last;
     if (keep) tables.kept.push_back(std::make_unique<JobTable<Job>>());
     JobTable<Job>& t = keep ? *tables.kept.back() : tables.last;
@@ -373,9 +372,26 @@ class MeshStoreOn final : public MeshStore {
     table(vv_tables_, true);
     table(ee_tables_, true);
   }
-  // Before a stream-ordered query: the kept tables of its kinds for the layout now, written
-  // here (allocating, outside the stream's order) unless a reservation or an earlier call did.
+  // The kept table written for `key`, if any.
+  template <class Job>
+  static const JobTable<Job>* kept_table(const JobTables<Job>& tables, const std::vector<const void*>& key) {
+    for (const auto& kept : tables.kept)
+      if (kept->layout == key) return kept.get();
+    return nullptr;
+  }
+  // Before a stream-ordered query: every tree's nodes fixed and the kept tables of its kinds
+  // for the layout now, made here (allocating and synchronising, outside the stream's order)
+  // unless a reservation or an earlier call made them. Where they are there (every step after
+  // the first), it does no device work and does not synchronise.
   void prepare_async_tables(std::initializer_list<QueryKind> kinds) {
+    bool ready = true;
+    for (const auto& g : geometries_) ready = ready && g->nodes_fixed();
+    if (ready) {
+      const std::vector<const void*> key = layout();
+      for (const QueryKind kind : kinds)
+        with_tables(kind, [&](const auto& tables) { ready = ready && kept_table(tables, key) != nullptr; });
+    }
+    if (ready) return;
     [[maybe_unused]] const auto scope = x_.scope();
     for (const auto& g : geometries_) g->fix_nodes(x_);
     for (const QueryKind kind : kinds) with_tables(kind, [&](auto& tables) { table(tables, true); });
