@@ -3,7 +3,8 @@
 # baseline ABI description committed beside this script (abi/libminkq.abi, abi/libminkq_mpi.abi).
 # Run by ctest (tests abi_libminkq and abi_libminkq_mpi, so by `./build.sh test` too) as
 #   abi/check_abi.sh LIBRARY HEADER ABI_DEFINE BASELINE [MORE_HEADERS...]
-# (MORE_HEADERS: other public headers whose types HEADER uses, e.g. minkq.h for minkq_mpi.h.)
+# (MORE_HEADERS: the other public headers: those HEADER includes, e.g. minkq_async.h for minkq.h,
+# or whose types it uses, e.g. minkq.h and minkq_async.h for minkq_mpi.h.)
 # It fails on an incompatible change (a function removed, a parameter or return type changed, a
 # struct's layout or an enum's values changed) unless ABI_DEFINE in HEADER was bumped past the
 # baseline's ABI (the number ending the baseline's SONAME, libminkq.so.<ABI>). A compatible change
@@ -11,9 +12,10 @@
 #
 # Refreshing the baseline, after an ABI bump or to record an addition (from the repository root,
 # with the library built, e.g. by `cmake --preset cpu && cmake --build --preset cpu`):
-#   abi/check_abi.sh --refresh build-cpu/capi/libminkq.so capi/minkq.h MINKQ_ABI_VERSION abi/libminkq.abi
+#   abi/check_abi.sh --refresh build-cpu/capi/libminkq.so capi/minkq.h MINKQ_ABI_VERSION abi/libminkq.abi \
+#                    capi/minkq_async.h
 #   abi/check_abi.sh --refresh build-cpu/mpi/libminkq_mpi.so mpi/minkq_mpi.h MINKQ_MPI_ABI_VERSION \
-#                    abi/libminkq_mpi.abi capi/minkq.h
+#                    abi/libminkq_mpi.abi capi/minkq.h capi/minkq_async.h
 # and commit the .abi file with the change. The DWARF abidw reads comes from the C API's own
 # sources, compiled with -g and kept in <library file>.debug beside the library (capi/ and
 # mpi/CMakeLists.txt); the types recorded are those of the public headers only (--header-file,
@@ -23,7 +25,7 @@ set -euo pipefail
 refresh=0
 if [ "${1:-}" = --refresh ]; then refresh=1; shift; fi
 if [ $# -lt 4 ]; then
-  sed -n '2,16p' "$0" >&2
+  sed -n '2,18p' "$0" >&2
   exit 2
 fi
 library=$1 header=$2 abi_define=$3 baseline=$4

@@ -1,21 +1,30 @@
 # What a minkq shared library exports is its C API, and nothing else. Run by ctest (abi/
 # CMakeLists.txt) as
-#   cmake -DNM=<nm> -DLIBRARY=<libminkq.so> -DHEADER=<minkq.h> -DMACRO=MINKQ_API
-#         -DABI_DEFINE=MINKQ_ABI_VERSION -DNODE_PREFIX=MINKQ_ -P check_exports.cmake
-# The expected list is read from the header, so a new API function needs no second list: every
-# function or object declared there with MACRO. Fails when
+#   cmake -DNM=<nm> -DLIBRARY=<libminkq.so> -DHEADER=<minkq.h> -DPARTS=<minkq_async.h,...>
+#         -DMACRO=MINKQ_API -DABI_DEFINE=MINKQ_ABI_VERSION -DNODE_PREFIX=MINKQ_ -P check_exports.cmake
+# (PARTS: the public headers HEADER includes, comma-separated; may be empty.) The expected list is
+# read from the headers, so a new API function needs no second list: every function or object
+# declared in HEADER or a part with MACRO. Fails when
 #   - the library defines a dynamic symbol that is not one of them (a leaked C++ symbol, a
 #     statically linked TBB, xxHash or CUDA runtime symbol, an unmarked extern "C" helper);
 #   - a declared function is missing, is not a function (nm type T), or is not at the symbol
 #     version NODE_PREFIX<ABI_DEFINE> that the linker version script gives;
-#   - the header declares a minkq_* function without MACRO (it would be hidden).
+#   - a header declares a minkq_* function without MACRO (it would be hidden).
 foreach(var NM LIBRARY HEADER MACRO ABI_DEFINE NODE_PREFIX)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "check_exports.cmake: -D${var}=... is missing")
   endif()
 endforeach()
 
-file(STRINGS ${HEADER} header_lines)
+string(REPLACE "," ";" parts "${PARTS}")
+set(header_lines)
+foreach(file IN ITEMS ${HEADER} ${parts})
+  file(STRINGS ${file} file_lines)
+  list(APPEND header_lines ${file_lines})
+endforeach()
+if(parts)
+  string(REPLACE ";" ", " HEADER "${HEADER} (with ${parts})")  # the name the messages give
+endif()
 set(functions)
 set(objects)
 set(unmarked)

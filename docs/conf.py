@@ -28,7 +28,8 @@ myst_enable_extensions = ["colon_fence", "deflist"]
 # as they are): a heading jump is a matter of style there, not a fault of the site.
 suppress_warnings = ["myst.header"]
 
-# C reference: Doxygen's XML of capi/minkq.h and mpi/minkq_mpi.h (docs/_tools/Doxyfile).
+# C reference: Doxygen's XML of capi/minkq.h, capi/minkq_async.h and mpi/minkq_mpi.h
+# (docs/_tools/Doxyfile).
 breathe_projects = {"minkq": str(build / "doxygen" / "xml")}
 breathe_default_project = "minkq"
 breathe_domain_by_extension = {"h": "c"}

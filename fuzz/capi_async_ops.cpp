@@ -2,7 +2,7 @@
 // asynchronous refits, rebuilds and queries, and minkq_scene_async_status, each checked
 // against the model's reservation and pending error and against the blocking call.
 //
-// Stream-ordered calls (minkq.h, "Stream-ordered calls"): on the CPU they run at once, on host
+// Stream-ordered calls (minkq_async.h): on the CPU they run at once, on host
 // memory, the stream ignored; non-finite vertices become the scene's pending error.
 #include <algorithm>
 #include <cmath>

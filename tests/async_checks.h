@@ -1,4 +1,4 @@
-// The stream-ordered calls' contract (minkq.h, "Stream-ordered calls"), checked on any device:
+// The stream-ordered calls' contract (minkq_async.h), checked on any device:
 // test_async.cpp runs it on the CPU (host memory), test_cuda.cpp on a GPU (device memory, a
 // stream of its own). Each check compares the asynchronous calls with the blocking ones.
 #pragma once

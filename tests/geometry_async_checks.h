@@ -1,4 +1,4 @@
-// The stream-ordered calls on scenes of many geometries (minkq.h, "Stream-ordered calls"),
+// The stream-ordered calls on scenes of many geometries (minkq_async.h),
 // checked on any device as async_checks.h checks one-mesh scenes: test_geometries_async.cpp
 // runs them on the CPU, test_cuda_geometries.cpp on a GPU (and captures them into a graph).
 // Each check drives a scene by the asynchronous calls beside a CPU twin driven by the blocking

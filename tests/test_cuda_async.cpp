@@ -1,4 +1,4 @@
-// The CUDA backend's stream-ordered calls (minkq.h, "Stream-ordered calls") on a stream of the
+// The CUDA backend's stream-ordered calls (minkq_async.h) on a stream of the
 // test's own with device memory: async_checks.h's contract checks (the same ones test_async.cpp
 // runs on the CPU), and the calls captured into CUDA graphs and replayed over moving vertices,
 // rebuilds included, against the blocking calls. Needs the CUDA runtime; skips without a device.

@@ -1,11 +1,11 @@
 """Doxygen's INPUT_FILTER for the headers: turns their plain comments into doc comments.
 
-capi/minkq.h and mpi/minkq_mpi.h document every declaration in ordinary C comments (a block
+capi/minkq.h, capi/minkq_async.h and mpi/minkq_mpi.h document every declaration in ordinary C comments (a block
 before a declaration, a trailing one after a member or enumerator). Doxygen reads only doc
 comments, so this filter, run on each header as Doxygen reads it, marks them: the first
 comment becomes the file's description, a comment that starts a line documents what follows,
 a comment after code on its line documents that code. Section rules (`/* ---- Name ---- */`)
-stay plain. The headers themselves are not changed.
+and comments on preprocessor lines stay plain. The headers themselves are not changed.
 
 capi/minkq.hpp (C++) does the same with `//` comments: a run of leading `//` lines documents
 what follows (the first run describes the file), a trailing `//` documents its line's code;
@@ -28,7 +28,7 @@ def doc_comments(lines):
         elif LEADING.match(line):
             yield LEADING.sub(r"\1/*! \\file " if first else r"\1/** ", line, count=1)
             first = False
-        elif TRAILING.match(line) and not line.lstrip().startswith("*"):
+        elif TRAILING.match(line) and not line.lstrip().startswith(("*", "#")):  # not `#endif /* GUARD */`
             yield TRAILING.sub(r"\1/**< ", line, count=1)
         else:
             yield line

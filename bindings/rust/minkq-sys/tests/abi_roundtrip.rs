@@ -1,5 +1,6 @@
 //! ABI round trip: cbindgen turns the Rust FFI declarations (src/bindings.rs) back into C
-//! headers, which are compiled in one translation unit with capi/minkq.h:
+//! headers, which are compiled in one translation unit with capi/minkq.h (and the public headers
+//! it includes, put in place):
 //! - types and constants, `rs_`-prefixed, under static assertions on the size, alignment and
 //!   every field's offset and size of each struct, the size of each enum type and the value of
 //!   every enumerator and version macro. The assertions cover the union of both sides' names,
@@ -277,8 +278,18 @@ fn bindings() -> String {
     fs::read_to_string(crate_dir().join("src/bindings.rs")).unwrap()
 }
 
+/// The C API as one text: minkq.h with each public header it includes (`#include "..."`:
+/// minkq_async.h) put in place of its line, so that every declaration is read and compiled.
 fn minkq_h() -> String {
-    fs::read_to_string(c_header()).unwrap()
+    let header = c_header();
+    let mut text = String::new();
+    for line in fs::read_to_string(&header).unwrap().lines() {
+        match line.strip_prefix("#include \"").and_then(|rest| rest.strip_suffix('"')) {
+            Some(part) => text += &fs::read_to_string(header.with_file_name(part)).unwrap(),
+            None => text += &format!("{line}\n"),
+        }
+    }
+    text
 }
 
 /// Inserts `line` as the last line of the body of `struct name`, in either language.

@@ -1,10 +1,11 @@
-//! src/bindings.rs is bindgen's output for capi/minkq.h, checked in. This test runs bindgen
-//! again (the `bindgen` command of Debian's bindgen package, or $BINDGEN) with the same
-//! arguments and fails if the fresh output differs in any token. Layout does not count: the
-//! fresh output is left unformatted and both are compared without whitespace and without the
-//! trailing commas that rustfmt adds or drops as it wraps lines. After an intended change to
-//! minkq.h, regenerate with `MINKQ_BLESS=1 cargo test -p minkq-sys --test bindgen_fresh` (which
-//! writes bindgen's rustfmt-formatted output) and review the diff.
+//! src/bindings.rs is bindgen's output for capi/minkq.h (and minkq_async.h, which it includes),
+//! checked in. This test runs bindgen again (the `bindgen` command of Debian's bindgen package,
+//! or $BINDGEN) with the same arguments and fails if the fresh output differs in any token.
+//! Layout does not count: the fresh output is left unformatted and both are compared without
+//! whitespace and without the trailing commas that rustfmt adds or drops as it wraps lines. After
+//! an intended change to minkq.h, regenerate with
+//! `MINKQ_BLESS=1 cargo test -p minkq-sys --test bindgen_fresh` (which writes bindgen's
+//! rustfmt-formatted output) and review the diff.
 use std::env;
 use std::fs;
 use std::path::PathBuf;

@@ -87,7 +87,7 @@ impl Scene {
     /// vertices of the moving geometries one after another, all of one precision;
     /// [`Scene::refit_geometry`] and the others move one geometry. The stream-ordered calls
     /// take such scenes too: their whole-scene moves take the moving geometries' vertices as
-    /// [`Scene::refit`] does (`minkq.h`, "Stream-ordered calls").
+    /// [`Scene::refit`] does (`minkq_async.h`).
     ///
     /// Errors: those of [`Scene::new`], the library's messages naming the geometry
     /// (`"geometry 1: triangle 0 references vertex 7 but the geometry has 3 vertices"`);
