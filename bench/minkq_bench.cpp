@@ -17,7 +17,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "peers/embree_vt.h"
+#include "peers/embree.h"
 #include "minkq_bench.h"
 #include "scenes.h"
 #include "suites/suites.h"

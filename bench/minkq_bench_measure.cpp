@@ -14,7 +14,7 @@
 
 #include "cpu/tree.h"
 #include "minkq/leaf_groups.h"
-#include "peers/embree_vt.h"
+#include "peers/embree.h"
 #include "minkq/predicates.h"
 #include "minkq_bench.h"
 

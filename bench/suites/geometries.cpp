@@ -6,7 +6,7 @@
 //    the cloth and finds the cross pairs (VT both ways, EE) in box mode: minkq with two geometries
 //    (the cloth refit alone, the body never touched), the two meshes concatenated in one minkq scene
 //    (refit whole, query whole, keep the cross pairs: the way without geometries), and Embree's
-//    rtcCollide of the cloth's and the body's element scenes (peers/embree_collide.h; the cloth's
+//    rtcCollide of the cloth's and the body's element scenes (peers/embree.h; the cloth's
 //    three scenes refit, or rebuilt: both rows). A leaf_exact row for minkq's two ways.
 //  - Batched worlds: W copies of a 32 x 32 cloth at the same place, each twisted its own way, self
 //    pairs (VT, EE, incident dropped, box mode): one scene of W worlds (refit all, query) against
@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "peers/embree_collide.h"
+#include "peers/embree.h"
 #include "suites/suites.h"
 
 namespace minkq::bench::suites {
