@@ -137,6 +137,15 @@ inline double geomean(const std::vector<double>& v) {
   return n ? std::exp(s / n) : NAN;
 }
 
+// The non-empty items of a comma-separated list ("a,b,,c": a, b, c): the options' lists.
+inline std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 // The time a result file is written, "2026-12-06 08:13 UTC".
 inline std::string utc_now() {
   char when[64];

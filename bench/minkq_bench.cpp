@@ -14,7 +14,6 @@
 #include <cinttypes>
 #include <filesystem>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 
 #include "peers/embree.h"
@@ -79,15 +78,6 @@ options:
 exit status: 0 success, 1 false negatives found (or a suite's check failed), 2 bad
 arguments, 3 failure
 )";
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 // The C API suites (bench/suites/), each writing its own file; false when a check failed.
 bool run_api_suites(const Options& opt) {

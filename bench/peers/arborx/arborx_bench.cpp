@@ -50,7 +50,6 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -159,9 +158,7 @@ int main(int argc, char** argv) {
     mb::Device device = mb::open_device("cpu");
     const std::string machine = mb::machine_line(minkq_device_name(device.get()));
     const double load_start = mb::load_average();
-    char started[64];
-    const std::time_t now = std::time(nullptr);
-    std::strftime(started, sizeof started, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+    const std::string started = mb::utc_now();
     std::fprintf(stderr, "arborx_bench: %s; %d threads; load %.2f\n", machine.c_str(), opt.threads, load_start);
     std::vector<SceneResult> results;
     for (const auto& make : scene_list(opt)) {

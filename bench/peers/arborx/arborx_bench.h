@@ -22,6 +22,7 @@ namespace ref = minkq::reference;
 
 using Exec = Kokkos::OpenMP;
 using mb::PairSet;
+using mb::split;
 using mb::Timing;
 
 struct Options {
@@ -71,9 +72,7 @@ struct SceneResult {
   double load_start = 0, load_end = 0;
 };
 
-// arborx_scenes.cpp
-std::vector<std::string> split(const std::string& s);
-// The scenes, in table order; each missing mesh is named on stderr and skipped.
+// arborx_scenes.cpp: the scenes, in table order; each missing mesh is named on stderr and skipped.
 std::vector<std::function<Scene()>> scene_list(const Options& opt);
 
 // arborx_run.cpp: checks one scene's pair sets, then times its contestants.

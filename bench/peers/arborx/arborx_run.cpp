@@ -187,32 +187,24 @@ SceneResult run_scene(Scene sc, const Options& opt, const Exec& space, minkq_dev
     mk_tree.reset();
     ax_tree.reset();
   };
-  cs.emplace_back("build triangle tree", "minkq", "CpuTree::build(TriangleBoxes)", reset,
-                [&] {
-                  mk_tree.emplace().build(minkq::TriangleBoxes{v, tris}, nt);
-                  return uint64_t(nt);
-                },
-                uint64_t(nt));
-  cs.emplace_back("build triangle tree", "ArborX", "boxes + BVH", reset,
-                [&] {
-                  ax_tree.emplace(build_tree(space, triangle_boxes(space, m)));
-                  space.fence();
-                  return uint64_t(ax_tree->size());
-                },
-                uint64_t(nt));
-  cs.emplace_back("build edge tree", "minkq", "CpuTree::build(EdgeBoxes)", reset,
-                [&] {
-                  mk_tree.emplace().build(minkq::EdgeBoxes{v, edges}, ne);
-                  return uint64_t(ne);
-                },
-                uint64_t(ne));
-  cs.emplace_back("build edge tree", "ArborX", "boxes + BVH", reset,
-                [&] {
-                  ax_tree.emplace(build_tree(space, edge_boxes(space, m)));
-                  space.fence();
-                  return uint64_t(ax_tree->size());
-                },
-                uint64_t(ne));
+  auto builds = [&](const char* row, const char* variant, auto boxes, View<AxBox> (*ax_boxes)(const Exec&, const AxMesh&),
+                    int32_t n) {
+    cs.emplace_back(row, "minkq", variant, reset,
+                    [&, boxes, n] {
+                      mk_tree.emplace().build(boxes, n);
+                      return uint64_t(n);
+                    },
+                    uint64_t(n));
+    cs.emplace_back(row, "ArborX", "boxes + BVH", reset,
+                    [&, ax_boxes] {
+                      ax_tree.emplace(build_tree(space, ax_boxes(space, m)));
+                      space.fence();
+                      return uint64_t(ax_tree->size());
+                    },
+                    uint64_t(n));
+  };
+  builds("build triangle tree", "CpuTree::build(TriangleBoxes)", minkq::TriangleBoxes{v, tris}, triangle_boxes, nt);
+  builds("build edge tree", "CpuTree::build(EdgeBoxes)", minkq::EdgeBoxes{v, edges}, edge_boxes, ne);
   auto nothing = [] {};
   // Rebuilds of one tree that keeps its build scratch (what a scene reserved with
   // MINKQ_RESERVE_REBUILD does: no allocation); ArborX builds afresh again, having no rebuild in
@@ -269,21 +261,17 @@ SceneResult run_scene(Scene sc, const Options& opt, const Exec& space, minkq_dev
                 [&] { return run_minkq(scene.get(), MINKQ_QUERY_EE, MINKQ_MODE_BOX, r, pair_buffer.data(), res.ee).count; },
                 res.ee);
   View<int> ax_offsets("offsets", 0), ax_values("values", 0);
-  cs.emplace_back("EE pairs stored", "ArborX", "CSR query, buffer hint = max per query", nothing,
-                [&] {
-                  edge_tree.query(space, EdgeBoxQueries<true>{m, r}, EeStore{m.edges}, ax_values, ax_offsets,
-                                  ArborX::Experimental::TraversalPolicy().setBufferSize(ee_hint));
-                  space.fence();
-                  return uint64_t(ax_values.extent(0));
-                },
-                res.ee);
-  cs.emplace_back("EE pairs stored", "ArborX", "CSR query, no hint (two traversals)", nothing,
-                [&] {
-                  edge_tree.query(space, EdgeBoxQueries<true>{m, r}, EeStore{m.edges}, ax_values, ax_offsets);
-                  space.fence();
-                  return uint64_t(ax_values.extent(0));
-                },
-                res.ee);
+  // The CSR query with the best buffer hint (one traversal), and without (the default policy: two).
+  for (const auto& [variant, policy] :
+       {std::pair{"CSR query, buffer hint = max per query", ArborX::Experimental::TraversalPolicy().setBufferSize(ee_hint)},
+        std::pair{"CSR query, no hint (two traversals)", ArborX::Experimental::TraversalPolicy()}})
+    cs.emplace_back("EE pairs stored", "ArborX", variant, nothing,
+                    [&, policy = policy] {
+                      edge_tree.query(space, EdgeBoxQueries<true>{m, r}, EeStore{m.edges}, ax_values, ax_offsets, policy);
+                      space.fence();
+                      return uint64_t(ax_values.extent(0));
+                    },
+                    res.ee);
   cs.emplace_back("EE pairs stored", "ArborX", "HalfTraversal count + fill", nothing,
                 [&] {
                   half_traversal_store(space, edge_tree, m, r, counts, ax_offsets, ax_values);

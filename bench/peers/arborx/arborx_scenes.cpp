@@ -4,20 +4,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 #include "arborx_bench.h"
 
 namespace peer {
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string x; std::getline(in, x, ',');)
-    if (!x.empty()) out.push_back(x);
-  return out;
-}
 
 // OFF (CGAL's format): "OFF", counts, vertices, faces (polygons fan-triangulated).
 ref::Mesh load_off(const std::string& path) {
@@ -48,17 +39,11 @@ ref::Mesh load_off(const std::string& path) {
 }
 
 Scene mesh_scene(const std::string& suite, const std::string& name, const std::string& path, double factor) {
-  Scene s;
-  s.suite = suite;
-  s.name = name;
-  s.mesh = std::filesystem::path(path).extension() == ".off" ? load_off(path) : ref::load_mesh(path);
-  s.xyz = s.mesh.xyz;
-  s.factor = factor;
-  s.r = float(factor * ref::mean_edge_length(s.mesh));
-  s.what = std::filesystem::path(path).filename().string() + ", static";
-  return s;
+  const std::filesystem::path file(path);
+  const ref::Mesh mesh = file.extension() == ".off" ? load_off(path) : ref::load_mesh(path);
+  return Scene{suite, name, file.filename().string() + ", static", mesh, mesh.xyz, factor,
+               float(factor * ref::mean_edge_length(mesh))};
 }
-
 
 std::vector<std::function<Scene()>> scene_list(const Options& opt) {
   std::vector<std::function<Scene()>> list;
@@ -72,15 +57,7 @@ std::vector<std::function<Scene()>> scene_list(const Options& opt) {
     if (!wanted(name)) return;
     list.push_back([=, &opt] {
       const mb::SceneFrames f = mb::make_scene("twist_target", triangles, 1, opt.data_dir);
-      Scene s;
-      s.suite = suite;
-      s.name = name;
-      s.what = f.recipe;
-      s.mesh = f.mesh;
-      s.xyz = f.frames[0];
-      s.factor = 0.25;
-      s.r = float(0.25 * f.mean_edge);
-      return s;
+      return Scene{suite, name, f.recipe, f.mesh, f.frames[0], 0.25, float(0.25 * f.mean_edge)};
     });
   };
   for (const std::string& suite : opt.suites) {
@@ -101,15 +78,8 @@ std::vector<std::function<Scene()>> scene_list(const Options& opt) {
         list.push_back([=, &opt] {
           // minkq_bench's frames: 4, r = factor x mean edge of frame 0; measured at the last.
           const mb::SceneFrames f = mb::make_scene(name, 0, 4, opt.data_dir);
-          Scene s;
-          s.suite = "scenes";
-          s.name = name;
-          s.what = "last of 4 frames: " + f.recipe;
-          s.mesh = f.mesh;
-          s.xyz = f.frames.back();
-          s.factor = f.radius_factor;
-          s.r = float(f.radius_factor * f.mean_edge);
-          return s;
+          return Scene{"scenes", name, "last of 4 frames: " + f.recipe, f.mesh, f.frames.back(), f.radius_factor,
+                       float(f.radius_factor * f.mean_edge)};
         });
       }
     } else if (suite == "real") {
