@@ -64,28 +64,22 @@ def timed(fn, repeats, wp):
     return statistics.median(ts), min(ts), max(ts)
 
 
+def take(args, name, default):
+    """The value after option `name` in args (both removed), else default."""
+    if name not in args:
+        return default
+    i = args.index(name)
+    value = args[i + 1]
+    del args[i : i + 2]
+    return value
+
+
 def main():
     args = sys.argv[1:]
-    repeats = 3
-    only = []
-    if "--repeats" in args:
-        i = args.index("--repeats")
-        repeats = int(args[i + 1])
-        del args[i : i + 2]
-    minkq_threads = "1"
-    if "--minkq-threads" in args:
-        i = args.index("--minkq-threads")
-        minkq_threads = args[i + 1]
-        del args[i : i + 2]
-    if "--only" in args:
-        i = args.index("--only")
-        only = args[i + 1].split(",")
-        del args[i : i + 2]
-    device = "cpu"
-    if "--device" in args:
-        i = args.index("--device")
-        device = args[i + 1]
-        del args[i : i + 2]
+    repeats = int(take(args, "--repeats", 3))
+    minkq_threads = take(args, "--minkq-threads", "1")
+    only = take(args, "--only", "").split(",") if "--only" in args else []
+    device = take(args, "--device", "cpu")
     backend = "cpu" if device == "cpu" else "cuda"
     if len(args) != 3:
         print(__doc__)
@@ -360,16 +354,12 @@ def main():
                  f"{ratio(row.get('vt_sphere_ms'), mkms(row, 'VT', 'sphere'))} | {ratio(row.get('newton_vt_ms'), mkms(row, 'VT', 'leaf_exact'))} |\n")
     o.append("\n## EE\n\n| scene | E | oracle true | Warp aabb cand / true / ms | Warp capsule cand / true / ms | minkq box cand / ms | minkq capsule_ray cand / ms | minkq capsule_exact cand / ms | minkq leaf_exact ms | Newton EE true / ms | Newton EE lost | minkq box vs Warp aabb | minkq ray vs Warp capsule | minkq leaf vs Newton |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     for row in results:
-        true = mk(row, "EE", "box", "true_contacts")
-        lost = "–"
-        if true != "–" and row.get("newton_ee_true") is not None and int(true) > 0:
-            lost = f"{100 * (1 - row['newton_ee_true'] / int(true)):.1f}%"
-        o.append(f"| {row['scene']} | {row['E']} | {true} | {g(row, 'ee_aabb_cand')} / {g(row, 'ee_aabb_true')} / {g(row, 'ee_aabb_ms')} | "
+        o.append(f"| {row['scene']} | {row['E']} | {mk(row, 'EE', 'box', 'true_contacts')} | {g(row, 'ee_aabb_cand')} / {g(row, 'ee_aabb_true')} / {g(row, 'ee_aabb_ms')} | "
                  f"{g(row, 'ee_capsule_cand')} / {g(row, 'ee_capsule_true')} / {g(row, 'ee_capsule_ms')} | "
                  f"{mk(row, 'EE', 'box', 'candidates')} / {mk(row, 'EE', 'box', 'ms_median')} | "
                  f"{mk(row, 'EE', 'capsule_ray', 'candidates')} / {mk(row, 'EE', 'capsule_ray', 'ms_median')} | "
                  f"{mk(row, 'EE', 'capsule_exact', 'candidates')} / {mk(row, 'EE', 'capsule_exact', 'ms_median')} | {mk(row, 'EE', 'leaf_exact', 'ms_median')} | "
-                 f"{g(row, 'newton_ee_true')} / {g(row, 'newton_ee_ms')} | {lost} | {ratio(row.get('ee_aabb_ms'), mkms(row, 'EE', 'box'))} | "
+                 f"{g(row, 'newton_ee_true')} / {g(row, 'newton_ee_ms')} | {lost(row, 'EE', 'newton_ee_true')} | {ratio(row.get('ee_aabb_ms'), mkms(row, 'EE', 'box'))} | "
                  f"{ratio(row.get('ee_capsule_ms'), mkms(row, 'EE', 'capsule_ray'))} | {ratio(row.get('newton_ee_ms'), mkms(row, 'EE', 'leaf_exact'))} |\n")
     o.append("\n## Build and refit\n\n| scene | Warp build both trees (LBVH default) | Warp refit both | Newton refit | Newton T / E (vs minkq) | Newton resize flag | errors |\n|---|---|---|---|---|---|---|\n")
     for row in results:
