@@ -112,43 +112,35 @@ def main():
         res = triangle_closest_point(a, b, c, p)
         return wp.length(res[0] - p)
 
-    @wp.kernel
-    def vt_aabb(bvh: wp.uint64, pos: wp.array(dtype=wp.vec3), tris: wp.array2d(dtype=wp.int32), r: float,
-                counts: wp.array(dtype=wp.int32)):
-        v = wp.tid()
-        p = pos[v]
-        cand = int(0)
-        cont = int(0)
-        t = int(0)
-        q = wp.bvh_query_aabb(bvh, p - wp.vec3(r), p + wp.vec3(r))
-        while wp.bvh_query_next(q, t):
-            a = tris[t, 0]
-            b = tris[t, 1]
-            c = tris[t, 2]
-            if a != v and b != v and c != v:
-                cand += 1
-                if vt_dist(pos[a], pos[b], pos[c], p) <= r:
-                    cont += 1
-        wp.atomic_add(counts, 0, cand)
-        wp.atomic_add(counts, 1, cont)
+    @wp.func
+    def vt_pair(v: int, t: int, p: wp.vec3, pos: wp.array(dtype=wp.vec3), tris: wp.array2d(dtype=wp.int32), r: float):
+        # 0: not a candidate (an incident triangle), 1: candidate, 2: candidate within r
+        a = tris[t, 0]
+        b = tris[t, 1]
+        c = tris[t, 2]
+        if a == v or b == v or c == v:
+            return 0
+        if vt_dist(pos[a], pos[b], pos[c], p) <= r:
+            return 2
+        return 1
 
     @wp.kernel
-    def vt_sphere(bvh: wp.uint64, pos: wp.array(dtype=wp.vec3), tris: wp.array2d(dtype=wp.int32), r: float,
-                  counts: wp.array(dtype=wp.int32)):
+    def vt_query(bvh: wp.uint64, pos: wp.array(dtype=wp.vec3), tris: wp.array2d(dtype=wp.int32), r: float,
+                 sphere: int, counts: wp.array(dtype=wp.int32)):
+        # sphere 0: bvh_query_aabb of the r-padded box, 1: bvh_query_sphere
         v = wp.tid()
         p = pos[v]
         cand = int(0)
         cont = int(0)
         t = int(0)
-        q = wp.bvh_query_sphere(bvh, p, r)
+        if sphere == 0:
+            q = wp.bvh_query_aabb(bvh, p - wp.vec3(r), p + wp.vec3(r))
+        else:
+            q = wp.bvh_query_sphere(bvh, p, r)
         while wp.bvh_query_next(q, t):
-            a = tris[t, 0]
-            b = tris[t, 1]
-            c = tris[t, 2]
-            if a != v and b != v and c != v:
-                cand += 1
-                if vt_dist(pos[a], pos[b], pos[c], p) <= r:
-                    cont += 1
+            k = vt_pair(v, t, p, pos, tris, r)
+            cand += wp.where(k > 0, 1, 0)
+            cont += wp.where(k > 1, 1, 0)
         wp.atomic_add(counts, 0, cand)
         wp.atomic_add(counts, 1, cont)
 
@@ -166,8 +158,10 @@ def main():
         return 1
 
     @wp.kernel
-    def ee_aabb(bvh: wp.uint64, pos: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), r: float,
-                counts: wp.array(dtype=wp.int32)):
+    def ee_query(bvh: wp.uint64, pos: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), r: float,
+                 capsule: int, counts: wp.array(dtype=wp.int32)):
+        # capsule 0: bvh_query_aabb of the edge's r-padded box, 1: bvh_query_capsule (dir = e1 - e0,
+        # max_dist 1), or for a zero-length edge, which it does not support (its docs), bvh_query_sphere
         e = wp.tid()
         i0 = edges[e, 0]
         i1 = edges[e, 1]
@@ -176,44 +170,21 @@ def main():
         cand = int(0)
         cont = int(0)
         f = int(0)
-        q = wp.bvh_query_aabb(bvh, wp.min(p0, p1) - wp.vec3(r), wp.max(p0, p1) + wp.vec3(r))
-        while wp.bvh_query_next(q, f):
-            k = ee_pair(e, f, i0, i1, p0, p1, pos, edges, r)
-            if k > 0:
-                cand += 1
-            if k > 1:
-                cont += 1
-        wp.atomic_add(counts, 0, cand)
-        wp.atomic_add(counts, 1, cont)
-
-    @wp.kernel
-    def ee_capsule(bvh: wp.uint64, pos: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), r: float,
-                   counts: wp.array(dtype=wp.int32)):
-        e = wp.tid()
-        i0 = edges[e, 0]
-        i1 = edges[e, 1]
-        p0 = pos[i0]
-        p1 = pos[i1]
-        cand = int(0)
-        cont = int(0)
-        f = int(0)
-        # zero-length edges are not supported by bvh_query_capsule (its docs): a sphere query instead
-        if wp.length(p1 - p0) > 0.0:
+        if capsule != 0 and wp.length(p1 - p0) > 0.0:
             q = wp.bvh_query_capsule(bvh, p0, p1 - p0, r)
             while wp.bvh_query_next(q, f, 1.0):
                 k = ee_pair(e, f, i0, i1, p0, p1, pos, edges, r)
-                if k > 0:
-                    cand += 1
-                if k > 1:
-                    cont += 1
+                cand += wp.where(k > 0, 1, 0)
+                cont += wp.where(k > 1, 1, 0)
         else:
-            q2 = wp.bvh_query_sphere(bvh, p0, r)
+            if capsule == 0:
+                q2 = wp.bvh_query_aabb(bvh, wp.min(p0, p1) - wp.vec3(r), wp.max(p0, p1) + wp.vec3(r))
+            else:
+                q2 = wp.bvh_query_sphere(bvh, p0, r)
             while wp.bvh_query_next(q2, f):
                 k2 = ee_pair(e, f, i0, i1, p0, p1, pos, edges, r)
-                if k2 > 0:
-                    cand += 1
-                if k2 > 1:
-                    cont += 1
+                cand += wp.where(k2 > 0, 1, 0)
+                cont += wp.where(k2 > 1, 1, 0)
         wp.atomic_add(counts, 0, cand)
         wp.atomic_add(counts, 1, cont)
 
@@ -264,12 +235,14 @@ def main():
             wp.launch(boxes_kernel, dim=len(edges), inputs=[pos, we, 2, elo, ehi], device=dev)
             row["warp_refit_ms"] = timed(lambda: (bvh_t.refit(), bvh_e.refit()), repeats, wp)[0]
             counts = wp.zeros(2, dtype=wp.int32, device=dev)
-            for name, kern, bvh, n, idx in [("vt_aabb", vt_aabb, bvh_t, len(x), wt), ("vt_sphere", vt_sphere, bvh_t, len(x), wt),
-                                            ("ee_aabb", ee_aabb, bvh_e, len(edges), we), ("ee_capsule", ee_capsule, bvh_e, len(edges), we)]:
+            for name, kern, bvh, n, idx, mode in [("vt_aabb", vt_query, bvh_t, len(x), wt, 0),
+                                                  ("vt_sphere", vt_query, bvh_t, len(x), wt, 1),
+                                                  ("ee_aabb", ee_query, bvh_e, len(edges), we, 0),
+                                                  ("ee_capsule", ee_query, bvh_e, len(edges), we, 1)]:
 
-                def go(kern=kern, bvh=bvh, n=n, idx=idx):
+                def go(kern=kern, bvh=bvh, n=n, idx=idx, mode=mode):
                     counts.zero_()
-                    wp.launch(kern, dim=n, inputs=[bvh.id, pos, idx, float(r), counts], device=dev)
+                    wp.launch(kern, dim=n, inputs=[bvh.id, pos, idx, float(r), mode, counts], device=dev)
 
                 row[name + "_ms"] = timed(go, repeats, wp)[0]
                 c = counts.numpy()
