@@ -38,7 +38,7 @@ const char* const kDemoUsage = R"usage(  demo [--backend B] [--size N] [--radius
 const char* const kQueryUsage = R"usage(  query MESH [--against MESH_B [--self]] [--thickness FILE] [--to MESH1]
         --radius R | --radius-factor F [--kind K] [--mode M] [--leaf-exact] [--backend B]
         [--out PREFIX | --out -] [--format F] [--stats]
-      Loads an OBJ or PLY mesh and runs the queries of each kind K (incident pairs dropped)
+      Loads an OBJ, PLY or OFF mesh and runs the queries of each kind K (incident pairs dropped)
       within R (or F x the mesh's mean edge length).
       --kind K: a comma-separated list of vt (vertex, triangle), ee (edge, edge), vv (vertex,
         vertex) and ev (vertex, edge); default vt,ee. Each runs in the order given.

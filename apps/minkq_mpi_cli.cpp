@@ -29,7 +29,7 @@ constexpr int kExitUsage = 2, kExitFailure = 3;
 
 const char* const kUsage = R"(usage: mpirun -n K minkq-mpi query MESH --radius R | --radius-factor F [options]
 
-  Loads an OBJ or PLY mesh on every rank, splits it over the K ranks, and runs the distributed
+  Loads an OBJ, PLY or OFF mesh on every rank, splits it over the K ranks, and runs the distributed
   VT and EE queries (incident pairs dropped) within R (or F x the mesh's mean edge length) in
   mode M. Rank 0 prints
   "vt candidates N digest HEX" and "ee candidates N digest HEX" for the union of the ranks'

@@ -282,6 +282,30 @@ TEST(ReferenceLoad, BigEndianPly) {
   EXPECT_EQ(m.tris, (std::vector<int32_t>{0, 1, 2, 0, 2, 3, 0, 3, 1}));
 }
 
+TEST(ReferenceLoad, OffPolygonsAreFanTriangulated) {
+  const std::string path = testing::TempDir() + "minkq_reference_quad.off";
+  {
+    std::ofstream f(path);
+    f << "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0.1\n4 0 1 2 3\n3 0 1 4\n";
+  }
+  const ref::Mesh q = ref::load_mesh(path);
+  EXPECT_EQ(q.xyz, (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0.5f, 0.5f, 0.1f}));
+  EXPECT_EQ(q.tris, (std::vector<int32_t>{0, 1, 2, 0, 2, 3, 0, 1, 4}));
+  EXPECT_EQ(q.edges, ref::derive_edges(q.tris));
+  EXPECT_EQ(ref::load_mesh(path, true).xyz64[14], 0.1);
+  {
+    std::ofstream f(path);
+    f << "OFF\n3 1 0\n0 0 0\n1 0 0\n1 1 0\n3 0 1 7\n";  // a vertex out of range
+  }
+  EXPECT_THROW(ref::load_mesh(path), std::runtime_error);
+  {
+    std::ofstream f(path);
+    f << "OFF\n3 2 0\n0 0 0\n1 0 0\n1 1 0\n3 0 1 2\n";  // a face missing
+  }
+  EXPECT_THROW(ref::load_mesh(path), std::runtime_error);
+  std::remove(path.c_str());
+}
+
 TEST(ReferenceLoad, AsciiPlyAndErrors) {
   const std::string path = testing::TempDir() + "minkq_reference_quad.ply";
   {

@@ -1,5 +1,5 @@
 // The mesh of the apps, the oracle and the tests: edges derived from triangles, double input,
-// and the OBJ / PLY loaders.
+// and the OBJ / PLY / OFF loaders.
 #include "mesh_io.h"
 
 #include <tiny_obj_loader.h>
@@ -250,6 +250,31 @@ Mesh load_ply(const std::string& path, std::string data, bool float64) {
   return m;
 }
 
+// OFF (Geomview's and CGAL's format): "OFF", the vertex, face and edge counts, the vertices, then
+// each face as its vertex count and indices (polygons fan-triangulated).
+Mesh load_off(const std::string& path, const std::string& data, bool float64) {
+  std::istringstream in(data);
+  std::string head;
+  size_t nv = 0, nf = 0, ne = 0;
+  if (!(in >> head >> nv >> nf >> ne) || head != "OFF") fail(path, "not an OFF file");
+  std::vector<double> xyz(3 * nv);
+  for (double& x : xyz) in >> x;
+  Mesh m;
+  for (size_t f = 0; f < nf && in; ++f) {
+    int k = 0;
+    in >> k;
+    std::vector<int32_t> poly(size_t(std::max(k, 0)));
+    for (int32_t& v : poly) in >> v;
+    for (size_t j = 2; j < poly.size(); ++j) m.tris.insert(m.tris.end(), {poly[0], poly[j - 1], poly[j]});  // fan
+  }
+  if (!in) fail(path, "truncated OFF file");
+  if (m.tris.empty()) fail(path, "no triangles");
+  if (float64) set_float64(m, std::move(xyz));
+  else m.xyz.assign(xyz.begin(), xyz.end());  // to nearest
+  check_indices(path, m);
+  return m;
+}
+
 }  // namespace
 
 Mesh load_mesh(const std::string& path, bool float64) {
@@ -260,7 +285,8 @@ Mesh load_mesh(const std::string& path, bool float64) {
   std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   if (ext == ".obj") return load_obj(path, float64);
-  fail(path, "unknown mesh format (expected .obj or a PLY file)");
+  if (ext == ".off") return load_off(path, data, float64);
+  fail(path, "unknown mesh format (expected .obj, .off or a PLY file)");
 }
 
 }  // namespace minkq::meshio

@@ -1,5 +1,5 @@
 // minkq::meshio: the triangle mesh that the programs (apps/), the oracle (oracle/), the tests,
-// fuzzers and benchmarks read files into, and its one OBJ / PLY loader.
+// fuzzers and benchmarks read files into, and its one OBJ / PLY / OFF loader.
 //
 // It depends on neither the library nor the oracle: it is the file side of every tool, so that
 // a mesh means the same vertices, triangles and edges wherever it is loaded.
@@ -38,12 +38,12 @@ double mean_edge_length(const Mesh& mesh);
 // Throws std::invalid_argument when its size is not a multiple of 3.
 void set_float64(Mesh& mesh, std::vector<double> xyz64);
 
-// Loads an OBJ (tinyobjloader: polygons triangulated, all shapes merged into one mesh) or a PLY
+// Loads an OBJ (tinyobjloader: polygons triangulated, all shapes merged into one mesh), a PLY
 // (ascii, binary_little_endian or binary_big_endian; vertex x, y, z of any scalar type, faces
-// as a list, polygons fan-triangulated). Fills edges with derive_edges. Throws
-// std::runtime_error naming the file and the problem. With float64, xyz64 holds the file's
-// coordinates in double (OBJ text parsed as doubles, PLY values as stored) and xyz their
-// rounding to nearest float.
+// as a list, polygons fan-triangulated) or an OFF (.off; polygons fan-triangulated). Fills
+// edges with derive_edges. Throws std::runtime_error naming the file and the problem. With
+// float64, xyz64 holds the file's coordinates in double (OBJ and OFF text parsed as doubles, PLY
+// values as stored) and xyz their rounding to nearest float.
 Mesh load_mesh(const std::string& path, bool float64 = false);
 
 }  // namespace minkq::meshio

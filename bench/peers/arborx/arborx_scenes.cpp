@@ -1,47 +1,15 @@
-// arborx_bench's scenes: the reference, procedural, real, scale and extra scenes in table order,
-// and CGAL's OFF format (for elephant-with-holes).
-#include <algorithm>
+// arborx_bench's scenes: the reference, procedural, real, scale and extra scenes in table order.
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 
 #include "arborx_bench.h"
 
 namespace peer {
 
-// OFF (CGAL's format): "OFF", counts, vertices, faces (polygons fan-triangulated).
-ref::Mesh load_off(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot open " + path);
-  std::string head;
-  f >> head;
-  if (head != "OFF") throw std::runtime_error(path + ": not an OFF file");
-  size_t nv = 0, nf = 0, ne = 0;
-  f >> nv >> nf >> ne;
-  ref::Mesh m;
-  m.xyz.resize(3 * nv);
-  for (size_t i = 0; i < 3 * nv; ++i) {
-    double x;
-    f >> x;
-    m.xyz[i] = float(x);
-  }
-  for (size_t i = 0; i < nf; ++i) {
-    int k;
-    f >> k;
-    std::vector<int32_t> poly(size_t(std::max(k, 0)));
-    for (auto& v : poly) f >> v;
-    for (int j = 1; j + 1 < k; ++j) m.tris.insert(m.tris.end(), {poly[0], poly[size_t(j)], poly[size_t(j) + 1]});
-  }
-  if (!f) throw std::runtime_error(path + ": truncated OFF file");
-  m.edges = ref::derive_edges(m.tris);
-  return m;
-}
-
 Scene mesh_scene(const std::string& suite, const std::string& name, const std::string& path, double factor) {
-  const std::filesystem::path file(path);
-  const ref::Mesh mesh = file.extension() == ".off" ? load_off(path) : ref::load_mesh(path);
-  return Scene{suite, name, file.filename().string() + ", static", mesh, mesh.xyz, factor,
+  const ref::Mesh mesh = ref::load_mesh(path);  // .obj, .ply or .off (CGAL's elephant-with-holes)
+  return Scene{suite, name, std::filesystem::path(path).filename().string() + ", static", mesh, mesh.xyz, factor,
                float(factor * ref::mean_edge_length(mesh))};
 }
 
