@@ -356,7 +356,7 @@ TEST(Bvh, leaf_scan_four_at_a_time_matches_the_test_box_by_box) {
               if (hits >> k & 1u) got.push_back(prims[size_t(base + k)]);
           };
           WorkCounts work;
-          scan_leaves<4>(groups.data(), shape, first, last, after, on_hits, work);
+          scan_leaves(groups.data(), shape, first, last, after, on_hits, work);
           for (int32_t p = std::max(first, after + 1); p <= last; ++p)
             if (shape.overlaps(boxes[size_t(p)])) want.push_back(100 + p);
           ASSERT_EQ(got, want) << "range " << first << ".." << last << " after " << after;

@@ -72,9 +72,8 @@ namespace minkq {
 
 // The queries of one request for a pass: the request's kind, the tree, the query source and
 // where the pairs go, with the node test as a type. A pass is what run_passes runs: queries
-// 0..num_queries-1, query i by run(i, emit, work) (run<W>: the host scan's W lanes), whose
-// pairs' first ids lie below first_ids() (the bits a canonical sort covers). jobs.h's JobPass
-// is the other kind of pass.
+// 0..num_queries-1, query i by run(i, emit, work), whose pairs' first ids lie below first_ids()
+// (the bits a canonical sort covers). jobs.h's JobPass is the other kind of pass.
 template <class Shape_, class Queries>
 struct QueryPass {
   using Shape = Shape_;
@@ -83,9 +82,9 @@ struct QueryPass {
   Queries queries;
   int32_t num_queries;
   PairOutput out;
-  template <int W = 4, class Emit, class Work>
+  template <class Emit, class Work>
   MINKQ_HD void run(int32_t i, Emit& emit, Work& work) const {
-    run_query<Shape, W>(bvh, queries, i, emit, work);
+    run_query<Shape>(bvh, queries, i, emit, work);
   }
   MINKQ_HD int32_t first_ids() const { return num_queries; }
 };

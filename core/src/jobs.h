@@ -87,7 +87,7 @@ struct JobPass {
   PairOutput out;
   float r;           // the query's radius and filters (kLeafExact), given to each job's source
   uint32_t filters;
-  template <int W = 4, class Emit, class Work>
+  template <class Emit, class Work>
   MINKQ_HD void run(int32_t i, Emit& emit, Work& work) const {
     int32_t lo = 0, hi = num_jobs - 1;
     while (lo < hi) {
@@ -99,11 +99,11 @@ struct JobPass {
     const int32_t q = i - job.first_query;
     if constexpr (!std::is_same<typename Job::Reversed, NoReversed>::value) {
       if (job.reversed)
-        return run_query<BoxShape, W>(job.bvh, reversed_source<Shape>(with_request(job.reversed_queries, r, filters)), q,
+        return run_query<BoxShape>(job.bvh, reversed_source<Shape>(with_request(job.reversed_queries, r, filters)), q,
                                    offset_emit, work);
     }
-    if (job.self) run_query<Shape, W>(job.bvh, with_request(job.self_queries, r, filters), q, offset_emit, work);
-    else run_query<Shape, W>(job.bvh, with_request(job.cross_queries, r, filters), q, offset_emit, work);
+    if (job.self) run_query<Shape>(job.bvh, with_request(job.self_queries, r, filters), q, offset_emit, work);
+    else run_query<Shape>(job.bvh, with_request(job.cross_queries, r, filters), q, offset_emit, work);
   }
   MINKQ_HD int32_t first_ids() const { return first_bound; }
 };

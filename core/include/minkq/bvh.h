@@ -43,10 +43,6 @@ constexpr int32_t kNoChild = INT32_MIN;
 // Keys are 63 Morton bits plus a 32-bit index tie-break; each level down lengthens the shared
 // key prefix, so depth <= 96 and a traversal stack of 128 entries never overflows.
 constexpr int kTraversalStack = 128;
-// Groups a host tree keeps past its last leaf group, zeroed: the host scan at 8 lanes tests two
-// groups at a time from any group of a range, so it may read one group past the last
-// (traversal.h's scan_leaves; no lane of it is asked for).
-constexpr int kScanPadGroups = 1;
 // Leaf positions must leave ~position distinct from kNoChild.
 constexpr int64_t kMaxPrimitives = INT32_MAX - 1;
 // The most primitives one tree holds: a tree over n keeps up to n - 1 node records

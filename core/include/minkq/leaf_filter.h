@@ -82,16 +82,15 @@ struct LeafFilter {
   }
 };
 
-// Query i of the batch: emit(first, second) for each pair it finds; work counts (or not). W:
-// the host scan's lanes (traversal.h's scan_leaves); the pairs do not depend on it.
-template <class Shape, int W = 4, class Queries, class Emit, class Work>
+// Query i of the batch: emit(first, second) for each pair it finds; work counts (or not).
+template <class Shape, class Queries, class Emit, class Work>
 MINKQ_HD void run_query(const BvhView& bvh, const Queries& queries, int32_t i, Emit& emit, Work& work) {
   static_assert(QuerySourceContract<Queries, Shape>::value, "not a query source (query_sources.h)");
   static_assert(EmitContract<Emit>::value, "not an emitter");
   const QueryTarget target = queries.target(i);
   const Shape shape = Shape::from(queries.geometry(target));
   LeafFilter<Shape, Queries, Emit, Work> on_hits{queries, bvh.sorted_prims, target, emit, work};
-  traverse_groups<W>(bvh, shape, target.after, on_hits, work);
+  traverse_groups(bvh, shape, target.after, on_hits, work);
 }
 
 }  // namespace minkq

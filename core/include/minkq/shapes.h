@@ -19,13 +19,6 @@
 //                                            and overlaps(group_box(g, k)). Every verdict must
 //                                            be overlaps' own, bit for bit.
 //
-// A shape whose test is the box mode's and then a finer one (all of minkq's) may say so, and the
-// host then tests nodes and leaf groups with the box mode's wide tests (shape_contract::kBoxFirst):
-//   const BoxShape& box_test()               the box mode's shape it tests first;
-//   unsigned finer_group(const BoxGroup& g, unsigned lanes)   (host code)
-//                                            overlaps_group(g, lanes) ==
-//                                            finer_group(g, box_test().overlaps_group(g, lanes)).
-//
 // With these, traversal reports exactly the primitives whose box the shape overlaps, whatever
 // the tree (tests/test_queries.cpp checks it against the test applied to every primitive).
 // Each finer mode is the box test AND a tighter one (BoxThenFiner), so the candidate sets nest
@@ -50,8 +43,6 @@ struct QueryGeometry {
   Vec3 p0, p1;
   float r;
 };
-
-struct BoxShape;
 
 // The contract above, member by member, checked where a shape is used (traverse_groups in
 // traversal.h; walk, which tests node boxes only, checks may_overlap). What each test decides
@@ -78,13 +69,6 @@ template <class S>
 constexpr bool kFiner = detected_as<bool, Finer, S>;
 template <class S>
 constexpr bool kOverlapsGroup = detected_as<unsigned, OverlapsGroup, S>;
-template <class S>
-using BoxTest = decltype(std::declval<const S&>().box_test());
-template <class S>
-using FinerGroup = decltype(std::declval<const S&>().finer_group(std::declval<const BoxGroup&>(), 0u));
-// The optional members: the box mode's test first, then finer_group (CUDA code never uses them).
-template <class S>
-constexpr bool kBoxFirst = detected_as<const BoxShape&, BoxTest, S> && detected_as<unsigned, FinerGroup, S>;
 }  // namespace shape_contract
 
 template <class S>
@@ -127,28 +111,12 @@ struct BoxShape {
 #if defined(__CUDACC__)
     return overlaps_each(*this, g, lanes);
 #else
-    return overlaps_groups<4>(&g, lanes);
+    using simd4::load;
+    const simd4::M4 pass = (load(g.lo[0]) - hi.x <= r) & (lo.x - load(g.hi[0]) <= r) & (load(g.lo[1]) - hi.y <= r) &
+                           (lo.y - load(g.hi[1]) <= r) & (load(g.lo[2]) - hi.z <= r) & (lo.z - load(g.hi[2]) <= r);
+    return lanes & simd4::mask_bits(pass);
 #endif
   }
-  // What every shape tests first (BoxThenFiner), and what the box mode adds to it: nothing.
-  MINKQ_HD const BoxShape& box_test() const { return *this; }
-#if !defined(__CUDACC__)
-  unsigned finer_group(const BoxGroup&, unsigned lanes) const { return lanes; }
-  // overlaps on the W boxes of the W / 4 groups from g (bit k: box k % 4 of group g + k / 4),
-  // the lanes asked for: W lanes at a time (simd.h's Lanes), each lane overlaps_group's.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"  // the wide vectors stay inside (simd.h's load_rows)
-  template <int W>
-  __attribute__((always_inline)) unsigned overlaps_groups(const BoxGroup* g, unsigned lanes) const {
-    constexpr size_t kStride = sizeof(BoxGroup) / sizeof(float);  // one group's floats
-    const typename Lanes<W>::M pass =
-        (load_rows<W>(g->lo[0], kStride) - hi.x <= r) & (lo.x - load_rows<W>(g->hi[0], kStride) <= r) &
-        (load_rows<W>(g->lo[1], kStride) - hi.y <= r) & (lo.y - load_rows<W>(g->hi[1], kStride) <= r) &
-        (load_rows<W>(g->lo[2], kStride) - hi.z <= r) & (lo.z - load_rows<W>(g->hi[2], kStride) <= r);
-    return lanes & minkq::mask_bits<W>(pass);
-  }
-#pragma GCC diagnostic pop
-#endif
 };
 
 // Whether Shape is the box mode, whose finer test is no test: a filter that would apply it the
@@ -291,13 +259,5 @@ struct CapsuleExactShape : BoxThenFiner<CapsuleExactShape> {
   }
 #endif
 };
-
-#if !defined(__CUDACC__)
-// minkq's shapes test the box mode's test first: the host walks and scans them with its wide
-// tests (traversal.h).
-static_assert(shape_contract::kBoxFirst<BoxShape> && shape_contract::kBoxFirst<SphereShape> &&
-                  shape_contract::kBoxFirst<CapsuleRayShape> && shape_contract::kBoxFirst<CapsuleExactShape>,
-              "a shape lost box_test() or finer_group()");
-#endif
 
 }  // namespace minkq

@@ -1,7 +1,6 @@
-// The host's SIMD helpers: simd4, for the shapes' leaf tests on four boxes at once (shapes.h)
-// and the incidence test on four elements (leaf_groups.h), and Lanes<W>, the box test on the W
-// boxes of W / 4 consecutive leaf groups (traversal.h's scan at the wider CPU levels,
-// core/src/cpu/isa.h). Host code only: CUDA code tests lane by lane.
+// The host's SIMD helpers (simd4), for the shapes' leaf tests on four boxes at once (shapes.h)
+// and the incidence test on four elements (leaf_groups.h). Host code only: CUDA code tests
+// lane by lane.
 #pragma once
 
 #include "minkq/hd.h"
@@ -54,48 +53,6 @@ inline F4 next_down(F4 x) {  // minkq::next_down per lane
 }
 inline F4 next_up(F4 x) { return -next_down(-x); }
 }  // namespace simd4
-
-// W lanes of floats (W = 4 or 8) in GCC vector extensions: written once, compiled for the
-// level of the function they are inlined into (SSE2: two 4-float halves; AVX2 and AVX-512: one
-// 8-float register). Wider vectors are left out: g++ 12 tests 16-float comparisons lane by lane.
-template <int W>
-struct Lanes;
-template <>
-struct Lanes<4> {
-  typedef float F __attribute__((vector_size(16)));
-  typedef int32_t M __attribute__((vector_size(16)));
-};
-template <>
-struct Lanes<8> {
-  typedef float F __attribute__((vector_size(32)));
-  typedef int32_t M __attribute__((vector_size(32)));
-};
-
-// Lanes 0..W-1: the 4-float rows at p, p + stride, ... (a field of consecutive groups). Always
-// inlined: a wide vector never crosses a call, whose convention would depend on the level (so
-// g++'s note that it does, -Wpsabi, does not apply).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-template <int W>
-__attribute__((always_inline)) inline typename Lanes<W>::F load_rows(const float* p, size_t stride) {
-  if constexpr (W == 4) {
-    return simd4::load(p);
-  } else {
-    static_assert(W == 8, "4 or 8 lanes");
-    return __builtin_shufflevector(simd4::load(p), simd4::load(p + stride), 0, 1, 2, 3, 4, 5, 6, 7);
-  }
-}
-// Bit k set where lane k of the comparison m is true.
-template <int W>
-__attribute__((always_inline)) inline unsigned mask_bits(typename Lanes<W>::M m) {
-  if constexpr (W == 4) {
-    return simd4::mask_bits(m);
-  } else {
-    return simd4::mask_bits(__builtin_shufflevector(m, m, 0, 1, 2, 3)) |
-           simd4::mask_bits(__builtin_shufflevector(m, m, 4, 5, 6, 7)) << 4;
-  }
-}
-#pragma GCC diagnostic pop
 
 }  // namespace minkq
 #endif

@@ -6,8 +6,6 @@
 // compiled out when not.
 #pragma once
 
-#include <cstddef>
-
 #include "minkq/bvh.h"
 #include "minkq/shapes.h"
 
@@ -78,90 +76,33 @@ struct WorkContract {
   static constexpr bool value = is_work<W>;
 };
 
-// Leaf positions max(first, after + 1)..last: on_hits(base, hits, group) for each group whose
-// boxes pass overlaps in some lane, in order, hits holding bit k for position base + k. In
-// CUDA code, and for shapes that do not test the box mode's test first (shapes.h), a group at a
-// time with overlaps_group. On the host W / 4 groups at a time (W lanes: the CPU level's width,
-// core/src/cpu/isa.h): the box test on all W lanes, then the shape's finer test on each group
-// with hits; each verdict is overlaps_group's. Its last chunk may read groups past the range and
-// past the tree's last group: every host tree keeps kScanPadGroups more (bvh.h), and no lane
-// past `last` is asked for.
-template <int W, class Shape, class OnHits, class Work>
+// Leaf positions max(first, after + 1)..last, a group of four at a time: on_hits(base, hits,
+// group) for each group whose boxes pass overlaps in some lane (four at once: overlaps_group),
+// hits holding bit k for position base + k.
+template <class Shape, class OnHits, class Work>
 MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const Shape& shape, int32_t first, int32_t last, int32_t after,
                           OnHits& on_hits, Work& work) {
-  const int64_t start = first > after ? first : after + 1;
-#if defined(__CUDACC__)
-  constexpr bool kWide = false;
-#else
-  constexpr bool kWide = shape_contract::kBoxFirst<Shape>;
-#endif
-  if constexpr (!kWide) {
-    for (int64_t p = start; p <= last; p = (p | 3) + 1) {
-      const int64_t base = p & ~int64_t(3);
-      const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
-      const BoxGroup& group = leaf_groups[base >> 2];
-      const unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
-      work.test_nodes(unsigned(to - from + 1));
-      if (hits != 0) on_hits(base, hits, group);
-    }
-  } else {
-    static_assert(W == 4 || W == 8, "a scan tests 4 or 8 lanes at a time");
-    static_assert(W / 4 - 1 <= kScanPadGroups, "a chunk reads past the last group no further than the padding");
-    constexpr unsigned kAll = (1u << W) - 1u;
-    unsigned lanes = kAll & (kAll << (start & 3));  // the first chunk starts at `start`
-    for (int64_t g = start >> 2; 4 * g <= last; g += W / 4, lanes = kAll) {
-      if (last - 4 * g < W - 1) lanes &= (2u << (last - 4 * g)) - 1u;  // the last chunk ends at `last`
-      work.test_nodes(unsigned(popcount(lanes)));
-      unsigned hits = shape.box_test().template overlaps_groups<W>(leaf_groups + g, lanes);
-      while (hits != 0) {
-        const int j = lowest_bit(hits) >> 2;
-        const BoxGroup& group = leaf_groups[g + j];
-        const unsigned group_hits = shape.finer_group(group, (hits >> 4 * j) & 15u);
-        hits &= ~(15u << 4 * j);
-        if (group_hits != 0) on_hits(4 * (g + j), group_hits, group);
-      }
-    }
+  for (int64_t p = first > after ? first : after + 1; p <= last; p = (p | 3) + 1) {
+    const int64_t base = p & ~int64_t(3);
+    const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
+    const BoxGroup& group = leaf_groups[base >> 2];
+    const unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
+    work.test_nodes(unsigned(to - from + 1));
+    if (hits != 0) on_hits(base, hits, group);
   }
 }
 
 // A leaf range whose box passed may_overlap. One leaf: its box is the range's and passed the
 // box test; only the finer one is left.
-template <int W, class Shape, class OnHits, class Work>
+template <class Shape, class OnHits, class Work>
 MINKQ_HD void visit_leaf_range(const BoxGroup* leaf_groups, const Shape& shape, int32_t first, int32_t last,
                                int32_t after, const Box& range_box, OnHits& on_hits, Work& work) {
   if (first == last) {
     if (shape.finer(range_box)) on_hits(int64_t(first) & ~int64_t(3), 1u << (first & 3), leaf_groups[first >> 2]);
     return;
   }
-  scan_leaves<W>(leaf_groups, shape, first, last, after, on_hits, work);
+  scan_leaves(leaf_groups, shape, first, last, after, on_hits, work);
 }
-
-#if !defined(__CUDACC__)
-// The box mode's may_overlap on both children of a node at once (bit 0: left, bit 1: right), on
-// the host: the node's 12 child-box floats (left lo, left hi, right lo, right hi) in three
-// 4-float rows with every hi coordinate negated, so that one subtraction serves both kinds of
-// face: (-b.hi) - (-lo) is lo - b.hi exactly (the same rounding, the same NaN), as box_gap_within
-// computes it.
-inline unsigned children_overlap(const BoxShape& s, const BvhNode& n) {
-  static_assert(offsetof(BvhNode, left_box) == 0 && offsetof(BvhNode, right_box) == sizeof(Box) &&
-                    sizeof(Box) == 6 * sizeof(float),
-                "a node's child boxes are its first 12 floats");
-  using simd4::F4;
-  using simd4::M4;
-  const float* f = &n.left_box.lo.x;
-  const M4 kSign = {int32_t(0x80000000)}, kNone = {0};
-  const M4 flip[3] = {__builtin_shufflevector(kNone, kSign, 0, 0, 0, 4), __builtin_shufflevector(kNone, kSign, 4, 4, 0, 0),
-                      __builtin_shufflevector(kNone, kSign, 0, 4, 4, 4)};
-  const F4 q[3] = {F4{s.hi.x, s.hi.y, s.hi.z, -s.lo.x}, F4{-s.lo.y, -s.lo.z, s.hi.x, s.hi.y},
-                   F4{s.hi.z, -s.lo.x, -s.lo.y, -s.lo.z}};
-  unsigned bits = 0;
-  for (int row = 0; row < 3; ++row) {
-    const F4 b = (F4)((M4)simd4::load(f + 4 * row) ^ flip[row]);
-    bits |= simd4::mask_bits(b - q[row] <= s.r) << 4 * row;
-  }
-  return unsigned((bits & 0x3fu) == 0x3fu) | unsigned((bits >> 6) == 0x3fu) << 1;
-}
-#endif
 
 // The one walk of the tree, for every query shape and both backends: on_range(first, last,
 // box, own) is called, in the order met, for every leaf range [first, last] that the shape may
@@ -185,11 +126,6 @@ MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRang
   static_assert(shape_contract::kMayOverlap<Shape>, "Shape: needs bool may_overlap(const Box&) const");
   static_assert(WorkContract<Work>::value, "the work type does not fulfil the Work contract");
   if (bvh.num_prims <= 0 || after >= bvh.num_prims - 1) return;
-#if defined(__CUDACC__)
-  constexpr bool kBothAtOnce = false;
-#else
-  constexpr bool kBothAtOnce = shape_contract::kBoxFirst<Shape>;
-#endif
   int32_t stack[kTraversalStack];
   int sp = 0;
   int32_t node = 0;
@@ -198,23 +134,17 @@ MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRang
     const BvhNode& n = bvh.nodes[node];
     work.visit_node();
     int32_t next = -1;
-    // Both child boxes at once where the shape tests the box mode's test first (its may_overlap).
-    [[maybe_unused]] unsigned both = 0;
-    if constexpr (kBothAtOnce) both = children_overlap(shape.box_test(), n);
-    auto overlaps_child = [&](int side, const Box& box) {
-      if constexpr (kBothAtOnce) return (both >> side & 1u) != 0; else return shape.may_overlap(box);
-    };
     // The child holding `after` and leaves past it (a left child ending at `after` is skipped).
     const bool left_on_path = on_path && after < n.split, right_on_path = on_path && after > n.split;
     if (n.split > after) {
       if (!left_on_path) work.test_node();
-      if (left_on_path || overlaps_child(0, n.left_box)) {
+      if (left_on_path || shape.may_overlap(n.left_box)) {
         if (n.left < 0) on_range(~n.left, n.split, n.left_box, left_on_path); else next = n.left;
       }
     }
     if (n.right != kNoChild) {
       if (!right_on_path) work.test_node();
-      if (right_on_path || overlaps_child(1, n.right_box)) {
+      if (right_on_path || shape.may_overlap(n.right_box)) {
         if (n.right < 0) {
           on_range(n.split + 1, ~n.right, n.right_box, right_on_path);
         } else if (next < 0) {
@@ -232,31 +162,18 @@ MINKQ_HD void walk(const BvhView& bvh, const Shape& shape, int32_t after, OnRang
   }
 }
 
-// What traverse_groups does with each leaf range the walk meets: visit_leaf_range. A named type
-// rather than a lambda: g++ then inlines it into a function compiled for a CPU level
-// (cpu/passes.h's flatten), which it does not do with a lambda here.
-template <int W, class Shape, class OnHits, class Work>
-struct LeafRanges {
-  const BoxGroup* leaf_groups;
-  const Shape& shape;
-  int32_t after;
-  OnHits& on_hits;
-  Work& work;
-  MINKQ_HD void operator()(int32_t first, int32_t last, const Box& range_box, bool) const {
-    visit_leaf_range<W>(leaf_groups, shape, first, last, after, range_box, on_hits, work);
-  }
-};
-
 // The traversal: on_hits(base, hits, group) is called for the leaf groups holding primitives at
 // sorted positions after `after` whose box the shape overlaps (the contract at the top of
 // shapes.h makes that exact: may_overlap accepts every ancestor box of such a box), bit k of
 // hits for position base + k; a self-query thus meets each pair once. The leaf filter
-// (leaf_filter.h) takes a group's hits at once. W: the host scan's lanes (scan_leaves).
-template <int W = 4, class Shape, class OnHits, class Work>
+// (leaf_filter.h) takes a group's hits at once.
+template <class Shape, class OnHits, class Work>
 MINKQ_HD void traverse_groups(const BvhView& bvh, const Shape& shape, int32_t after, OnHits& on_hits, Work& work) {
   static_assert(ShapeContract<Shape>::value, "the query shape does not fulfil the Shape contract (shapes.h)");
   static_assert(WorkContract<Work>::value, "the work type does not fulfil the Work contract");
-  LeafRanges<W, Shape, OnHits, Work> on_range{bvh.leaf_groups, shape, after, on_hits, work};
+  auto on_range = [&](int32_t first, int32_t last, const Box& range_box, bool) {
+    visit_leaf_range(bvh.leaf_groups, shape, first, last, after, range_box, on_hits, work);
+  };
   walk(bvh, shape, after, on_range, work);
 }
 

@@ -9,7 +9,6 @@
 #include <utility>
 
 #include "backend.h"
-#include "cpu/isa.h"
 #include "cpu/passes.h"
 #include "cpu/tree.h"
 #include "store.h"
@@ -184,9 +183,7 @@ class CpuExecutor {
 class CpuBackend final : public Backend {
  public:
   std::string name() const override {
-    // The level the queries run at (cpu/isa.h); a bad MINKQ_CPU_ISA fails here, on creation.
-    return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads, " +
-           cpu::isa_name(cpu::active_isa()) + ")";
+    return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads)";
   }
   bool is_cuda() const override { return false; }
   int64_t first_non_finite(const Strided& values, int floats) override {

@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "backend.h"
-#include "cpu/isa.h"
 #include "cpu/runtime.h"
 #include "minkq/leaf_filter.h"
 
@@ -28,15 +27,12 @@ struct BlockOut {
   uint64_t counted = 0;
 };
 
-// The queries of one block, scanning leaves W lanes at a time (traversal.h). Always inlined,
-// as is the whole query below it (MINKQ_HD), so that each level's function below holds the
-// query compiled for its level.
-template <int W, class Work, class Pass>
-inline __attribute__((always_inline)) void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
+template <class Work, class Pass>
+void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
   const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
   if (pass.out.capacity == 0) {
     PairCounter count;  // leaf_filter.h: the count-only emitter the CUDA backend uses too
-    for (int32_t i = block * kBlock; i < end; ++i) pass.template run<W>(i, count, work);
+    for (int32_t i = block * kBlock; i < end; ++i) pass.run(i, count, work);
     part.counted += count.counted;
     return;
   }
@@ -44,38 +40,7 @@ inline __attribute__((always_inline)) void run_block(const Pass& pass, int32_t b
     part.pairs.push_back(first);
     part.pairs.push_back(second);
   };
-  for (int32_t i = block * kBlock; i < end; ++i) pass.template run<W>(i, emit, work);
-}
-
-// The same loop compiled for each level of isa.h: the query (walk, scan, leaf filter) inlined
-// into one function compiled for the level, so that its vector code is the level's. Each level
-// runs the same float operations in the same order, so the pairs and their order do not depend
-// on it (tests/test_isa_levels.cpp compares them).
-#if defined(__x86_64__)
-template <class Work, class Pass>
-__attribute__((target(MINKQ_TARGET_AVX2))) void run_block_avx2(const Pass& pass, int32_t block,
-                                                                          BlockOut& part, Work& work) {
-  run_block<8>(pass, block, part, work);
-}
-template <class Work, class Pass>
-__attribute__((target(MINKQ_TARGET_AVX512))) void
-run_block_avx512(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
-  run_block<8>(pass, block, part, work);
-}
-#endif
-
-// The block at the level `isa`. Queries that count their work (MINKQ_QUERY_STATS, a diagnostic)
-// run at SSE2 whatever the level: the same pairs and counts, and a third of the code to compile.
-template <class Work, class Pass>
-void run_block_at(Isa isa, const Pass& pass, int32_t block, BlockOut& part, Work& work) {
-#if defined(__x86_64__)
-  if constexpr (std::is_same<Work, NoWork>::value) {
-    if (isa == Isa::kAvx512) return run_block_avx512(pass, block, part, work);
-    if (isa == Isa::kAvx2) return run_block_avx2(pass, block, part, work);
-  }
-#endif
-  (void)isa;
-  run_block<4>(pass, block, part, work);
+  for (int32_t i = block * kBlock; i < end; ++i) pass.run(i, emit, work);
 }
 
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
@@ -120,12 +85,10 @@ std::array<uint64_t, sizeof...(Pass)> run_passes(const std::array<WorkCounts*, s
   const int32_t blocks = first_block[kPasses];
   std::vector<BlockOut> parts(static_cast<size_t>(blocks));
   std::vector<Work> block_work(static_cast<size_t>(blocks));
-  const Isa isa = active_isa();
   tbb::parallel_for(int32_t(0), blocks, [&](int32_t b) {
     size_t k = 0;
     auto run_if_owner = [&](const auto& pass) {
-      if (b >= first_block[k] && b < first_block[k + 1])
-        run_block_at(isa, pass, b - first_block[k], parts[b], block_work[b]);
+      if (b >= first_block[k] && b < first_block[k + 1]) run_block(pass, b - first_block[k], parts[b], block_work[b]);
       ++k;
     };
     (run_if_owner(passes), ...);

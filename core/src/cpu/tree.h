@@ -264,8 +264,8 @@ class CpuTree {
   const BoxGroup* leaf_groups() const { return leaf_groups_.data(); }
   int32_t size() const { return n_; }
   // Bytes held: node records with their refit counters, per primitive its id and box in leaf
-  // order (boxes in groups of four: up to three unused lanes, and kScanPadGroups groups more),
-  // and the build scratch once reserved.
+  // order (boxes in groups of four: up to three unused lanes), and the build scratch once
+  // reserved.
   size_t bytes() const {
     return nodes_.size() * (sizeof(BvhNode) + sizeof(int32_t)) + size_t(n_) * sizeof(int32_t) +
            leaf_groups_.size() * sizeof(BoxGroup) + (reserved_ ? scratch_.bytes() : 0);
@@ -281,11 +281,9 @@ class CpuTree {
     cost_at_build_ = 0.0;
     sorted_prims_.swap(sorted_prims);
     if (n <= 1) sorted_prims_.assign(size_t(n), 0);
-    // Every lane below n is written below; the lanes past the last primitive stay zero, and so
-    // do the groups a wide scan may read past the last (kScanPadGroups, bvh.h).
-    const size_t groups = size_t(box_group_count(n));
-    leaf_groups_.resize(groups + kScanPadGroups);
-    for (size_t g = groups > 0 ? groups - 1 : 0; g < leaf_groups_.size(); ++g) leaf_groups_[g] = BoxGroup{};
+    // Every lane below n is written below; the lanes past the last primitive stay zero.
+    leaf_groups_.resize(size_t(box_group_count(n)));
+    if (n > 0) leaf_groups_.back() = BoxGroup{};
     const GivenBoxes boxes{s.sort.element.data()};
     if (n <= 1) nodes_.assign(size_t(n), one_leaf_root());
     else build_nodes(keys.data(), n, config.leaf_size, boxes, sorted_prims_.data(), nodes_, leaf_groups_.data(),
