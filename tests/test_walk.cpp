@@ -1,6 +1,7 @@
 // The walk of traversal.h against its definition: the leaf ranges a query meets, and, for a
 // self-query (the half traversal), that the path down to its own leaf range is followed with no
-// box test while every other child past it is tested exactly as a top-down walk tests it.
+// box test while every other child past it is tested exactly as a top-down walk tests it. And
+// the host's packets (packet.h): each member's hits are those of its own traversal.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <vector>
 
 #include "cpu/tree.h"
+#include "minkq/packet.h"
 #include "minkq/shapes.h"
 #include "minkq/traversal.h"
 #include "test_util.h"
@@ -137,6 +139,70 @@ TEST(Walk, meets_the_leaf_ranges_past_the_query_and_tests_none_on_its_path) {
           expect_walk_as_defined(tree, shape, after, what.c_str());
         }
       }
+    }
+  }
+}
+
+// A member's hits as (position) of each lane, in the order met.
+struct Collect {
+  std::vector<int64_t>* out;
+  void operator()(int64_t base, unsigned hits, const BoxGroup&) const {
+    for (; hits != 0; hits &= hits - 1u) out->push_back(base + lowest_bit(hits));
+  }
+};
+
+// Packets of 1 to 4 members of one shape kind, random geometries (points and segments, radii
+// from 0 up, sometimes the same query twice) and bounds (-1, or a self-query's position, up to
+// past the last leaf): each member gets exactly its own traversal's hits, each once.
+template <class Shape>
+void expect_packets_as_alone(test::Random& rng, const CpuTree& tree, int32_t n, const std::string& what) {
+  for (int trial = 0; trial < 40; ++trial) {
+    const int count = rng.integer(1, kPacket);
+    Shape shapes[kPacket];
+    int32_t bounds[kPacket];
+    const bool self = rng.integer(0, 1) == 1;
+    const int32_t first_bound = self ? rng.integer(0, n) : -1;
+    for (int j = 0; j < kPacket; ++j) {
+      bounds[j] = self ? std::min(first_bound + j, n) : -1;
+      Vec3 p0 = rng.vec3(-1.0f, 1.0f);
+      Vec3 p1 = rng.integer(0, 2) == 0 ? p0 : p0 + rng.vec3(-0.3f, 0.3f);
+      if (self && bounds[j] < n && rng.integer(0, 1) == 0) {  // a self-query: its own leaf's box, as EE's
+        const Box own = group_box(tree.view().leaf_groups[bounds[j] >> 2], bounds[j] & 3);
+        p0 = own.lo;
+        p1 = own.hi;
+      }
+      const float r = rng.integer(0, 4) == 0 ? 0.0f : rng.log_uniform(1e-4f, 0.5f);
+      shapes[j] = j > 0 && rng.integer(0, 5) == 0 ? shapes[j - 1] : Shape::from({p0, p1, r});
+    }
+    std::vector<int64_t> got[kPacket];
+    Collect on_hits[kPacket] = {{&got[0]}, {&got[1]}, {&got[2]}, {&got[3]}};
+    traverse_packet(tree.view(), shapes, bounds, (1u << count) - 1u, on_hits);
+    for (int j = 0; j < kPacket; ++j) {
+      std::vector<int64_t> want;
+      Collect alone{&want};
+      NoWork work;
+      if (j < count) traverse_groups(tree.view(), shapes[j], bounds[j], alone, work);
+      std::sort(got[j].begin(), got[j].end());
+      std::sort(want.begin(), want.end());
+      EXPECT_EQ(got[j], want) << what << " trial " << trial << " member " << j << " of " << count;
+      EXPECT_EQ(std::adjacent_find(got[j].begin(), got[j].end()), got[j].end()) << what << ": a hit twice";
+    }
+  }
+}
+
+TEST(Walk, packets_give_each_member_its_own_hits_for_every_shape) {
+  test::Random rng(test::fresh_seed());
+  for (int32_t n : {1, 2, 3, 5, 17, 64, 300, 1000}) {
+    for (int32_t leaf_size : {1, 4, kLeafSize}) {
+      std::vector<Box> boxes(static_cast<size_t>(n));
+      for (Box& b : boxes) b = rng.box(rng.vec3(-1.0f, 1.0f), rng.log_uniform(1e-3f, 0.2f));
+      CpuTree tree;
+      tree.build(GivenBoxes{boxes.data()}, n, BuildConfig{leaf_size});
+      const std::string what = "n " + std::to_string(n) + " leaf size " + std::to_string(leaf_size);
+      expect_packets_as_alone<BoxShape>(rng, tree, n, what + " box");
+      expect_packets_as_alone<SphereShape>(rng, tree, n, what + " sphere");
+      expect_packets_as_alone<CapsuleRayShape>(rng, tree, n, what + " capsule_ray");
+      expect_packets_as_alone<CapsuleExactShape>(rng, tree, n, what + " capsule_exact");
     }
   }
 }

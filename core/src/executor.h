@@ -67,6 +67,7 @@
 #include "backend.h"
 #include "minkq/detect.h"
 #include "minkq/leaf_filter.h"
+#include "minkq/packet.h"
 
 namespace minkq {
 
@@ -86,6 +87,13 @@ struct QueryPass {
   MINKQ_HD void run(int32_t i, Emit& emit, Work& work) const {
     run_query<Shape>(bvh, queries, i, emit, work);
   }
+#if !defined(__CUDACC__)
+  // Queries i .. i + count - 1 (count 1 to kPacket) walked together, without work counts.
+  template <class Emit>
+  void run_packet(int32_t i, int count, Emit& emit) const {
+    minkq::run_packet<Shape>(bvh, queries, i, count, emit);
+  }
+#endif
   MINKQ_HD int32_t first_ids() const { return num_queries; }
 };
 

@@ -104,6 +104,7 @@ struct BoxShape {
   MINKQ_HD bool overlaps(const Box& b) const { return box_gap_within(lo, hi, r, b); }
   MINKQ_HD bool may_overlap(const Box& b) const { return overlaps(b); }
   MINKQ_HD bool finer(const Box&) const { return true; }  // the box test is the whole test
+  MINKQ_HD const BoxShape& box_test() const { return *this; }  // as the finer modes name theirs
   // The bits k of `lanes` where box k of the group passes overlaps. On the host (g++) all four
   // in 4-float vector lanes; in CUDA code only the lanes asked for, box by box (a thread reads
   // no more than it tests). The same float subtractions and comparisons either way.

@@ -14,6 +14,7 @@
 #include "backend.h"
 #include "cpu/runtime.h"
 #include "minkq/leaf_filter.h"
+#include "minkq/packet.h"
 
 namespace minkq::cpu {
 
@@ -27,12 +28,28 @@ struct BlockOut {
   uint64_t counted = 0;
 };
 
+// Whether a pass walks its queries in packets (packet.h): QueryPass does; a pass of jobs,
+// whose neighbouring queries may belong to different trees, walks them one by one.
+template <class Pass>
+using RunPacket = decltype(std::declval<const Pass&>().run_packet(int32_t(), 1, std::declval<PairCounter&>()));
+
+// Queries [begin, end) of a pass in order: in packets of kPacket without work counts where the
+// pass has them (the same pairs; work is counted query by query, as the CUDA backend walks).
+template <class Work, class Pass, class Emit>
+void run_queries(const Pass& pass, int32_t begin, int32_t end, Emit& emit, Work& work) {
+  if constexpr (std::is_same<Work, NoWork>::value && is_detected<RunPacket, Pass>) {
+    for (int32_t i = begin; i < end; i += kPacket) pass.run_packet(i, int(std::min<int32_t>(kPacket, end - i)), emit);
+  } else {
+    for (int32_t i = begin; i < end; ++i) pass.run(i, emit, work);
+  }
+}
+
 template <class Work, class Pass>
 void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
-  const int32_t end = std::min(pass.num_queries, (block + 1) * kBlock);
+  const int32_t begin = block * kBlock, end = std::min(pass.num_queries, (block + 1) * kBlock);
   if (pass.out.capacity == 0) {
     PairCounter count;  // leaf_filter.h: the count-only emitter the CUDA backend uses too
-    for (int32_t i = block * kBlock; i < end; ++i) pass.run(i, count, work);
+    run_queries(pass, begin, end, count, work);
     part.counted += count.counted;
     return;
   }
@@ -40,7 +57,7 @@ void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
     part.pairs.push_back(first);
     part.pairs.push_back(second);
   };
-  for (int32_t i = block * kBlock; i < end; ++i) pass.run(i, emit, work);
+  run_queries(pass, begin, end, emit, work);
 }
 
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the

@@ -1,0 +1,131 @@
+// Query packets, the host's walk: up to four neighbouring queries of a batch (consecutive in
+// the batch's order: Morton-ordered vertices, or a self-query's consecutive leaf positions)
+// walk the tree together, each node's child boxes tested against all four box tests at once
+// (one member per 4-float lane), so that a node that several members reach is read and
+// tested once for them. At a leaf range, each member whose box test passed the range's box
+// scans it as its own traversal would (visit_leaf_range, its own shape, bound and filter).
+//
+// The pairs are exactly those of traverse_groups for each member: a member enters a node when
+// its box test passes the node's box and the node holds positions after its bound, which is
+// the single walk's rule (its self-query path only skips tests that pass), so each member
+// reaches the leaf ranges it would alone, tested the same way. Only their order differs (the
+// C API leaves it unspecified). Host code only; CUDA threads walk alone (traversal.h).
+#pragma once
+
+#include "minkq/leaf_filter.h"
+
+#if !defined(__CUDACC__)
+namespace minkq {
+
+// Queries per packet: the lanes of simd4.
+constexpr int kPacket = 4;
+
+// A packet's box tests, member j in lane j: box_gap_within(lo_j, hi_j, r_j, b) for one box b
+// against every member at once, the scalar test's subtractions and comparisons lane by lane
+// (b's faces broadcast), so each lane's verdict is the member's own.
+struct PacketBoxes {
+  simd4::F4 lo[3], hi[3], r;
+  simd4::M4 after;  // each member's bound (traverse_groups' `after`)
+
+  template <class Shape>
+  static PacketBoxes of(const Shape (&shapes)[kPacket], const int32_t (&bounds)[kPacket]) {
+    PacketBoxes p;
+    for (int j = 0; j < kPacket; ++j) {
+      const BoxShape& b = shapes[j].box_test();
+      for (int axis = 0; axis < 3; ++axis) {
+        p.lo[axis][j] = component(b.lo, axis);
+        p.hi[axis][j] = component(b.hi, axis);
+      }
+      p.r[j] = b.r;
+      p.after[j] = bounds[j];
+    }
+    return p;
+  }
+  // The members whose box test accepts b, as bits.
+  unsigned overlaps(const Box& b) const {
+    using simd4::splat;
+    const simd4::M4 pass = (splat(b.lo.x) - hi[0] <= r) & (lo[0] - splat(b.hi.x) <= r) &
+                           (splat(b.lo.y) - hi[1] <= r) & (lo[1] - splat(b.hi.y) <= r) &
+                           (splat(b.lo.z) - hi[2] <= r) & (lo[2] - splat(b.hi.z) <= r);
+    return simd4::mask_bits(pass);
+  }
+  // The members with a leaf position after their bound at or before `last`.
+  unsigned reach(int32_t last) const { return simd4::mask_bits(after < last); }
+};
+
+// traverse_groups for each member j of `live` (bits below kPacket), on_hits[j] taking its
+// groups. shapes[j] and bounds[j] (its `after`) are ignored outside `live`.
+template <class Shape, class OnHits>
+void traverse_packet(const BvhView& bvh, const Shape (&shapes)[kPacket], const int32_t (&bounds)[kPacket],
+                     unsigned live, OnHits (&on_hits)[kPacket]) {
+  static_assert(ShapeContract<Shape>::value, "the query shape does not fulfil the Shape contract (shapes.h)");
+  if (bvh.num_prims <= 0) return;
+  const PacketBoxes packet = PacketBoxes::of(shapes, bounds);
+  NoWork work;
+  // A leaf range [first, last] whose box the members of `members` accept.
+  auto on_range = [&](int32_t first, int32_t last, const Box& range_box, unsigned members) {
+    for (; members != 0; members &= members - 1u) {
+      const int j = lowest_bit(members);
+      visit_leaf_range(bvh.leaf_groups, shapes[j], first, last, bounds[j], range_box, on_hits[j], work);
+    }
+  };
+  int32_t stack[kTraversalStack];
+  unsigned stack_members[kTraversalStack];
+  int sp = 0;
+  int32_t node = 0;
+  unsigned members = live & packet.reach(bvh.num_prims - 1);
+  while (members != 0) {
+    const BvhNode& n = bvh.nodes[node];
+    int32_t next = -1;
+    unsigned next_members = 0;
+    // The left child ends at split: only members bound before it go there.
+    if (unsigned left = members & packet.reach(n.split)) {
+      if ((left &= packet.overlaps(n.left_box)) != 0) {
+        if (n.left < 0) on_range(~n.left, n.split, n.left_box, left); else next = n.left, next_members = left;
+      }
+    }
+    if (n.right != kNoChild) {
+      if (const unsigned right = members & packet.overlaps(n.right_box)) {
+        if (n.right < 0) {
+          on_range(n.split + 1, ~n.right, n.right_box, right);
+        } else if (next < 0) {
+          next = n.right, next_members = right;
+        } else {
+          stack[sp] = n.right;
+          stack_members[sp++] = right;
+        }
+      }
+    }
+    if (next >= 0) {
+      node = next;
+      members = next_members;
+      continue;
+    }
+    if (sp == 0) return;
+    node = stack[--sp];
+    members = stack_members[sp];
+  }
+}
+
+// Queries first .. first + count - 1 of the batch (count 1 to kPacket) as one packet: each
+// member's pairs are run_query's for it, without work counts.
+template <class Shape, class Queries, class Emit>
+void run_packet(const BvhView& bvh, const Queries& queries, int32_t first, int count, Emit& emit) {
+  static_assert(QuerySourceContract<Queries, Shape>::value, "not a query source (query_sources.h)");
+  static_assert(EmitContract<Emit>::value, "not an emitter");
+  NoWork work;
+  QueryTarget targets[kPacket];
+  for (int j = 0; j < kPacket; ++j) targets[j] = queries.target(first + (j < count ? j : 0));
+  const Shape shapes[kPacket] = {Shape::from(queries.geometry(targets[0])), Shape::from(queries.geometry(targets[1])),
+                                 Shape::from(queries.geometry(targets[2])), Shape::from(queries.geometry(targets[3]))};
+  const int32_t bounds[kPacket] = {targets[0].after, targets[1].after, targets[2].after, targets[3].after};
+  using Filter = LeafFilter<Shape, Queries, Emit, NoWork>;
+  Filter filters[kPacket] = {{queries, bvh.sorted_prims, targets[0], emit, work},
+                             {queries, bvh.sorted_prims, targets[1], emit, work},
+                             {queries, bvh.sorted_prims, targets[2], emit, work},
+                             {queries, bvh.sorted_prims, targets[3], emit, work}};
+  traverse_packet(bvh, shapes, bounds, (1u << count) - 1u, filters);
+}
+
+}  // namespace minkq
+#endif
