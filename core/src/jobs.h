@@ -89,23 +89,52 @@ struct JobPass {
   uint32_t filters;
   template <class Emit, class Work>
   MINKQ_HD void run(int32_t i, Emit& emit, Work& work) const {
+    in_job(job_of(i), i, emit, [&](auto shape, const BvhView& bvh, const auto& queries, int32_t q, auto& job_emit) {
+      run_query<decltype(shape)>(bvh, queries, q, job_emit, work);
+    });
+  }
+#if !defined(__CUDACC__)
+  // Queries i .. i + count - 1 walked together (packet.h): a packet per job they fall in.
+  template <class Emit>
+  void run_packet(int32_t i, int count, Emit& emit) const {
+    for (const int32_t end = i + count; i < end;) {
+      const int32_t k = job_of(i);
+      const int here = int(std::min(end, jobs[k].first_query + jobs[k].num_queries) - i);
+      in_job(k, i, emit, [&](auto shape, const BvhView& bvh, const auto& queries, int32_t q, auto& job_emit) {
+        minkq::run_packet<decltype(shape)>(bvh, queries, q, here, job_emit);
+      });
+      i += here;
+    }
+  }
+#endif
+  MINKQ_HD int32_t first_ids() const { return first_bound; }
+
+ private:
+  // The job whose range holds query i (binary search).
+  MINKQ_HD int32_t job_of(int32_t i) const {
     int32_t lo = 0, hi = num_jobs - 1;
     while (lo < hi) {
       const int32_t mid = (lo + hi + 1) / 2;
       if (jobs[mid].first_query <= i) lo = mid; else hi = mid - 1;
     }
-    const Job& job = jobs[lo];
+    return lo;
+  }
+  // run(shape, bvh, queries, q, job_emit) for query i of job k: the job's tree, its source with
+  // the request's radius and filters, i's number in the job and an emitter numbering the job's
+  // pairs globally; `shape` is a value of the node test's type (a reversed job's: the box test).
+  template <class Emit, class Run>
+  MINKQ_HD void in_job(int32_t k, int32_t i, Emit& emit, Run&& run) const {
+    const Job& job = jobs[k];
     OffsetEmit<Emit> offset_emit{emit, job.first_offset, job.second_offset, job.swap};
     const int32_t q = i - job.first_query;
     if constexpr (!std::is_same<typename Job::Reversed, NoReversed>::value) {
       if (job.reversed)
-        return run_query<BoxShape>(job.bvh, reversed_source<Shape>(with_request(job.reversed_queries, r, filters)), q,
-                                   offset_emit, work);
+        return run(BoxShape{}, job.bvh, reversed_source<Shape>(with_request(job.reversed_queries, r, filters)), q,
+                   offset_emit);
     }
-    if (job.self) run_query<Shape>(job.bvh, with_request(job.self_queries, r, filters), q, offset_emit, work);
-    else run_query<Shape>(job.bvh, with_request(job.cross_queries, r, filters), q, offset_emit, work);
+    if (job.self) run(Shape{}, job.bvh, with_request(job.self_queries, r, filters), q, offset_emit);
+    else run(Shape{}, job.bvh, with_request(job.cross_queries, r, filters), q, offset_emit);
   }
-  MINKQ_HD int32_t first_ids() const { return first_bound; }
 };
 
 // What a geometry brings to the planning of jobs: its role and element counts.

@@ -28,8 +28,8 @@ struct BlockOut {
   uint64_t counted = 0;
 };
 
-// Whether a pass walks its queries in packets (packet.h): QueryPass does; a pass of jobs,
-// whose neighbouring queries may belong to different trees, walks them one by one.
+// Whether a pass walks its queries in packets (packet.h): QueryPass and JobPass (one packet per
+// job a packet's queries fall in) do.
 template <class Pass>
 using RunPacket = decltype(std::declval<const Pass&>().run_packet(int32_t(), 1, std::declval<PairCounter&>()));
 
