@@ -94,6 +94,28 @@ MINKQ_HD unsigned overlaps_each(const Shape& shape, const BoxGroup& g, unsigned 
   return lanes_where(lanes, [&](int k) { return shape.overlaps(group_box(g, k)); });
 }
 
+#if !defined(__CUDACC__)
+// The box mode's test (box_gap_within) on a leaf group's four boxes in 4-float lanes, the
+// query's faces and radius broadcast once: a scan makes one per leaf range (group_test below),
+// so that its loop only loads and compares. The scalar test's subtractions and comparisons,
+// lane by lane.
+struct BoxLanes {
+  simd4::F4 lo[3], hi[3], r;
+  static BoxLanes of(Vec3 lo, Vec3 hi, float r) {
+    using simd4::splat;
+    return {{splat(lo.x), splat(lo.y), splat(lo.z)}, {splat(hi.x), splat(hi.y), splat(hi.z)}, splat(r)};
+  }
+  // The bits k of `lanes` where box k of g passes.
+  unsigned overlaps(const BoxGroup& g, unsigned lanes) const {
+    using simd4::load;
+    const simd4::M4 pass = (load(g.lo[0]) - hi[0] <= r) & (lo[0] - load(g.hi[0]) <= r) &
+                           (load(g.lo[1]) - hi[1] <= r) & (lo[1] - load(g.hi[1]) <= r) &
+                           (load(g.lo[2]) - hi[2] <= r) & (lo[2] - load(g.hi[2]) <= r);
+    return lanes & simd4::mask_bits(pass);
+  }
+};
+#endif
+
 // The box mode: the query's own box (segment p0-p1, or the user box lo-hi with r = 0) within r
 // of b in every axis, as box_gap_within decides it: symmetric, so an EE pair needs it one way
 // only, and exact for boxes (r = 0).
@@ -112,10 +134,7 @@ struct BoxShape {
 #if defined(__CUDACC__)
     return overlaps_each(*this, g, lanes);
 #else
-    using simd4::load;
-    const simd4::M4 pass = (load(g.lo[0]) - hi.x <= r) & (lo.x - load(g.hi[0]) <= r) & (load(g.lo[1]) - hi.y <= r) &
-                           (lo.y - load(g.hi[1]) <= r) & (load(g.lo[2]) - hi.z <= r) & (lo.z - load(g.hi[2]) <= r);
-    return lanes & simd4::mask_bits(pass);
+    return BoxLanes::of(lo, hi, r).overlaps(g, lanes);
 #endif
   }
 };
@@ -135,6 +154,40 @@ MINKQ_HD constexpr bool is_box_shape() {
   return IsBoxShape<Shape>::value;
 }
 
+// What a leaf scan tests a leaf group with: group_test(shape).overlaps_group(g, lanes), which
+// is shape.overlaps_group(g, lanes). On the host, for the library's shapes (those with a
+// box_test()), it holds the shape's box test with the query broadcast (BoxLanes) and runs the
+// shape's finer_group on what passes; CUDA code, and other shapes, test with the shape itself.
+#if defined(__CUDACC__)
+template <class Shape>
+MINKQ_HD const Shape& group_test(const Shape& shape) {
+  return shape;
+}
+#else
+template <class Shape>
+struct GroupTest {
+  BoxLanes box;
+  const Shape& shape;
+  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
+    const unsigned hits = box.overlaps(g, lanes);
+    if constexpr (is_box_shape<Shape>()) return hits; else return shape.finer_group(g, hits);
+  }
+};
+namespace shape_contract {
+template <class S>
+using BoxTest = decltype(std::declval<const S&>().box_test());
+}  // namespace shape_contract
+template <class Shape>
+decltype(auto) group_test(const Shape& shape) {
+  if constexpr (is_detected<shape_contract::BoxTest, Shape>) {
+    const BoxShape& b = shape.box_test();
+    return GroupTest<Shape>{BoxLanes::of(b.lo, b.hi, b.r), shape};
+  } else {
+    return (shape);
+  }
+}
+#endif
+
 // What a finer mode's shape (Shape) derives from its two tests: box_test(), its BoxShape, and
 // finer(b) with, on the host, finer_group(g, lanes), the same on the lanes asked for. On the
 // host a leaf group gets the box test and the finer test four boxes at once; CUDA code tests
@@ -147,7 +200,7 @@ struct BoxThenFiner {
 #if defined(__CUDACC__)
     return overlaps_each(shape(), g, lanes);
 #else
-    return shape().finer_group(g, shape().box_test().overlaps_group(g, lanes));
+    return group_test(shape()).overlaps_group(g, lanes);
 #endif
   }
 
@@ -260,5 +313,16 @@ struct CapsuleExactShape : BoxThenFiner<CapsuleExactShape> {
   }
 #endif
 };
+
+#if !defined(__CUDACC__)
+// Every mode's leaf scan broadcasts its query once per range (group_test's BoxLanes path).
+static_assert(std::is_same<decltype(group_test(std::declval<const BoxShape&>())), GroupTest<BoxShape>>::value &&
+                  std::is_same<decltype(group_test(std::declval<const SphereShape&>())), GroupTest<SphereShape>>::value &&
+                  std::is_same<decltype(group_test(std::declval<const CapsuleRayShape&>())),
+                               GroupTest<CapsuleRayShape>>::value &&
+                  std::is_same<decltype(group_test(std::declval<const CapsuleExactShape&>())),
+                               GroupTest<CapsuleExactShape>>::value,
+              "a mode's leaf scan lost its broadcast box test");
+#endif
 
 }  // namespace minkq

@@ -77,18 +77,25 @@ struct WorkContract {
 };
 
 // Leaf positions max(first, after + 1)..last, a group of four at a time: on_hits(base, hits,
-// group) for each group whose boxes pass overlaps in some lane (four at once: overlaps_group),
-// hits holding bit k for position base + k.
+// group) for each group whose boxes pass overlaps in some lane (four at once: overlaps_group,
+// through group_test), hits holding bit k for position base + k. Only the first and the last
+// group of the range ask for fewer than four lanes.
 template <class Shape, class OnHits, class Work>
 MINKQ_HD void scan_leaves(const BoxGroup* leaf_groups, const Shape& shape, int32_t first, int32_t last, int32_t after,
                           OnHits& on_hits, Work& work) {
-  for (int64_t p = first > after ? first : after + 1; p <= last; p = (p | 3) + 1) {
-    const int64_t base = p & ~int64_t(3);
-    const int from = int(p - base), to = last - base < 3 ? int(last - base) : 3;
+  const int64_t start = first > after ? first : int64_t(after) + 1;
+  if (start > last) return;
+  const auto& test = group_test(shape);
+  const int64_t last_base = int64_t(last) & ~int64_t(3);
+  int64_t base = start & ~int64_t(3);
+  unsigned lanes = (0xfu << (start - base)) & 0xfu;
+  for (;; base += 4, lanes = 0xfu) {
+    if (base == last_base) lanes &= 0xfu >> (3 - (last - base));
     const BoxGroup& group = leaf_groups[base >> 2];
-    const unsigned hits = shape.overlaps_group(group, (2u << to) - (1u << from));  // lanes from..to
-    work.test_nodes(unsigned(to - from + 1));
+    const unsigned hits = test.overlaps_group(group, lanes);
+    work.test_nodes(unsigned(popcount(lanes)));
     if (hits != 0) on_hits(base, hits, group);
+    if (base == last_base) return;
   }
 }
 
