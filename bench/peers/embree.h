@@ -105,10 +105,5 @@ class EmbreeBoxes {
 // second into out, sorted when asked. Not reentrant (the per-thread buffers are kept).
 void embree_collide(const EmbreeBoxes& query, const EmbreeBoxes& tree, std::vector<uint64_t>& out,
                     bool drop_incident = false, bool sorted = true);
-inline std::vector<uint64_t> embree_collide(const EmbreeBoxes& query, const EmbreeBoxes& tree) {
-  std::vector<uint64_t> out;
-  embree_collide(query, tree, out);
-  return out;
-}
 
 }  // namespace minkq::bench

@@ -133,17 +133,19 @@ std::string cloth_rows(const SuiteRun& run, int subdivisions, bool& ok) {
     std::sort(cat_vt.begin(), cat_vt.end());
     std::sort(cat_ee.begin(), cat_ee.end());
   };
-  Pairs em_vt, em_ee;
+  Pairs em_vt, em_ee, reverse;
   auto embree_step = [&](EmbreeBoxes& cv_s, EmbreeBoxes& ct_s, EmbreeBoxes& ce_s) {
     cv_s.set(s.frames[frame], {}, 1, s.r, Side::query);
     ct_s.set(s.frames[frame], s.cloth.tris, 3, s.r, Side::tree);
     ce_s.set(s.frames[frame], s.cloth.edges, 2, s.r, Side::query);
-    em_vt = embree_collide(cv_s, body_triangles);
-    const Pairs reverse = shifted(embree_collide(body_vertices, ct_s), cv, 0);
+    embree_collide(cv_s, body_triangles, em_vt, false, false);  // shifted() sorts
+    embree_collide(body_vertices, ct_s, reverse, false, false);
     em_vt = shifted(em_vt, 0, ct);
+    reverse = shifted(reverse, cv, 0);
     em_vt.insert(em_vt.end(), reverse.begin(), reverse.end());
     std::sort(em_vt.begin(), em_vt.end());
-    em_ee = shifted(embree_collide(ce_s, body_edges), 0, ce);
+    embree_collide(ce_s, body_edges, em_ee, false, false);
+    em_ee = shifted(em_ee, 0, ce);
   };
   EmbreeBoxes refit_v(true), refit_t(true), refit_e(true), build_v(false), build_t(false), build_e(false);
   std::string out;
