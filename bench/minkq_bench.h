@@ -97,6 +97,7 @@ struct Report {
   std::vector<SceneInfo> scenes;
   std::vector<std::string> skipped;
   uint64_t false_negatives = 0;
+  uint64_t failed_checks = 0;  // pair sets that must be equal and are not (rtcCollide's against minkq's)
 };
 
 // One case of a suite: a scene, at its own radius or another, and what to measure of it.
@@ -124,6 +125,7 @@ std::string targets(const Report& rep, const Options& opt, const std::string& ma
 std::string memory_table(const Report& rep, const Options& opt, const std::string& machine);
 std::string sweep_table(const Report& rep);
 std::string work_table(const Report& rep, const std::string& suite);
+std::string collide_table(const Report& rep, const Options& opt, const std::string& machine);
 std::string rows_csv(const Report& rep);
 std::string steps_csv(const Report& rep);
 

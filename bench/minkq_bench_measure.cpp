@@ -1,8 +1,9 @@
 // minkq_bench's measurement of one scene (run_scene): the reference oracle once per frame, build
 // and refit on every backend and Embree's, every mode's VT and EE queries timed round by round
-// beside Embree's and checked against the oracle, and the narrow phase's cost per candidate; with
-// the helpers only it uses: the memory layout arithmetic (layout_bytes), the narrow-phase
-// measurement and the frame export for warp_baseline.py (see minkq_bench.h for the other parts).
+// beside Embree's (point query; rtcCollide, box mode, and the whole step) and checked against the
+// oracle, and the narrow phase's cost per candidate; with the helpers only it uses: the memory
+// layout arithmetic (layout_bytes), the narrow-phase measurement and the frame export for
+// warp_baseline.py (see minkq_bench.h for the other parts).
 #include <malloc.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/blocked_range.h>
@@ -160,6 +161,8 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
     std::function<PairSet()> pairs;
     std::vector<double> times;
     std::function<minkq_query_stats()> work;  // minkq only: an untimed run with MINKQ_QUERY_STATS
+    std::string kind = "";  // mode-less contestants: "VT" (the default), "EE", or "step" (a StepRow)
+    std::string mode_name = "point_query+exact_leaf";
   };
   std::vector<int32_t> box_vt, box_ee;  // box candidates of the last frame (cpu)
   std::vector<Device> devices;
@@ -194,6 +197,30 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
                               [&] { em.reset(); });
     if (cfg.steps) rep.steps.push_back({cfg.suite, label, "embree", "build", info.triangles, 0, tb, load_average()});
   }
+  // Embree's rtcCollide (peers/embree.h) for minkq's box-mode sets: the vertices grown by r against
+  // the triangles (VT), the edges against themselves (EE), incident pairs dropped in the callback;
+  // built at frame 0, refit after. The whole step (refit + VT + EE, pairs stored) of it and of
+  // minkq's cpu box mode are contestants too.
+  struct Collide {
+    EmbreeBoxes vertices{true}, triangles{true}, edges{true};
+  };
+  std::unique_ptr<Collide> ec;
+  std::vector<uint64_t> ec_vt, ec_ee;
+  const size_t cpu = size_t(std::find(opt.backends.begin(), opt.backends.end(), "cpu") - opt.backends.begin());
+  const bool with_collide = with_embree && cpu < opt.backends.size();
+  auto collide_set = [&](Collide& c, const std::vector<float>& xyz) {
+    c.vertices.set(xyz, {}, 1, r, EmbreeBoxes::Side::query);
+    c.triangles.set(xyz, sc.mesh.tris, 3, r, EmbreeBoxes::Side::tree);
+    c.edges.set(xyz, sc.mesh.edges, 2, r, EmbreeBoxes::Side::self);
+  };
+  auto collide_vt = [&] { embree_collide(ec->vertices, ec->triangles, ec_vt, true, false); };
+  auto collide_ee = [&] { embree_collide(ec->edges, ec->edges, ec_ee, true, false); };
+  if (with_collide) {
+    const Timing tb = measure(cfg.warmup, cfg.repeats, [&] { ec = std::make_unique<Collide>(), collide_set(*ec, sc.frames[0]); },
+                              [&] { ec.reset(); });
+    if (cfg.steps) rep.steps.push_back({cfg.suite, label, "embree_collide", "build", info.triangles, 0, tb, load_average()});
+  }
+  Result step_vt = new_result(), step_ee = new_result();
 
   for (size_t k = 0; k < sc.frames.size(); ++k) {
     if (k > 0) {
@@ -206,6 +233,10 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
       if (with_embree) {
         const Timing tr = measure(cfg.warmup, cfg.repeats, [&] { em->refit(sc.frames[k]); });
         if (cfg.steps) rep.steps.push_back({cfg.suite, label, "embree", "refit", info.triangles, int(k), tr, load_average()});
+      }
+      if (with_collide) {
+        const Timing tr = measure(cfg.warmup, cfg.repeats, [&] { collide_set(*ec, sc.frames[k]); });
+        if (cfg.steps) rep.steps.push_back({cfg.suite, label, "embree_collide", "refit", info.triangles, int(k), tr, load_average()});
       }
     }
     std::vector<Contestant> cs;
@@ -229,6 +260,21 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
     if (with_embree)
       cs.push_back({"embree", nullptr, [&] { em->query(r, embree_pairs); },
                     [&] { return to_set(embree_pairs.data(), embree_pairs.size() / 2); }, {}, {}});
+    auto sorted = [](PairSet p) { return std::sort(p.begin(), p.end()), p; };
+    if (with_collide) {
+      const std::vector<float>& xyz = sc.frames[k];
+      minkq_scene* scene = scenes[cpu].get();
+      cs.push_back({"embree_collide", nullptr, collide_vt, [&] { return sorted(ec_vt); }, {}, {}, "VT", "box"});
+      cs.push_back({"embree_collide", nullptr, collide_ee, [&] { return sorted(ec_ee); }, {}, {}, "EE", "box"});
+      cs.push_back({"cpu", nullptr, [&, scene] {
+                      check(minkq_scene_refit(scene, {xyz.data(), 12, xyz.size() / 3, MINKQ_MEMORY_HOST}), "minkq_scene_refit");
+                      for (auto [kind, res] : {std::pair{MINKQ_QUERY_VT, step_vt.get()}, std::pair{MINKQ_QUERY_EE, step_ee.get()}}) {
+                        const minkq_query_desc q{kind, MINKQ_MODE_BOX, 0, r};
+                        check(minkq_scene_query_result(scene, &q, res), "minkq_scene_query_result");
+                      }
+                    }, {}, {}, {}, "step"});
+      cs.push_back({"embree_collide", nullptr, [&] { collide_set(*ec, xyz), collide_vt(), collide_ee(); }, {}, {}, {}, "step"});
+    }
     for (int w = 0; w < cfg.warmup; ++w)
       for (auto& c : cs) c.run();
     for (int round = 0; round < cfg.repeats; ++round)
@@ -239,25 +285,36 @@ void run_scene(const SceneFrames& sc, const CaseConfig& cfg, const Options& opt,
       }
     if (cfg.warmup == 0 && cfg.repeats == 0)
       for (auto& c : cs) c.run();
-    PairSet leaf_vt;  // minkq's cpu leaf_exact VT set, for the Embree comparison
+    PairSet leaf_vt;        // minkq's cpu leaf_exact VT set, for the Embree comparison
+    PairSet cpu_box[2];     // minkq's cpu box-mode VT and EE sets, for rtcCollide's
     for (auto& c : cs) {
       std::sort(c.times.begin(), c.times.end());
       Timing t;
       t.repeats = int(c.times.size());
       t.min = c.times.front(), t.max = c.times.back();
       t.median = t.repeats % 2 ? c.times[size_t(t.repeats) / 2] : 0.5 * (c.times[size_t(t.repeats) / 2 - 1] + c.times[size_t(t.repeats) / 2]);
+      if (c.kind == "step") {
+        if (cfg.steps) rep.steps.push_back({cfg.suite, label, c.backend, "step", info.triangles, int(k), t, load_average()});
+        continue;
+      }
       const PairSet got = c.pairs();
-      const bool vt = !c.mode || c.mode->kind == MINKQ_QUERY_VT;
+      const bool vt = c.mode ? c.mode->kind == MINKQ_QUERY_VT : c.kind != "EE";
       const PairSet& truth = vt ? vt_truth[k] : ee_truth[k];
       QueryRow row;
       row.suite = cfg.suite, row.scene = label, row.backend = c.backend, row.kind = vt ? "VT" : "EE";
-      row.mode = c.mode ? c.mode->name : "point_query+exact_leaf";
+      row.mode = c.mode ? c.mode->name : c.mode_name;
       row.vertices = info.vertices, row.triangles = info.triangles, row.edges = info.edges;
       row.frame = int(k), row.factor = factor, row.r = r, row.t = t;
       row.candidates = got.size(), row.truth = truth.size(), row.fn = missing(truth, got), row.load = load_average();
       if (c.work) row.work = c.work();
       if (c.backend == "cpu" && c.mode && vt && (c.mode->flags & MINKQ_QUERY_LEAF_EXACT)) leaf_vt = got;
-      if (!c.mode && (!leaf_vt.empty() || got.empty())) row.diff_vs_leaf = int64_t(missing(leaf_vt, got) + missing(got, leaf_vt));
+      if (c.backend == "cpu" && c.mode && c.mode->mode == MINKQ_MODE_BOX && !c.mode->flags) cpu_box[vt ? 0 : 1] = got;
+      if (c.backend == "embree_collide" && got != cpu_box[vt ? 0 : 1]) {
+        std::fprintf(stderr, "FAIL: %s frame %zu rtcCollide %s: %zu pairs, minkq's cpu box mode %zu (%" PRIu64 " missing)\n",
+                     label.c_str(), k, row.kind.c_str(), got.size(), cpu_box[vt ? 0 : 1].size(), missing(cpu_box[vt ? 0 : 1], got));
+        ++rep.failed_checks;
+      }
+      if (c.backend == "embree" && (!leaf_vt.empty() || got.empty())) row.diff_vs_leaf = int64_t(missing(leaf_vt, got) + missing(got, leaf_vt));
       // The box candidates (box mode without the leaf test) feed the narrow-phase measurement.
       if (c.backend == "cpu" && c.mode && k + 1 == sc.frames.size() && c.mode->mode == MINKQ_MODE_BOX &&
           !(c.mode->flags & MINKQ_QUERY_LEAF_EXACT)) {

@@ -57,24 +57,33 @@ class EmbreeVT {
 };
 
 // Embree 3's rtcCollide (its tree against tree collision of two scenes, the broad phase of its
-// cloth tutorial) as the baseline for pairs between two meshes: each element set (a mesh's
-// vertices, triangles or edges) is a scene of one user geometry whose primitives' boxes are the
-// elements' boxes, the query side's grown by r (rounded outward); rtcCollide reports the pairs
-// whose boxes overlap, and its callback keeps those that pass minkq's own box test
-// (box_gap_within on the unexpanded box, predicates.h), so the set is exactly minkq's box-mode
-// set. Moved elements are refit (geometry build quality REFIT) or rebuilt (MEDIUM), as asked.
+// cloth tutorial) as the baseline for box-mode pairs: each element set (a mesh's vertices,
+// triangles or edges) is a scene of one user geometry whose primitives' boxes are the elements'
+// boxes, the query side's grown by r (rounded outward, box_gap_bound); rtcCollide reports the
+// pairs whose boxes overlap, and its callback keeps those that pass minkq's own box test
+// (box_gap_within on the unexpanded boxes, predicates.h) and share no vertex when asked, so the
+// set is exactly minkq's box-mode set. A scene collided with itself (EE) has every box grown by
+// r/2: two such boxes overlap whenever the test can pass. Embree 3.13 reports each pair of a
+// scene with itself both ways (never an element with itself); the callback keeps (lower, higher),
+// minkq's EE order. Moved elements are refit (geometry build quality REFIT, scene LOW) or
+// rebuilt (MEDIUM).
 class EmbreeBoxes {
  public:
+  enum class Side { query, tree, self };  // grown by r, not grown, grown by r/2
   // An empty scene on the shared Embree device; `refit`: moves refit its tree, else rebuild it.
   explicit EmbreeBoxes(bool refit);
   ~EmbreeBoxes();
   EmbreeBoxes(const EmbreeBoxes&) = delete;
   EmbreeBoxes& operator=(const EmbreeBoxes&) = delete;
 
-  // The elements' boxes (same count after the first call) and the radius they are grown by for
-  // Embree (0 for the tree side); commits the scene.
-  void set(std::vector<Box> boxes, float r);
+  // The boxes of elements of `corners` vertices each (1: the vertices, `elements` unused; 2:
+  // edges; 3: triangles) at positions xyz, as the library's trees box them (elements.h), computed
+  // with TBB; the same count after the first call, `elements` kept by reference (the incidence
+  // filter reads it). Commits the scene. r: the box test's radius.
+  void set(const std::vector<float>& xyz, const std::vector<int32_t>& elements, int corners, float r, Side side);
   const std::vector<Box>& boxes() const { return boxes_; }
+  const int32_t* elements() const { return elements_; }  // null for vertices
+  int corners() const { return corners_; }
   float radius() const { return r_; }
   RTCSceneTy* scene() const { return scene_; }
   static RTCDeviceTy* device();
@@ -83,13 +92,18 @@ class EmbreeBoxes {
   static void bounds(const ::RTCBoundsFunctionArguments* args);
   bool refit_;
   std::vector<Box> boxes_;
-  float r_ = 0.0f;
+  const int32_t* elements_ = nullptr;
+  int corners_ = 1;
+  float r_ = 0.0f, grow_ = 0.0f;
   RTCSceneTy* scene_ = nullptr;
   RTCGeometryTy* geometry_ = nullptr;
 };
 
 // Every (query element, tree element) whose boxes are within the query's radius (minkq's box
-// test), through rtcCollide(query, tree); pairs packed as first << 32 | second, sorted.
-std::vector<uint64_t> embree_collide(const EmbreeBoxes& query, const EmbreeBoxes& tree);
+// test), through rtcCollide(query, tree), pairs sharing a vertex dropped when drop_incident; a
+// scene with itself: each unordered pair once, (lower, higher). Pairs packed as first << 32 |
+// second into out, sorted when asked. Not reentrant (the per-thread buffers are kept).
+void embree_collide(const EmbreeBoxes& query, const EmbreeBoxes& tree, std::vector<uint64_t>& out,
+                    bool drop_incident = false, bool sorted = true);
 
 }  // namespace minkq::bench

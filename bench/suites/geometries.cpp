@@ -75,20 +75,6 @@ Scene create_geometries(minkq_device* device, const std::vector<minkq_geometry_d
   return Scene(scene);
 }
 
-// The boxes of a mesh's vertices (kind 0), triangles (1) or edges (2) at positions xyz, as the
-// library's trees box them (elements.h).
-std::vector<Box> element_boxes(const ref::Mesh& mesh, const std::vector<float>& xyz, int kind) {
-  const auto* v = reinterpret_cast<const Vec3*>(xyz.data());
-  const size_t n = kind == 0 ? xyz.size() / 3 : kind == 1 ? mesh.triangle_count() : mesh.edge_count();
-  std::vector<Box> boxes(n);
-  for (size_t i = 0; i < n; ++i) {
-    if (kind == 0) boxes[i] = PointBoxes{v}(int32_t(i));
-    if (kind == 1) boxes[i] = TriangleBoxes{v, reinterpret_cast<const Triangle*>(mesh.tris.data())}(int32_t(i));
-    if (kind == 2) boxes[i] = EdgeBoxes{v, reinterpret_cast<const Edge*>(mesh.edges.data())}(int32_t(i));
-  }
-  return boxes;
-}
-
 Pairs shifted(const Pairs& pairs, uint64_t first, uint64_t second, bool swap = false) {
   Pairs out;
   for (uint64_t p : pairs) {
@@ -114,9 +100,10 @@ std::string cloth_rows(const SuiteRun& run, int subdivisions, bool& ok) {
   Scene one = create_scene(run.device, both.xyz, both.tris, MINKQ_SCENE_VT | MINKQ_SCENE_EE);
   // Embree: the body's scenes once, the cloth's per step.
   EmbreeBoxes body_vertices(false), body_triangles(false), body_edges(false);
-  body_vertices.set(element_boxes(s.body, s.body.xyz, 0), s.r);
-  body_triangles.set(element_boxes(s.body, s.body.xyz, 1), 0.0f);
-  body_edges.set(element_boxes(s.body, s.body.xyz, 2), 0.0f);
+  using Side = EmbreeBoxes::Side;
+  body_vertices.set(s.body.xyz, {}, 1, s.r, Side::query);
+  body_triangles.set(s.body.xyz, s.body.tris, 3, s.r, Side::tree);
+  body_edges.set(s.body.xyz, s.body.edges, 2, s.r, Side::tree);
   Result vt = new_result(), ee = new_result();
   std::vector<float> all = both.xyz;
   int frame = 0;
@@ -146,17 +133,19 @@ std::string cloth_rows(const SuiteRun& run, int subdivisions, bool& ok) {
     std::sort(cat_vt.begin(), cat_vt.end());
     std::sort(cat_ee.begin(), cat_ee.end());
   };
-  Pairs em_vt, em_ee;
+  Pairs em_vt, em_ee, reverse;
   auto embree_step = [&](EmbreeBoxes& cv_s, EmbreeBoxes& ct_s, EmbreeBoxes& ce_s) {
-    cv_s.set(element_boxes(s.cloth, s.frames[frame], 0), s.r);
-    ct_s.set(element_boxes(s.cloth, s.frames[frame], 1), 0.0f);
-    ce_s.set(element_boxes(s.cloth, s.frames[frame], 2), s.r);
-    em_vt = embree_collide(cv_s, body_triangles);
-    const Pairs reverse = shifted(embree_collide(body_vertices, ct_s), cv, 0);
+    cv_s.set(s.frames[frame], {}, 1, s.r, Side::query);
+    ct_s.set(s.frames[frame], s.cloth.tris, 3, s.r, Side::tree);
+    ce_s.set(s.frames[frame], s.cloth.edges, 2, s.r, Side::query);
+    embree_collide(cv_s, body_triangles, em_vt, false, false);  // shifted() sorts
+    embree_collide(body_vertices, ct_s, reverse, false, false);
     em_vt = shifted(em_vt, 0, ct);
+    reverse = shifted(reverse, cv, 0);
     em_vt.insert(em_vt.end(), reverse.begin(), reverse.end());
     std::sort(em_vt.begin(), em_vt.end());
-    em_ee = shifted(embree_collide(ce_s, body_edges), 0, ce);
+    embree_collide(ce_s, body_edges, em_ee, false, false);
+    em_ee = shifted(em_ee, 0, ce);
   };
   EmbreeBoxes refit_v(true), refit_t(true), refit_e(true), build_v(false), build_t(false), build_e(false);
   std::string out;
