@@ -29,7 +29,7 @@ class BVH(Closable, _SizedQueries):
     >>> boxes = np.array([[[0, 0, 0], [1, 1, 1]], [[2, 2, 2], [3, 3, 3]]], np.float32)
     >>> bvh = minkq.BVH(boxes)
     >>> centres = np.array([[1.5, 1.5, 1.5], [0.5, 0.5, 0.5]], np.float32)
-    >>> bvh.query("sphere", centres, 0.5).tolist()  # mode="box": the spheres' boxes
+    >>> bvh.query("sphere", centres, 0.5, canonical=True).tolist()  # mode="box": the spheres' boxes
     [[0, 0], [0, 1], [1, 0]]
     >>> bvh.query("sphere", centres, 0.5, mode="sphere").tolist()  # the spheres themselves
     [[1, 0]]
