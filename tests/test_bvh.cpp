@@ -9,6 +9,7 @@
 #include <functional>
 
 #include "store.h"
+#include "cpu/passes.h"
 #include "cpu/radix_sort.h"
 #include "cpu/tree.h"
 #include "karras_tree.h"
@@ -319,6 +320,30 @@ TEST(Bvh, radix_sort_of_pairs_is_a_stable_sort_by_key) {
           ASSERT_EQ(keys[size_t(i)], expected[size_t(i)].first) << "n " << n << " bits " << bits << " at " << i;
           ASSERT_EQ(values[size_t(i)], expected[size_t(i)].second) << "n " << n << " bits " << bits << " at " << i;
         }
+      }
+    }
+  }
+}
+
+// Canonical order on the CPU (cpu::sort_pairs): lexicographic, for counts on either side of
+// the one-thread threshold, ids from small to the largest an int32 holds, and as many pairs per
+// first id as a dense query gives.
+TEST(Bvh, canonical_sort_of_pairs_is_lexicographic) {
+  test::Random rng(test::fresh_seed());
+  for (const int64_t n : {0, 1, 2, 4095, 4096, 4097, 70001}) {
+    for (const int32_t largest : {1, 300, 1 << 20, INT32_MAX}) {
+      std::vector<std::pair<int32_t, int32_t>> expected(static_cast<size_t>(n));
+      for (auto& [first, second] : expected) first = rng.integer(0, largest), second = rng.integer(0, largest);
+      std::sort(expected.begin(), expected.end());
+      expected.erase(std::unique(expected.begin(), expected.end()), expected.end());  // pairs are distinct
+      std::vector<std::pair<int32_t, int32_t>> shuffled = expected;
+      std::shuffle(shuffled.begin(), shuffled.end(), rng.engine);
+      std::vector<int32_t> pairs;
+      for (const auto& [first, second] : shuffled) pairs.insert(pairs.end(), {first, second});
+      cpu::sort_pairs(pairs.data(), int64_t(shuffled.size()));
+      for (size_t i = 0; i < expected.size(); ++i) {
+        ASSERT_EQ(pairs[2 * i], expected[i].first) << "n " << n << " largest " << largest << " at " << i;
+        ASSERT_EQ(pairs[2 * i + 1], expected[i].second) << "n " << n << " largest " << largest << " at " << i;
       }
     }
   }

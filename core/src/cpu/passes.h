@@ -2,16 +2,19 @@
 // blocks, the counterpart of cuda/passes.cuh's single kernel launch.
 #pragma once
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
 #include <cstring>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "backend.h"
+#include "cpu/radix_sort.h"
 #include "cpu/runtime.h"
 #include "minkq/leaf_filter.h"
 #include "minkq/packet.h"
@@ -60,6 +63,48 @@ void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
   run_queries(pass, begin, end, emit, work);
 }
 
+// Sorts n pairs (ids >= 0) lexicographically: each a key of first above second, as few bits as
+// the largest ids need, radix sorted (the values go along unused: every pair is a different
+// key); a few thousand on one thread, by comparison, which costs less than setting that up.
+inline void sort_pairs(int32_t* pairs, int64_t n) {
+  if (n < 4096) {
+    std::vector<uint64_t> keys(static_cast<size_t>(n));
+    for (int64_t i = 0; i < n; ++i) keys[size_t(i)] = pack_pair(pairs[2 * i], pairs[2 * i + 1]);
+    std::sort(keys.begin(), keys.end());
+    for (int64_t i = 0; i < n; ++i) {
+      const Pair pair = unpack_pair(keys[size_t(i)]);
+      pairs[2 * i] = pair.first;
+      pairs[2 * i + 1] = pair.second;
+    }
+    return;
+  }
+  using Range = tbb::blocked_range<int64_t>;
+  const auto widest = tbb::parallel_reduce(
+      Range(0, n, 4096), std::pair<uint32_t, uint32_t>{0, 0},
+      [&](const Range& range, std::pair<uint32_t, uint32_t> m) {
+        for (int64_t i = range.begin(); i != range.end(); ++i)
+          m = {m.first | uint32_t(pairs[2 * i]), m.second | uint32_t(pairs[2 * i + 1])};
+        return m;
+      },
+      [](std::pair<uint32_t, uint32_t> a, std::pair<uint32_t, uint32_t> b) {
+        return std::pair<uint32_t, uint32_t>{a.first | b.first, a.second | b.second};
+      });
+  const auto width = [](uint32_t bits) { return bits == 0 ? 0 : 32 - __builtin_clz(bits); };
+  const int second_bits = width(widest.second), bits = std::max(1, width(widest.first) + second_bits);
+  HostVector<uint64_t> keys(static_cast<size_t>(n));
+  HostVector<int32_t> unused(static_cast<size_t>(n));
+  parallel_for_each(n, [&](int64_t i) {
+    keys[i] = uint64_t(uint32_t(pairs[2 * i])) << second_bits | uint32_t(pairs[2 * i + 1]);
+    unused[i] = 0;
+  });
+  radix_sort_pairs(keys, unused, bits);
+  const uint64_t second_mask = (uint64_t(1) << second_bits) - 1;
+  parallel_for_each(n, [&](int64_t i) {
+    pairs[2 * i] = int32_t(keys[i] >> second_bits);
+    pairs[2 * i + 1] = int32_t(keys[i] & second_mask);
+  });
+}
+
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
 // total. If it exceeds the capacity, a blocking query's output gets nothing and an asynchronous
 // one's (out.count set) the first `capacity` pairs, unsorted.
@@ -76,16 +121,7 @@ inline uint64_t write_pass(const BlockOut* parts, int32_t blocks, const PairOutp
     room -= words;
   }
   if (total > out.capacity) return total;
-  if (out.canonical) {
-    std::vector<uint64_t> packed(total);
-    parallel_for_each(int64_t(total), [&](int64_t i) { packed[i] = pack_pair(out.pairs[2 * i], out.pairs[2 * i + 1]); });
-    tbb::parallel_sort(packed.begin(), packed.end());
-    parallel_for_each(int64_t(total), [&](int64_t i) {
-      const Pair pair = unpack_pair(packed[i]);
-      out.pairs[2 * i] = pair.first;
-      out.pairs[2 * i + 1] = pair.second;
-    });
-  }
+  if (out.canonical) sort_pairs(out.pairs, int64_t(total));
   return total;
 }
 
