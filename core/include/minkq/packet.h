@@ -114,6 +114,11 @@ void run_packet(const BvhView& bvh, const Queries& queries, int32_t first, int c
   static_assert(QuerySourceContract<Queries, Shape>::value, "not a query source (query_sources.h)");
   static_assert(EmitContract<Emit>::value, "not an emitter");
   NoWork work;
+  // A tree of one leaf range has no node for the members to share: each walks alone.
+  if (bvh.num_prims <= kLeafSize) {
+    for (int j = 0; j < count; ++j) run_query<Shape>(bvh, queries, first + j, emit, work);
+    return;
+  }
   QueryTarget targets[kPacket];
   for (int j = 0; j < kPacket; ++j) targets[j] = queries.target(first + (j < count ? j : 0));
   const Shape shapes[kPacket] = {Shape::from(queries.geometry(targets[0])), Shape::from(queries.geometry(targets[1])),
