@@ -24,11 +24,41 @@ namespace minkq::cpu {
 // Queries per block: each block runs its queries in order into its own buffer.
 constexpr int32_t kBlock = 256;
 
-// One block's output: its pairs in query order, or only their number where the output has no
-// room for any (capacity 0: a count-only query, or a count to size the caller's buffer).
+// One block's output: its pairs in the order its queries found them (the first `words` int32 of
+// `pairs`), or only their number where the output has no room for any (capacity 0: a count-only
+// query, or a count to size the caller's buffer).
 struct BlockOut {
-  std::vector<int32_t> pairs;
+  HostVector<int32_t> pairs;
+  size_t words = 0;
   uint64_t counted = 0;
+};
+
+// The emitter of a block's pairs: a cursor into its buffer, whose room doubles when full (the
+// room is always a whole number of pairs).
+class BlockWriter {
+ public:
+  explicit BlockWriter(BlockOut& part)
+      : part_(part), cursor_(part.pairs.data() + part.words), end_(part.pairs.data() + part.pairs.size()) {}
+  ~BlockWriter() { part_.words = size_t(cursor_ - part_.pairs.data()); }
+  BlockWriter(const BlockWriter&) = delete;
+  BlockWriter& operator=(const BlockWriter&) = delete;
+  void operator()(int32_t first, int32_t second) {
+    if (cursor_ == end_) grow();
+    cursor_[0] = first;
+    cursor_[1] = second;
+    cursor_ += 2;
+  }
+
+ private:
+  void grow() {
+    const size_t words = size_t(cursor_ - part_.pairs.data());
+    part_.pairs.resize(std::max<size_t>(512, 2 * part_.pairs.size()));
+    cursor_ = part_.pairs.data() + words;
+    end_ = part_.pairs.data() + part_.pairs.size();
+  }
+  BlockOut& part_;
+  int32_t* cursor_;
+  int32_t* end_;
 };
 
 // Whether a pass walks its queries in packets (packet.h): QueryPass and JobPass (one packet per
@@ -56,10 +86,7 @@ void run_block(const Pass& pass, int32_t block, BlockOut& part, Work& work) {
     part.counted += count.counted;
     return;
   }
-  auto emit = [&part](int32_t first, int32_t second) {
-    part.pairs.push_back(first);
-    part.pairs.push_back(second);
-  };
+  BlockWriter emit(part);
   run_queries(pass, begin, end, emit, work);
 }
 
@@ -110,12 +137,12 @@ inline void sort_pairs(int32_t* pairs, int64_t n) {
 // one's (out.count set) the first `capacity` pairs, unsorted.
 inline uint64_t write_pass(const BlockOut* parts, int32_t blocks, const PairOutput& out) {
   uint64_t total = 0;
-  for (int32_t b = 0; b < blocks; ++b) total += parts[b].pairs.size() / 2 + parts[b].counted;
+  for (int32_t b = 0; b < blocks; ++b) total += parts[b].words / 2 + parts[b].counted;
   if (total > out.capacity && !out.count) return total;
   int32_t* cursor = out.pairs;
   size_t room = 2 * size_t(std::min<uint64_t>(total, out.capacity));  // int32 words
   for (int32_t b = 0; b < blocks && room > 0; ++b) {
-    const size_t words = std::min(parts[b].pairs.size(), room);
+    const size_t words = std::min(parts[b].words, room);
     if (words) std::memcpy(cursor, parts[b].pairs.data(), words * sizeof(int32_t));
     cursor += words;
     room -= words;
