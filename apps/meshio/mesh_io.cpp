@@ -57,6 +57,11 @@ void set_float64(Mesh& m, std::vector<double> xyz64) {
 // ---- Loaders -------------------------------------------------------------------------------
 namespace {
 
+// A polygon's triangles, fanned from its first vertex, appended to tris (PLY and OFF faces).
+void append_fan(std::vector<int32_t>& tris, const std::vector<int32_t>& poly) {
+  for (size_t k = 2; k < poly.size(); ++k) tris.insert(tris.end(), {poly[0], poly[k - 1], poly[k]});
+}
+
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
   throw std::runtime_error("load_mesh: " + path + ": " + what);
 }
@@ -236,7 +241,7 @@ Mesh load_ply(const std::string& path, std::string data, bool float64) {
           poly.push_back(int32_t(v));
         }
         if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index"))
-          for (size_t k = 2; k < poly.size(); ++k) m.tris.insert(m.tris.end(), {poly[0], poly[k - 1], poly[k]});  // fan
+          append_fan(m.tris, poly);
       }
       if (e.name == "vertex")
         for (int a = 0; a < 3; ++a) {
@@ -265,7 +270,7 @@ Mesh load_off(const std::string& path, const std::string& data, bool float64) {
     in >> k;
     std::vector<int32_t> poly(size_t(std::max(k, 0)));
     for (int32_t& v : poly) in >> v;
-    for (size_t j = 2; j < poly.size(); ++j) m.tris.insert(m.tris.end(), {poly[0], poly[j - 1], poly[j]});  // fan
+    append_fan(m.tris, poly);
   }
   if (!in) fail(path, "truncated OFF file");
   if (m.tris.empty()) fail(path, "no triangles");
