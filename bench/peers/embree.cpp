@@ -91,7 +91,7 @@ EmbreeVT::EmbreeVT(const std::vector<float>& xyz, const std::vector<int32_t>& tr
   scene_ = rtcNewScene(device_);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
   geometry_ = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-  rtcSetGeometryBuildQuality(geometry_, RTC_BUILD_QUALITY_REFIT);
+  rtcSetGeometryBuildQuality(geometry_, RTC_BUILD_QUALITY_MEDIUM);
   rtcSetSharedGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, xyz_.data(), 0,
                              3 * sizeof(float), xyz.size() / 3);
   rtcSetSharedGeometryBuffer(geometry_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, tris_.data(), 0,
@@ -108,13 +108,13 @@ EmbreeVT::~EmbreeVT() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-void EmbreeVT::refit(const std::vector<float>& xyz) {
-  if (xyz.size() + 1 != xyz_.size()) throw std::invalid_argument("embree refit: vertex count changed");
+void EmbreeVT::rebuild(const std::vector<float>& xyz) {
+  if (xyz.size() + 1 != xyz_.size()) throw std::invalid_argument("embree rebuild: vertex count changed");
   std::memcpy(xyz_.data(), xyz.data(), xyz.size() * sizeof(float));
   rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry(geometry_);
   rtcCommitScene(scene_);
-  check_device(device_, "refit");
+  check_device(device_, "rebuild");
 }
 
 uint64_t EmbreeVT::query(float r, std::vector<int32_t>& out) {

@@ -25,8 +25,10 @@ namespace minkq::bench {
 //    callback with an exact test: minkq's own leaf predicate (point_triangle_within from
 //    core/include/minkq/predicates.h, double precision with the stated 2^-20 S slack), so the
 //    pair set is the one minkq's leaf_exact query returns;
-//  - RTCPointQuery fields are set by name; scene build quality MEDIUM (HIGH's spatial splits may
-//    call back twice for one primitive); geometry quality REFIT so moved vertices refit;
+//  - RTCPointQuery fields are set by name; scene and geometry build quality MEDIUM (HIGH's
+//    spatial splits may call back twice for one primitive), so each frame's tree is a MEDIUM
+//    rebuild: Embree 3.13 refits only in a dynamic scene of LOW quality (EmbreeBoxes below),
+//    whose tree would cost its queries, and a query peer gets its best tree;
 //  - the vertex buffer carries one float of padding; after moving vertices the geometry and
 //    then the scene are committed.
 // Queries run over the vertices in blocks of 256 with TBB, each block into its own buffer (the
@@ -39,8 +41,8 @@ class EmbreeVT {
   EmbreeVT(const EmbreeVT&) = delete;
   EmbreeVT& operator=(const EmbreeVT&) = delete;
 
-  // New positions (same count); refits.
-  void refit(const std::vector<float>& xyz);
+  // New positions (same count); rebuilds the tree over them (a MEDIUM commit, see above).
+  void rebuild(const std::vector<float>& xyz);
   // Every (vertex, triangle) within r, the triangle's own vertices dropped; pairs appended in
   // (block, vertex) order into out (cleared first). Returns the pair count.
   uint64_t query(float r, std::vector<int32_t>& out);
