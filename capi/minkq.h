@@ -132,7 +132,7 @@ MINKQ_API minkq_status minkq_device_create(const char* spec, minkq_device** out_
 MINKQ_API void minkq_device_release(minkq_device* device);
 /* Returns the device's backend (MINKQ_BACKEND_CPU for NULL). */
 MINKQ_API minkq_backend minkq_device_backend(const minkq_device* device);
-/* Returns a description such as "cpu (8 threads)" or "cuda:0 (NVIDIA H100 80GB HBM3)", owned
+/* Returns a description such as "cpu (8 threads, avx2)" or "cuda:0 (NVIDIA H100 80GB HBM3)", owned
  * by the device and valid until it is released ("" for NULL). */
 MINKQ_API const char* minkq_device_name(const minkq_device* device);
 /* Returns the number of usable CUDA devices: 0 where minkq was built without CUDA or no GPU is

@@ -5,6 +5,7 @@
 #include <xxhash.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <string>
 
@@ -444,6 +445,31 @@ TEST(Devices, specs_versions_and_missing_cuda) {
   EXPECT_EQ(minkq_abi_version(), uint32_t(MINKQ_ABI_VERSION));
   EXPECT_EQ(minkq_version(), uint32_t(MINKQ_VERSION_MAJOR * 10000 + MINKQ_VERSION_MINOR * 100 + MINKQ_VERSION_PATCH));
   EXPECT_STREQ(minkq_status_name(MINKQ_ERROR_CAPACITY), "MINKQ_ERROR_CAPACITY");
+}
+
+// A CPU device names its instruction-set level: MINKQ_CPU_ISA's when set (tests/CMakeLists.txt
+// runs the C API suites at each level), and a word that is no level fails device creation
+// with a message naming the variable, the device left null.
+TEST(Devices, cpu_name_says_its_level_and_bad_levels_are_refused) {
+  const char* asked = std::getenv("MINKQ_CPU_ISA");
+  const std::string level = asked ? asked : "";
+  minkq_device* device = nullptr;
+  ASSERT_EQ(minkq_device_create("cpu", &device), MINKQ_SUCCESS) << message();
+  const std::string name = minkq_device_name(device);
+  minkq_device_release(device);
+  if (!level.empty()) {
+    EXPECT_EQ(name.substr(name.size() - level.size() - 3), ", " + level + ")") << name;
+  } else {
+    const bool known = name.find(", sse2)") != std::string::npos || name.find(", avx2)") != std::string::npos ||
+                       name.find(", avx512)") != std::string::npos;
+    EXPECT_TRUE(known) << name;
+  }
+  ASSERT_EQ(setenv("MINKQ_CPU_ISA", "sse3", 1), 0);
+  device = nullptr;
+  EXPECT_EQ(minkq_device_create("cpu", &device), MINKQ_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("MINKQ_CPU_ISA=sse3: expected one of sse2, avx2, avx512"), std::string::npos) << message();
+  EXPECT_EQ(device, nullptr);
+  if (asked) setenv("MINKQ_CPU_ISA", asked, 1); else unsetenv("MINKQ_CPU_ISA");
 }
 
 // A BVH over user boxes answers sphere, capsule and box queries; each set equals the node test

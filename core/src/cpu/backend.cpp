@@ -1,5 +1,6 @@
 // The CPU backend: the stores of store.h over the CPU executor (host vectors, CpuTree, the
-// TBB pass runner), and the backend's own input checks.
+// TBB pass runner), and the backend's own input checks. Compiled once per instruction-set level
+// (cpu/isa.h): a wider level's copy defines only its entry point, MINKQ_CPU_LEVEL_ENTRY.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
@@ -9,6 +10,7 @@
 #include <utility>
 
 #include "backend.h"
+#include "cpu/isa.h"
 #include "cpu/passes.h"
 #include "cpu/tree.h"
 #include "store.h"
@@ -183,7 +185,8 @@ class CpuExecutor {
 class CpuBackend final : public Backend {
  public:
   std::string name() const override {
-    return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads)";
+    return "cpu (" + std::to_string(tbb::this_task_arena::max_concurrency()) + " threads, " +
+           cpu::isa_name(cpu::kCompiledIsa) + ")";
   }
   bool is_cuda() const override { return false; }
   int64_t first_non_finite(const Strided& values, int floats) override {
@@ -205,6 +208,10 @@ class CpuBackend final : public Backend {
 
 }  // namespace
 
-std::unique_ptr<Backend> make_cpu_backend() { return std::make_unique<CpuBackend>(); }
+#if defined(MINKQ_CPU_LEVEL_ENTRY)
+extern "C" Backend* MINKQ_CPU_LEVEL_ENTRY() { return new CpuBackend(); }
+#else
+std::unique_ptr<Backend> cpu::make_baseline_backend() { return std::make_unique<CpuBackend>(); }
+#endif
 
 }  // namespace minkq

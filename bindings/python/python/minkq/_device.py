@@ -26,7 +26,7 @@ class Device:
 
     @property
     def name(self) -> str:
-        """A description such as ``"cpu (8 threads)"`` or ``"cuda:0 (NVIDIA H100 80GB HBM3)"``."""
+        """A description such as ``"cpu (8 threads, avx2)"`` or ``"cuda:0 (NVIDIA H100 80GB HBM3)"``."""
         return self._native.name
 
     @property

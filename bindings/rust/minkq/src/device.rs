@@ -142,7 +142,7 @@ impl Device {
         Device::new(&format!("cuda:{ordinal}"))
     }
 
-    /// A description such as `"cpu (8 threads)"` or `"cuda:0 (NVIDIA H100 80GB HBM3)"`.
+    /// A description such as `"cpu (8 threads, avx2)"` or `"cuda:0 (NVIDIA H100 80GB HBM3)"`.
     ///
     /// ```
     /// let device = minkq::Device::cpu()?;
