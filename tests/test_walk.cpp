@@ -151,7 +151,7 @@ struct Collect {
   }
 };
 
-// Packets of 1 to 4 members of one shape kind, random geometries (points and segments, radii
+// Packets of 1 to kPacket members (4, or 8 in the AVX2 build of this test) of one shape kind, random geometries (points and segments, radii
 // from 0 up, sometimes the same query twice) and bounds (-1, or a self-query's position, up to
 // past the last leaf): each member gets exactly its own traversal's hits, each once.
 template <class Shape>
@@ -175,7 +175,8 @@ void expect_packets_as_alone(test::Random& rng, const CpuTree& tree, int32_t n, 
       shapes[j] = j > 0 && rng.integer(0, 5) == 0 ? shapes[j - 1] : Shape::from({p0, p1, r});
     }
     std::vector<int64_t> got[kPacket];
-    Collect on_hits[kPacket] = {{&got[0]}, {&got[1]}, {&got[2]}, {&got[3]}};
+    Collect on_hits[kPacket];
+    for (int j = 0; j < kPacket; ++j) on_hits[j].out = &got[j];
     traverse_packet(tree.view(), shapes, bounds, (1u << count) - 1u, on_hits);
     for (int j = 0; j < kPacket; ++j) {
       std::vector<int64_t> want;

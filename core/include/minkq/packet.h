@@ -1,8 +1,8 @@
-// Query packets, the host's walk: up to four neighbouring queries of a batch (consecutive in
+// Query packets, the host's walk: up to kPacket neighbouring queries of a batch (consecutive in
 // the batch's order: Morton-ordered vertices, or a self-query's consecutive leaf positions)
-// walk the tree together, each node's child boxes tested against all four box tests at once
-// (one member per 4-float lane), so that a node that several members reach is read and
-// tested once for them. At a leaf range, each member whose box test passed the range's box
+// walk the tree together, each node's child boxes tested against all members' box tests at
+// once (one member per float lane: four at SSE2, eight in the backend's AVX2 copy, cpu/isa.h),
+// so that a node that several members reach is read and tested once for them. At a leaf range, each member whose box test passed the range's box
 // scans it as its own traversal would (visit_leaf_range, its own shape, bound and filter).
 //
 // The pairs are exactly those of traverse_groups for each member: a member enters a node when
@@ -12,20 +12,41 @@
 // C API leaves it unspecified). Host code only; CUDA threads walk alone (traversal.h).
 #pragma once
 
+#include <utility>
+
 #include "minkq/leaf_filter.h"
 
 #if !defined(__CUDACC__)
 namespace minkq {
 
-// Queries per packet: the lanes of simd4.
+// Queries per packet: the float lanes of the widest vector the compile has (AVX: 8, else 4).
+// The width names the inline namespace, so that code of both widths may meet in one program
+// (the baseline core beside a test compiled for AVX2) without their packets sharing a symbol.
+#if defined(__AVX__)
+inline namespace packets8 {
+constexpr int kPacket = 8;
+#else
+inline namespace packets4 {
 constexpr int kPacket = 4;
+#endif
+namespace packet_lanes {
+typedef float F __attribute__((vector_size(4 * kPacket)));
+typedef int32_t M __attribute__((vector_size(4 * kPacket)));  // -1 (true) or 0 per lane
+#if defined(__AVX__)
+inline F splat(float x) { return F{x, x, x, x, x, x, x, x}; }
+inline unsigned mask_bits(M m) { return unsigned(__builtin_ia32_movmskps256((F)m)); }  // each lane's sign
+#else
+inline F splat(float x) { return simd4::splat(x); }
+inline unsigned mask_bits(M m) { return simd4::mask_bits(m); }
+#endif
+}  // namespace packet_lanes
 
 // A packet's box tests, member j in lane j: box_gap_within(lo_j, hi_j, r_j, b) for one box b
 // against every member at once, the scalar test's subtractions and comparisons lane by lane
 // (b's faces broadcast), so each lane's verdict is the member's own.
 struct PacketBoxes {
-  simd4::F4 lo[3], hi[3], r;
-  simd4::M4 after;  // each member's bound (traverse_groups' `after`)
+  packet_lanes::F lo[3], hi[3], r;
+  packet_lanes::M after;  // each member's bound (traverse_groups' `after`)
 
   template <class Shape>
   static PacketBoxes of(const Shape (&shapes)[kPacket], const int32_t (&bounds)[kPacket]) {
@@ -43,14 +64,14 @@ struct PacketBoxes {
   }
   // The members whose box test accepts b, as bits.
   unsigned overlaps(const Box& b) const {
-    using simd4::splat;
-    const simd4::M4 pass = (splat(b.lo.x) - hi[0] <= r) & (lo[0] - splat(b.hi.x) <= r) &
+    using packet_lanes::splat;
+    const packet_lanes::M pass = (splat(b.lo.x) - hi[0] <= r) & (lo[0] - splat(b.hi.x) <= r) &
                            (splat(b.lo.y) - hi[1] <= r) & (lo[1] - splat(b.hi.y) <= r) &
                            (splat(b.lo.z) - hi[2] <= r) & (lo[2] - splat(b.hi.z) <= r);
-    return simd4::mask_bits(pass);
+    return packet_lanes::mask_bits(pass);
   }
   // The members with a leaf position after their bound at or before `last`.
-  unsigned reach(int32_t last) const { return simd4::mask_bits(after < last); }
+  unsigned reach(int32_t last) const { return packet_lanes::mask_bits(after < last); }
 };
 
 // traverse_groups for each member j of `live` (bits below kPacket), on_hits[j] taking its
@@ -107,30 +128,35 @@ void traverse_packet(const BvhView& bvh, const Shape (&shapes)[kPacket], const i
   }
 }
 
+// run_packet's members (all kPacket lanes: copies of the first past `count`) walking together.
+template <class Shape, class Queries, class Emit, size_t... J>
+void walk_packet(const BvhView& bvh, const Queries& queries, const QueryTarget (&targets)[kPacket], int count,
+                 Emit& emit, std::index_sequence<J...>) {
+  NoWork work;
+  const Shape shapes[kPacket] = {Shape::from(queries.geometry(targets[J]))...};
+  const int32_t bounds[kPacket] = {targets[J].after...};
+  using Filter = LeafFilter<Shape, Queries, Emit, NoWork>;
+  Filter filters[kPacket] = {Filter{queries, bvh.sorted_prims, targets[J], emit, work}...};
+  traverse_packet(bvh, shapes, bounds, (1u << count) - 1u, filters);
+}
+
 // Queries first .. first + count - 1 of the batch (count 1 to kPacket) as one packet: each
 // member's pairs are run_query's for it, without work counts.
 template <class Shape, class Queries, class Emit>
 void run_packet(const BvhView& bvh, const Queries& queries, int32_t first, int count, Emit& emit) {
   static_assert(QuerySourceContract<Queries, Shape>::value, "not a query source (query_sources.h)");
   static_assert(EmitContract<Emit>::value, "not an emitter");
-  NoWork work;
   // A tree of one leaf range has no node for the members to share: each walks alone.
   if (bvh.num_prims <= kLeafSize) {
+    NoWork work;
     for (int j = 0; j < count; ++j) run_query<Shape>(bvh, queries, first + j, emit, work);
     return;
   }
   QueryTarget targets[kPacket];
   for (int j = 0; j < kPacket; ++j) targets[j] = queries.target(first + (j < count ? j : 0));
-  const Shape shapes[kPacket] = {Shape::from(queries.geometry(targets[0])), Shape::from(queries.geometry(targets[1])),
-                                 Shape::from(queries.geometry(targets[2])), Shape::from(queries.geometry(targets[3]))};
-  const int32_t bounds[kPacket] = {targets[0].after, targets[1].after, targets[2].after, targets[3].after};
-  using Filter = LeafFilter<Shape, Queries, Emit, NoWork>;
-  Filter filters[kPacket] = {{queries, bvh.sorted_prims, targets[0], emit, work},
-                             {queries, bvh.sorted_prims, targets[1], emit, work},
-                             {queries, bvh.sorted_prims, targets[2], emit, work},
-                             {queries, bvh.sorted_prims, targets[3], emit, work}};
-  traverse_packet(bvh, shapes, bounds, (1u << count) - 1u, filters);
+  walk_packet<Shape>(bvh, queries, targets, count, emit, std::make_index_sequence<kPacket>());
 }
 
+}  // namespace packets4 / packets8
 }  // namespace minkq
 #endif
