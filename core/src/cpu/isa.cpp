@@ -98,21 +98,18 @@ Isa requested_isa() {
                                      "(this processor and build support " + levels_up_to(top) + ")");
 }
 
-std::unique_ptr<Backend> make_cpu_backend_at(Isa isa) {
-  if (int(isa) > int(detected_isa()))
-    fail(Status::kInvalidArgument, std::string("CPU level ") + isa_name(isa) + ": this processor and build support " +
-                                       levels_up_to(detected_isa()));
-#if defined(MINKQ_CPU_LEVEL_AVX512)
-  if (isa == Isa::kAvx512) return std::unique_ptr<Backend>(minkqcore_cpu_backend_avx512());
-#endif
-#if defined(MINKQ_CPU_LEVEL_AVX2)
-  if (isa == Isa::kAvx2) return std::unique_ptr<Backend>(minkqcore_cpu_backend_avx2());
-#endif
-  return make_baseline_backend();
-}
-
 }  // namespace cpu
 
-std::unique_ptr<Backend> make_cpu_backend() { return cpu::make_cpu_backend_at(cpu::requested_isa()); }
+// The level requested_isa() chose (never above the detected one).
+std::unique_ptr<Backend> make_cpu_backend() {
+  [[maybe_unused]] const cpu::Isa isa = cpu::requested_isa();  // unused in a baseline-only build
+#if defined(MINKQ_CPU_LEVEL_AVX512)
+  if (isa == cpu::Isa::kAvx512) return std::unique_ptr<Backend>(minkqcore_cpu_backend_avx512());
+#endif
+#if defined(MINKQ_CPU_LEVEL_AVX2)
+  if (isa == cpu::Isa::kAvx2) return std::unique_ptr<Backend>(minkqcore_cpu_backend_avx2());
+#endif
+  return cpu::make_baseline_backend();
+}
 
 }  // namespace minkq

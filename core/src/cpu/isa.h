@@ -1,8 +1,8 @@
 // The CPU backend's instruction-set levels. The backend (cpu/backend.cpp) is compiled once for
 // x86-64's baseline (SSE2) and, where the build can (core/CMakeLists.txt, MINKQ_CPU_LEVELS), once
 // more per wider level, each copy with its own name for its entry point and nothing else shared;
-// the first CPU device picks the widest level this processor, its operating system and this
-// build support, or MINKQ_CPU_ISA's. The copies are one source compiled with other flags (no
+// each CPU device (make_cpu_backend, isa.cpp) gets the widest level this processor, its
+// operating system and this build support, or MINKQ_CPU_ISA's. The copies are one source compiled with other flags (no
 // FMA contraction, the same float operations), so every level gives the same pairs in the same
 // order.
 #pragma once
@@ -41,8 +41,6 @@ Isa detected_isa();
 // it (kInvalidArgument, naming the variable and the levels this machine has).
 Isa requested_isa();
 
-// The backend compiled at `isa` (which this build has: detected_isa() or below).
-std::unique_ptr<Backend> make_cpu_backend_at(Isa isa);
 // The baseline copy's backend (cpu/backend.cpp).
 std::unique_ptr<Backend> make_baseline_backend();
 
