@@ -151,29 +151,43 @@ struct Collect {
   }
 };
 
-// Packets of 1 to kPacket members (4, or 8 in the AVX2 build of this test) of one shape kind, random geometries (points and segments, radii
+// A member's hits as (base, lanes) of each group, in the order met.
+struct Groups {
+  std::vector<std::pair<int64_t, unsigned>>* out;
+  void operator()(int64_t base, unsigned hits, const BoxGroup&) const { out->push_back({base, hits}); }
+};
+
+// A packet's kPacket members of one shape kind: random geometries (points and segments, radii
 // from 0 up, sometimes the same query twice) and bounds (-1, or a self-query's position, up to
-// past the last leaf): each member gets exactly its own traversal's hits, each once.
+// past the last leaf).
+template <class Shape>
+void random_packet(test::Random& rng, const CpuTree& tree, int32_t n, Shape (&shapes)[kPacket],
+                   int32_t (&bounds)[kPacket]) {
+  const bool self = rng.integer(0, 1) == 1;
+  const int32_t first_bound = self ? rng.integer(0, n) : -1;
+  for (int j = 0; j < kPacket; ++j) {
+    bounds[j] = self ? std::min(first_bound + j, n) : -1;
+    Vec3 p0 = rng.vec3(-1.0f, 1.0f);
+    Vec3 p1 = rng.integer(0, 2) == 0 ? p0 : p0 + rng.vec3(-0.3f, 0.3f);
+    if (self && bounds[j] < n && rng.integer(0, 1) == 0) {  // a self-query: its own leaf's box, as EE's
+      const Box own = group_box(tree.view().leaf_groups[bounds[j] >> 2], bounds[j] & 3);
+      p0 = own.lo;
+      p1 = own.hi;
+    }
+    const float r = rng.integer(0, 4) == 0 ? 0.0f : rng.log_uniform(1e-4f, 0.5f);
+    shapes[j] = j > 0 && rng.integer(0, 5) == 0 ? shapes[j - 1] : Shape::from({p0, p1, r});
+  }
+}
+
+// Packets of 1 to kPacket members (4, or 8 in the AVX2 build of this test), random_packet's:
+// each member gets exactly its own traversal's hits, each once.
 template <class Shape>
 void expect_packets_as_alone(test::Random& rng, const CpuTree& tree, int32_t n, const std::string& what) {
   for (int trial = 0; trial < 40; ++trial) {
     const int count = rng.integer(1, kPacket);
     Shape shapes[kPacket];
     int32_t bounds[kPacket];
-    const bool self = rng.integer(0, 1) == 1;
-    const int32_t first_bound = self ? rng.integer(0, n) : -1;
-    for (int j = 0; j < kPacket; ++j) {
-      bounds[j] = self ? std::min(first_bound + j, n) : -1;
-      Vec3 p0 = rng.vec3(-1.0f, 1.0f);
-      Vec3 p1 = rng.integer(0, 2) == 0 ? p0 : p0 + rng.vec3(-0.3f, 0.3f);
-      if (self && bounds[j] < n && rng.integer(0, 1) == 0) {  // a self-query: its own leaf's box, as EE's
-        const Box own = group_box(tree.view().leaf_groups[bounds[j] >> 2], bounds[j] & 3);
-        p0 = own.lo;
-        p1 = own.hi;
-      }
-      const float r = rng.integer(0, 4) == 0 ? 0.0f : rng.log_uniform(1e-4f, 0.5f);
-      shapes[j] = j > 0 && rng.integer(0, 5) == 0 ? shapes[j - 1] : Shape::from({p0, p1, r});
-    }
+    random_packet(rng, tree, n, shapes, bounds);
     std::vector<int64_t> got[kPacket];
     Collect on_hits[kPacket];
     for (int j = 0; j < kPacket; ++j) on_hits[j].out = &got[j];
@@ -188,6 +202,48 @@ void expect_packets_as_alone(test::Random& rng, const CpuTree& tree, int32_t n, 
       EXPECT_EQ(got[j], want) << what << " trial " << trial << " member " << j << " of " << count;
       EXPECT_EQ(std::adjacent_find(got[j].begin(), got[j].end()), got[j].end()) << what << ": a hit twice";
     }
+  }
+}
+
+// Members scanning a span of leaf positions together (scan_together; any span, aligned or not,
+// longer than a leaf or the 32 positions of one pass, with bounds inside, before and past it):
+// each member of the set gets its own scan's hits (scan_leaves) in the same groups, others none.
+template <class Shape>
+void expect_scans_together_as_alone(test::Random& rng, const CpuTree& tree, int32_t n, const std::string& what) {
+  for (int trial = 0; trial < 40; ++trial) {
+    Shape shapes[kPacket];
+    int32_t bounds[kPacket];
+    random_packet(rng, tree, n, shapes, bounds);
+    const int32_t first = rng.integer(0, n - 2), last = rng.integer(first + 1, n - 1);
+    const unsigned members = unsigned(rng.integer(1, (1 << kPacket) - 1));
+    std::vector<std::pair<int64_t, unsigned>> got[kPacket];
+    Groups on_hits[kPacket];
+    for (int j = 0; j < kPacket; ++j) on_hits[j].out = &got[j];
+    scan_together(tree.view().leaf_groups, PacketBoxes::of(shapes, bounds), shapes, bounds, first, last, members,
+                  on_hits);
+    for (int j = 0; j < kPacket; ++j) {
+      std::vector<std::pair<int64_t, unsigned>> want;
+      Groups alone{&want};
+      NoWork work;
+      if ((members >> j) & 1u) scan_leaves(tree.view().leaf_groups, shapes[j], first, last, bounds[j], alone, work);
+      EXPECT_EQ(got[j], want) << what << " trial " << trial << " member " << j << " of set " << members << " span "
+                              << first << ".." << last << " bound " << bounds[j];
+    }
+  }
+}
+
+TEST(Walk, members_scanning_a_span_together_get_their_own_scans) {
+  test::Random rng(test::fresh_seed());
+  for (int32_t n : {2, 3, 5, 17, 64, 300, 1000}) {
+    std::vector<Box> boxes(static_cast<size_t>(n));
+    for (Box& b : boxes) b = rng.box(rng.vec3(-1.0f, 1.0f), rng.log_uniform(1e-3f, 0.2f));
+    CpuTree tree;
+    tree.build(GivenBoxes{boxes.data()}, n, BuildConfig{kLeafSize});
+    const std::string what = "n " + std::to_string(n);
+    expect_scans_together_as_alone<BoxShape>(rng, tree, n, what + " box");
+    expect_scans_together_as_alone<SphereShape>(rng, tree, n, what + " sphere");
+    expect_scans_together_as_alone<CapsuleRayShape>(rng, tree, n, what + " capsule_ray");
+    expect_scans_together_as_alone<CapsuleExactShape>(rng, tree, n, what + " capsule_exact");
   }
 }
 

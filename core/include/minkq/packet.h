@@ -2,8 +2,9 @@
 // the batch's order: Morton-ordered vertices, or a self-query's consecutive leaf positions)
 // walk the tree together, each node's child boxes tested against all members' box tests at
 // once (one member per float lane: four at SSE2, eight in the backend's AVX2 copy, cpu/isa.h),
-// so that a node that several members reach is read and tested once for them. At a leaf range, each member whose box test passed the range's box
-// scans it as its own traversal would (visit_leaf_range, its own shape, bound and filter).
+// so that a node that several members reach is read and tested once for them. A leaf range
+// that several members reach is scanned once for them too (scan_together), and each member's
+// hits go through its own bound, finer test and filter, as in its own traversal.
 //
 // The pairs are exactly those of traverse_groups for each member: a member enters a node when
 // its box test passes the node's box and the node holds positions after its bound, which is
@@ -39,6 +40,17 @@ inline unsigned mask_bits(M m) { return unsigned(__builtin_ia32_movmskps256((F)m
 inline F splat(float x) { return simd4::splat(x); }
 inline unsigned mask_bits(M m) { return simd4::mask_bits(m); }
 #endif
+// Bit i: bit `bit` of bytes[i], for 32 bytes (one column of a 32 x 8 bit matrix).
+inline uint32_t column(const uint8_t (&bytes)[32], unsigned bit) {
+  typedef uint8_t B __attribute__((vector_size(16)));
+  typedef char C __attribute__((vector_size(16)));
+  B lo, hi;
+  memcpy(&lo, bytes, 16);
+  memcpy(&hi, bytes + 16, 16);
+  const B b = B{} + uint8_t(1u << bit);
+  return uint32_t(__builtin_ia32_pmovmskb128((C)((lo & b) == b))) |
+         uint32_t(__builtin_ia32_pmovmskb128((C)((hi & b) == b))) << 16;
+}
 }  // namespace packet_lanes
 
 // A packet's box tests, member j in lane j: box_gap_within(lo_j, hi_j, r_j, b) for one box b
@@ -74,6 +86,43 @@ struct PacketBoxes {
   unsigned reach(int32_t last) const { return packet_lanes::mask_bits(after < last); }
 };
 
+// Members sharing a leaf range at least this many scan it together (scan_together); fewer scan
+// it one by one, four boxes a test (visit_leaf_range). A box against all members costs what a
+// group of four against one member does, so four lanes need all four members to share it.
+constexpr int kScanTogether = kPacket == 8 ? 3 : 4;
+
+// The leaf range [first, last] for the members of `members`, read once for all of them: each
+// box tested against every member's box test at once (PacketBoxes::overlaps, the group scan's
+// float operations lane by lane), then each member's hits handed on a group at a time, past its
+// bound, through its finer test (finer_hits): the groups and hits visit_leaf_range gives it.
+template <class Shape, class OnHits>
+void scan_together(const BoxGroup* leaf_groups, const PacketBoxes& packet, const Shape (&shapes)[kPacket],
+                   const int32_t (&bounds)[kPacket], int32_t first, int32_t last, unsigned members,
+                   OnHits (&on_hits)[kPacket]) {
+  for (int64_t base = int64_t(first) & ~int64_t(3); base <= last; base += 32) {  // 32 positions a pass
+    uint8_t verdicts[32] = {};  // members' bits by position base + i
+    unsigned any = 0;           // the members with a hit in this pass
+    const int64_t end = last < base + 31 ? last : base + 31;
+    for (int64_t p = first > base ? first : base; p <= end; ++p) {
+      const unsigned bits = packet.overlaps(group_box(leaf_groups[p >> 2], int(p & 3)));
+      verdicts[p - base] = uint8_t(bits);
+      any |= bits;
+    }
+    for (unsigned rest = members & any; rest != 0; rest &= rest - 1u) {
+      const int j = lowest_bit(rest);
+      uint64_t hits = packet_lanes::column(verdicts, unsigned(j));
+      if (bounds[j] >= base) hits = bounds[j] - base >= 31 ? 0 : hits & (~uint64_t(0) << (bounds[j] - base + 1));
+      while (hits != 0) {
+        const int g = __builtin_ctzll(hits) >> 2;
+        const BoxGroup& group = leaf_groups[(base >> 2) + g];
+        const unsigned lanes = finer_hits(shapes[j], group, unsigned(hits >> (4 * g)) & 0xfu);
+        hits &= ~(uint64_t(0xf) << (4 * g));
+        if (lanes != 0) on_hits[j](base + 4 * g, lanes, group);
+      }
+    }
+  }
+}
+
 // traverse_groups for each member j of `live` (bits below kPacket), on_hits[j] taking its
 // groups. shapes[j] and bounds[j] (its `after`) are ignored outside `live`.
 template <class Shape, class OnHits>
@@ -85,6 +134,10 @@ void traverse_packet(const BvhView& bvh, const Shape (&shapes)[kPacket], const i
   NoWork work;
   // A leaf range [first, last] whose box the members of `members` accept.
   auto on_range = [&](int32_t first, int32_t last, const Box& range_box, unsigned members) {
+    if (first < last && popcount(members) >= kScanTogether) {
+      scan_together(bvh.leaf_groups, packet, shapes, bounds, first, last, members, on_hits);
+      return;
+    }
     for (; members != 0; members &= members - 1u) {
       const int j = lowest_bit(members);
       visit_leaf_range(bvh.leaf_groups, shapes[j], first, last, bounds[j], range_box, on_hits[j], work);

@@ -164,14 +164,16 @@ MINKQ_HD const Shape& group_test(const Shape& shape) {
   return shape;
 }
 #else
+// The lanes of `hits` (boxes of g that passed the shape's box test) that its finer test keeps.
+template <class Shape>
+unsigned finer_hits(const Shape& shape, const BoxGroup& g, unsigned hits) {
+  if constexpr (is_box_shape<Shape>()) return hits; else return shape.finer_group(g, hits);
+}
 template <class Shape>
 struct GroupTest {
   BoxLanes box;
   const Shape& shape;
-  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const {
-    const unsigned hits = box.overlaps(g, lanes);
-    if constexpr (is_box_shape<Shape>()) return hits; else return shape.finer_group(g, hits);
-  }
+  unsigned overlaps_group(const BoxGroup& g, unsigned lanes) const { return finer_hits(shape, g, box.overlaps(g, lanes)); }
 };
 namespace shape_contract {
 template <class S>
