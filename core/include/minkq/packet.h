@@ -111,7 +111,9 @@ void scan_together(const BoxGroup* leaf_groups, const PacketBoxes& packet, const
     for (unsigned rest = members & any; rest != 0; rest &= rest - 1u) {
       const int j = lowest_bit(rest);
       uint64_t hits = packet_lanes::column(verdicts, unsigned(j));
-      if (bounds[j] >= base) hits = bounds[j] - base >= 31 ? 0 : hits & (~uint64_t(0) << (bounds[j] - base + 1));
+      // Past the bound only: the positions from bounds[j] + 1 on (a shift of 32 or more leaves none).
+      const int64_t from = int64_t(bounds[j]) + 1 - base;
+      hits &= ~uint64_t(0) << (from < 0 ? 0 : from > 63 ? 63 : from);
       while (hits != 0) {
         const int g = __builtin_ctzll(hits) >> 2;
         const BoxGroup& group = leaf_groups[(base >> 2) + g];

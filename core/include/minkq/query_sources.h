@@ -28,6 +28,8 @@ struct QueryTarget {
 struct Pair {
   int32_t first, second;
 };
+// {a, b} lower first, as a minimum and a maximum (no branch: which is lower is a coin toss).
+MINKQ_HD Pair ordered_pair(int32_t a, int32_t b) { return {a < b ? a : b, a < b ? b : a}; }
 // A pair as one 64-bit key, first << 32 | second: keys sort as the pairs do lexicographically
 // (ids are non-negative).
 MINKQ_HD uint64_t pack_pair(int32_t first, int32_t second) { return uint64_t(uint32_t(first)) << 32 | uint32_t(second); }
@@ -212,7 +214,7 @@ struct EdgeEdgeQueries {
     return segment_segment_within(vertices[lo.v[0]], vertices[lo.v[1]], vertices[hi.v[0]], vertices[hi.v[1]],
                                   reach(radius(), element_thickness(thickness, lo), element_thickness(thickness, hi)));
   }
-  MINKQ_HD Pair pair(int32_t e, int32_t f) const { return e < f ? Pair{e, f} : Pair{f, e}; }
+  MINKQ_HD Pair pair(int32_t e, int32_t f) const { return ordered_pair(e, f); }
 };
 
 // The vertex tree against itself (VV: points of codimensional meshes), query i being the
@@ -248,7 +250,7 @@ struct VertexVertexQueries {
     return point_point_within(vertices[lo], vertices[hi],
                               reach(radius(), vertex_thickness(thickness, lo), vertex_thickness(thickness, hi)));
   }
-  MINKQ_HD Pair pair(int32_t v, int32_t w) const { return v < w ? Pair{v, w} : Pair{w, v}; }
+  MINKQ_HD Pair pair(int32_t v, int32_t w) const { return ordered_pair(v, w); }
 };
 
 // User queries against a tree of user boxes: spheres (p1 == nullptr), capsules, or boxes
