@@ -78,8 +78,8 @@ struct PacketBoxes {
   unsigned overlaps(const Box& b) const {
     using packet_lanes::splat;
     const packet_lanes::M pass = (splat(b.lo.x) - hi[0] <= r) & (lo[0] - splat(b.hi.x) <= r) &
-                           (splat(b.lo.y) - hi[1] <= r) & (lo[1] - splat(b.hi.y) <= r) &
-                           (splat(b.lo.z) - hi[2] <= r) & (lo[2] - splat(b.hi.z) <= r);
+                                 (splat(b.lo.y) - hi[1] <= r) & (lo[1] - splat(b.hi.y) <= r) &
+                                 (splat(b.lo.z) - hi[2] <= r) & (lo[2] - splat(b.hi.z) <= r);
     return packet_lanes::mask_bits(pass);
   }
   // The members with a leaf position after their bound at or before `last`.
