@@ -135,17 +135,23 @@ inline void sort_pairs(int32_t* pairs, int64_t n) {
 // Writes a pass's blocks, concatenated in block order, and sorts them if asked; returns the
 // total. If it exceeds the capacity, a blocking query's output gets nothing and an asynchronous
 // one's (out.count set) the first `capacity` pairs, unsorted.
+// The blocks are copied in parallel where there is much to copy (a serial copy of a million-vertex
+// mesh's pairs is memory bound on one thread).
 inline uint64_t write_pass(const BlockOut* parts, int32_t blocks, const PairOutput& out) {
   uint64_t total = 0;
   for (int32_t b = 0; b < blocks; ++b) total += parts[b].words / 2 + parts[b].counted;
   if (total > out.capacity && !out.count) return total;
-  int32_t* cursor = out.pairs;
-  size_t room = 2 * size_t(std::min<uint64_t>(total, out.capacity));  // int32 words
-  for (int32_t b = 0; b < blocks && room > 0; ++b) {
-    const size_t words = std::min(parts[b].words, room);
-    if (words) std::memcpy(cursor, parts[b].pairs.data(), words * sizeof(int32_t));
-    cursor += words;
-    room -= words;
+  const size_t room = 2 * size_t(std::min<uint64_t>(total, out.capacity));  // int32 words
+  std::vector<size_t> at(static_cast<size_t>(blocks) + 1, 0);  // block b's words: [at[b], at[b + 1])
+  for (int32_t b = 0; b < blocks; ++b) at[b + 1] = std::min(at[b] + parts[b].words, room);
+  const auto copy = [&](int32_t b) {
+    if (at[b + 1] > at[b]) std::memcpy(out.pairs + at[b], parts[b].pairs.data(), (at[b + 1] - at[b]) * sizeof(int32_t));
+  };
+  constexpr size_t kParallelCopyWords = size_t(1) << 16;
+  if (room >= kParallelCopyWords) {
+    tbb::parallel_for(int32_t(0), blocks, copy);
+  } else {
+    for (int32_t b = 0; b < blocks; ++b) copy(b);
   }
   if (total > out.capacity) return total;
   if (out.canonical) sort_pairs(out.pairs, int64_t(total));
